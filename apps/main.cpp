@@ -1,0 +1,29 @@
+// flexfarm: simulate flexible robot arms, one at a time or by the thousand.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+#include "apps/verbs.hpp"
+#include "kernel/errors.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"flexfarm: simulation farm for flexible robot manipulators (PNL Flexible Beam Testbed and kin)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "flexfarm 0.1.0");
+  ff::add_modes_verb(app);
+  ff::add_simulate_verb(app);
+  ff::add_run_verb(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const ff::ConfigError& e) {
+    std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,30 @@
+# flexfarm_library(NAME PUBLIC deps...): the folder NAME/ becomes the static library ff_NAME.
+# A folder without sources yet becomes an interface library, so later folders can already link it.
+function(flexfarm_library name)
+  cmake_parse_arguments(ARG "" "" "PUBLIC" ${ARGN})
+  file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/${name}/*.cpp)
+  if(srcs)
+    add_library(ff_${name} STATIC ${srcs})
+    target_include_directories(ff_${name} PUBLIC ${PROJECT_SOURCE_DIR})
+    target_link_libraries(ff_${name} PUBLIC ${ARG_PUBLIC})
+  else()
+    add_library(ff_${name} INTERFACE)
+    target_include_directories(ff_${name} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(ff_${name} INTERFACE ${ARG_PUBLIC})
+  endif()
+endfunction()
+
+# flexfarm_tests(FOLDER LIBS...): one GoogleTest program per folder of tests/, each test registered with ctest.
+function(flexfarm_tests folder)
+  file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/${folder}/*_test.cpp)
+  if(NOT srcs)
+    return()
+  endif()
+  add_executable(test_${folder} ${srcs})
+  target_link_libraries(test_${folder} PRIVATE ${ARGN} GTest::gtest_main)
+  target_compile_definitions(test_${folder} PRIVATE
+    FLEXFARM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    FLEXFARM_BINARY="$<TARGET_FILE:flexfarm>")
+  add_dependencies(test_${folder} flexfarm)
+  gtest_discover_tests(test_${folder} WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} DISCOVERY_TIMEOUT 60)
+endfunction()

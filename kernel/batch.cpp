@@ -1,0 +1,105 @@
+#include "kernel/batch.hpp"
+
+#include <limits>
+#include <stdexcept>
+
+#include "kernel/notch.hpp"
+
+namespace ff {
+
+const char* lane_status_name(LaneStatus s) {
+  switch (s) {
+    case LaneStatus::kOk: return "ok";
+    case LaneStatus::kNonfinite: return "nonfinite";
+    case LaneStatus::kSolverFail: return "solver_fail";
+  }
+  return "?";
+}
+
+NotchDesign make_notch_design(const Model& m) {
+  NotchDesign d;
+  d.order = m.spec.notch.order;
+  for (int i = 0; i < 2; ++i) {
+    d.omega_z[i] = m.omega_z[i];
+    d.alpha[i] = m.spec.notch.alpha[i];
+    d.zeta[i] = m.spec.notch.zeta[i];
+  }
+  return d;
+}
+
+BatchModel make_batch(std::span<const Model> models) {
+  if (models.empty()) throw std::invalid_argument("make_batch: no models");
+  const Model& m0 = models[0];
+  BatchModel bm;
+  bm.W = static_cast<int>(models.size());
+  bm.nseg = m0.nseg;
+  bm.nsections = m0.spec.notch.enabled ? 2 * m0.spec.notch.order + 1 : 0;
+  bm.substeps = m0.substeps;
+  bm.control_period = m0.control_period;
+  bm.duration = m0.duration;
+  for (const auto& m : models) {
+    const int ns = m.spec.notch.enabled ? 2 * m.spec.notch.order + 1 : 0;
+    if (m.nseg != bm.nseg || ns != bm.nsections || m.substeps != bm.substeps ||
+        m.control_period != bm.control_period || m.duration != bm.duration)
+      throw std::invalid_argument("make_batch: models differ in shape (segments, notch order, rate, substeps or duration)");
+  }
+  bm.models.assign(models.begin(), models.end());
+
+  const int W = bm.W, N = bm.nseg;
+  auto per_body = [&](auto get) {
+    std::vector<double> x(static_cast<std::size_t>(N) * W);
+    for (int l = 0; l < W; ++l)
+      for (int i = 0; i < N; ++i) x[i * W + l] = get(models[l], i);
+    return x;
+  };
+  bm.body_mass = per_body([](const Model& m, int i) { return m.body[i].mass; });
+  bm.body_first = per_body([](const Model& m, int i) { return m.body[i].first; });
+  bm.body_inertia = per_body([](const Model& m, int i) { return m.body[i].inertia; });
+  bm.seg_length = per_body([](const Model& m, int i) { return m.seg_length[i]; });
+  bm.joint_k = per_body([](const Model& m, int i) { return m.joint_k[i]; });
+  bm.joint_c = per_body([](const Model& m, int i) { return m.joint_c[i]; });
+
+  for (const auto& m : models) {
+    const auto& c = m.spec.controller;
+    bm.kp.push_back(c.kp);
+    bm.ki.push_back(c.ki);
+    bm.kd.push_back(c.kd);
+    bm.torque_limit.push_back(c.torque_limit > 0 ? c.torque_limit : std::numeric_limits<double>::infinity());
+    bm.load_comp.push_back(c.load_compensation);
+  }
+
+  bm.notch_coef.assign(static_cast<std::size_t>(5) * bm.nsections * W, 0.0);
+  if (bm.nsections > 0)
+    for (int l = 0; l < W; ++l)
+      pack_notch_sections(make_notch_sections(make_notch_design(models[l]), bm.control_period), W, l,
+                          bm.notch_coef.data());
+  return bm;
+}
+
+BatchState make_state(const BatchModel& bm) {
+  BatchState s;
+  const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
+  s.q.assign(nw, 0.0);
+  s.v.assign(nw, 0.0);
+  s.tau.assign(bm.W, 0.0);
+  s.integral.assign(bm.W, 0.0);
+  s.notch_state.assign(static_cast<std::size_t>(2) * bm.nsections * bm.W, 0.0);
+  s.status.assign(bm.W, LaneStatus::kOk);
+  return s;
+}
+
+Workspace make_workspace(const BatchModel& bm) {
+  Workspace ws;
+  const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
+  for (auto* x : {&ws.cq, &ws.sq, &ws.vw, &ws.vx, &ws.vy, &ws.cy, &ws.cz, &ws.i00, &ws.i01, &ws.i02, &ws.i11,
+                  &ws.i12, &ws.i22, &ws.p0, &ws.p1, &ws.p2, &ws.d, &ws.u, &ws.a0, &ws.a1, &ws.a2, &ws.armature,
+                  &ws.q1, &ws.v1, &ws.tau_joint})
+    x->assign(nw, 0.0);
+  for (int k = 0; k < 4; ++k) {
+    ws.kq[k].assign(nw, 0.0);
+    ws.kv[k].assign(nw, 0.0);
+  }
+  return ws;
+}
+
+}  // namespace ff

@@ -1,0 +1,79 @@
+// Lanes: W variants of equal shape advanced in lock-step. Every per-lane array is
+// structure-of-arrays with the lane innermost, x[j*W + lane], so loops over lanes vectorise.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "kernel/model.hpp"
+#include "kernel/notch.hpp"
+
+namespace ff {
+
+// Outcome of one lane (variant). Numerical failure is recorded here, never thrown.
+enum class LaneStatus : std::uint8_t { kOk = 0, kNonfinite, kSolverFail };
+const char* lane_status_name(LaneStatus s);
+
+// The parameters of W models of equal shape, gathered lane-innermost. Immutable once made.
+struct BatchModel {
+  int W = 0;                        // lanes
+  int nseg = 0;                     // N, bodies and joints
+  int nsections = 0;                // notch biquads per lane (0 = no notch)
+  int substeps = 1;                 // fixed-step substeps per control period
+  double control_period = 0.0;      // s
+  double duration = 0.0;            // s
+  std::vector<Model> models;        // the W source models (trajectory, metrics, reporting)
+  std::vector<double> body_mass;    // (N x W), kg
+  std::vector<double> body_first;   // mass times centre-of-mass offset (N x W), kg·m
+  std::vector<double> body_inertia; // about the joint axis (N x W), kg·m^2
+  std::vector<double> seg_length;   // (N x W), m
+  std::vector<double> joint_k;      // (N x W), N·m/rad, row 0 = 0
+  std::vector<double> joint_c;      // (N x W), N·m·s/rad, row 0 = 0
+  std::vector<double> kp, ki, kd;   // (W) PID gains
+  std::vector<double> torque_limit; // (W), N·m, +inf when unlimited
+  std::vector<double> load_comp;    // (W) root-moment feed-forward gain
+  std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
+};
+
+// Gathers models of equal shape (segments, notch order and enablement, rate, substeps, duration)
+// into lanes. Throws std::invalid_argument when shapes differ.
+BatchModel make_batch(std::span<const Model> models);
+
+// The continuous notch filter (seed eq. 6) a model asks for, with its zeros in place.
+NotchDesign make_notch_design(const Model& m);
+
+// Everything that changes during a run.
+struct BatchState {
+  double t = 0.0;                   // s
+  long sample = 0;                  // controller samples taken
+  std::vector<double> q;            // (N x W) q0 hub angle, qi relative joint angles, rad
+  std::vector<double> v;            // (N x W) rates, rad/s
+  std::vector<double> tau;          // (W) torque held on the hub until the next sample, N·m
+  std::vector<double> integral;     // (W) integral of the tracking error, rad·s
+  std::vector<double> notch_state;  // (2 * nsections x W)
+  std::vector<LaneStatus> status;   // (W)
+};
+
+BatchState make_state(const BatchModel& bm);
+
+// Scratch for the articulated-body algorithm and the integrators, sized once: nothing is
+// allocated while stepping.
+struct Workspace {
+  // articulated-body algorithm, per body (N x W)
+  std::vector<double> cq, sq;                         // cos, sin of the joint angle
+  std::vector<double> vw, vx, vy;                     // body spatial velocity
+  std::vector<double> cy, cz;                         // velocity-product acceleration (0, cy, cz)
+  std::vector<double> i00, i01, i02, i11, i12, i22;   // articulated inertia (symmetric 3x3)
+  std::vector<double> p0, p1, p2;                     // articulated bias force
+  std::vector<double> d, u;                           // joint-space inertia and force
+  std::vector<double> a0, a1, a2;                     // body spatial acceleration
+  std::vector<double> armature;                       // extra joint-space inertia (N x W)
+  // fixed-step integrator stages, (N x W) each
+  std::vector<double> q1, v1, kq[4], kv[4];
+  std::vector<double> tau_joint;                      // (N x W) joint torques
+};
+
+Workspace make_workspace(const BatchModel& bm);
+
+}  // namespace ff

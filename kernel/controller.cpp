@@ -1,0 +1,42 @@
+#include "kernel/controller.hpp"
+
+#include <algorithm>
+
+#include "kernel/notch.hpp"
+
+namespace ff {
+
+void reset_controller(const BatchModel& bm, BatchState& s, const double* r0) {
+  for (int l = 0; l < bm.W; ++l) {
+    s.integral[l] = 0.0;
+    if (bm.nsections > 0) reset_notch_state(bm.nsections, bm.W, l, bm.notch_coef.data(), r0[l], s.notch_state.data());
+  }
+}
+
+void compute_control(const BatchModel& bm, BatchState& s, const double* ref, double* ref_filtered) {
+  const int W = bm.W;
+  // Robust notch filter on the reference (seed eq. 6), or the reference itself.
+  if (bm.nsections > 0)
+    step_notch(bm.nsections, W, bm.notch_coef.data(), s.notch_state.data(), ref, ref_filtered);
+  else
+    std::copy(ref, ref + W, ref_filtered);
+
+  const double T = bm.control_period;
+  const double* q = s.q.data();
+  const double* v = s.v.data();
+  const double* k1 = bm.joint_k.data() + W;  // joint 1: the root of the beam
+  const double* c1 = bm.joint_c.data() + W;
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    const double e = ref_filtered[l] - q[l];
+    const double root_moment = k1[l] * q[W + l] + c1[l] * v[W + l];  // torque of the beam on the hub, N·m
+    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * v[l] - bm.load_comp[l] * root_moment;
+    const double lim = bm.torque_limit[l];
+    const double tau = std::clamp(raw, -lim, lim);
+    const bool winding = (raw != tau) && (e * raw > 0.0);
+    s.integral[l] += winding ? 0.0 : e * T;
+    s.tau[l] = tau;
+  }
+}
+
+}  // namespace ff

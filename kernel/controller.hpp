@@ -1,0 +1,20 @@
+// The digital controller, sampled with zero-order hold: reference -> robust notch (seed eq. 6)
+// -> PID on the hub angle with derivative on the measured rate, load-compensation feed-forward,
+// torque limit with anti-windup.
+#pragma once
+
+#include "kernel/batch.hpp"
+
+namespace ff {
+
+// Puts every lane's notch filter at rest at input r0 (before the first sample).
+void reset_controller(const BatchModel& bm, BatchState& s, const double* r0);
+
+// One controller sample for all lanes at s.t. ref (W): commanded hub angle; writes
+// ref_filtered (W) and the held torque s.tau (W):
+//   e = F(r) - theta_h,  tau = sat(kp e + ki integral - kd omega_h - g (k_1 q_1 + c_1 qd_1)).
+// The integral is advanced by forward Euler and frozen while the torque saturates in the
+// direction of the error (clamping anti-windup).
+void compute_control(const BatchModel& bm, BatchState& s, const double* ref, double* ref_filtered);
+
+}  // namespace ff

@@ -1,0 +1,186 @@
+#include "kernel/dynamics.hpp"
+
+#include <cmath>
+
+namespace ff {
+
+// Planar spatial vectors in body coordinates: motion (w, vx, vy), force (n, fx, fy).
+// Body i's frame sits on joint i with x along the segment; joint i+1 is at (L_i, 0).
+// Parent-to-child transform (Featherstone's plnr(q, [L_parent, 0])):
+//   X = [[1, 0, 0], [s L, c, s], [c L, -s, c]],  c = cos q, s = sin q.
+
+void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
+                           Workspace& ws) {
+  const int W = bm.W, N = bm.nseg;
+  double* tj = ws.tau_joint.data();
+  const double* k = bm.joint_k.data();
+  const double* c = bm.joint_c.data();
+#pragma omp simd
+  for (int l = 0; l < W; ++l) tj[l] = tau_hub[l];
+  // Spring-damper torque on the child of each beam joint.
+  for (int i = 1; i < N; ++i) {
+    const int o = i * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) tj[o + l] = -k[o + l] * q[o + l] - c[o + l] * v[o + l];
+  }
+}
+
+void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, double* qdd, Workspace& ws) {
+  const int W = bm.W, N = bm.nseg;
+  const double* bmass = bm.body_mass.data();
+  const double* bfirst = bm.body_first.data();
+  const double* binert = bm.body_inertia.data();
+  const double* len = bm.seg_length.data();
+  const double* tau = ws.tau_joint.data();
+  const double* arm = ws.armature.data();
+  double *cq = ws.cq.data(), *sq = ws.sq.data(), *vw = ws.vw.data(), *vx = ws.vx.data(), *vy = ws.vy.data();
+  double *cy = ws.cy.data(), *cz = ws.cz.data();
+  double *i00 = ws.i00.data(), *i01 = ws.i01.data(), *i02 = ws.i02.data();
+  double *i11 = ws.i11.data(), *i12 = ws.i12.data(), *i22 = ws.i22.data();
+  double *p0 = ws.p0.data(), *p1 = ws.p1.data(), *p2 = ws.p2.data();
+  double *d = ws.d.data(), *u = ws.u.data(), *a0 = ws.a0.data(), *a1 = ws.a1.data(), *a2 = ws.a2.data();
+
+  // Pass 1, root to tip: velocities, velocity-product accelerations, rigid-body inertia and bias force.
+  for (int i = 0; i < N; ++i) {
+    const int o = i * W, op = (i - 1) * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double c = std::cos(q[o + l]), s = std::sin(q[o + l]);
+      cq[o + l] = c;
+      sq[o + l] = s;
+      double w = v[o + l], x = 0.0, y = 0.0;
+      if (i > 0) {
+        const double lp = len[op + l], wp = vw[op + l], xp = vx[op + l], yp = vy[op + l];
+        w += wp;
+        x = s * lp * wp + c * xp + s * yp;
+        y = c * lp * wp - s * xp + c * yp;
+      }
+      vw[o + l] = w;
+      vx[o + l] = x;
+      vy[o + l] = y;
+      // c_i = crm(v_i) S qd_i = (0, vy qd, -vx qd)
+      cy[o + l] = y * v[o + l];
+      cz[o + l] = -x * v[o + l];
+      // I_i = [[J, 0, h], [0, m, 0], [h, 0, m]]; bias p_i = crf(v_i) I_i v_i
+      const double J = binert[o + l], h = bfirst[o + l], m = bmass[o + l];
+      const double fx = m * x, fy = h * w + m * y;
+      i00[o + l] = J;
+      i01[o + l] = 0.0;
+      i02[o + l] = h;
+      i11[o + l] = m;
+      i12[o + l] = 0.0;
+      i22[o + l] = m;
+      p0[o + l] = -y * fx + x * fy;
+      p1[o + l] = -w * fy;
+      p2[o + l] = w * fx;
+    }
+  }
+
+  // Pass 2, tip to root: articulated inertias and bias forces, projected across each revolute joint.
+  for (int i = N - 1; i >= 0; --i) {
+    const int o = i * W, op = (i - 1) * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      // U = IA S, d = S^T U + armature, u = tau - S^T pA
+      const double U0 = i00[o + l], U1 = i01[o + l], U2 = i02[o + l];
+      const double di = U0 + arm[o + l];
+      const double ui = tau[o + l] - p0[o + l];
+      d[o + l] = di;
+      u[o + l] = ui;
+      if (i == 0) continue;
+      // Ia = IA - U U^T / d ;  pa = pA + Ia c + U u / d
+      const double r = 1.0 / di;
+      const double a00 = U0 - U0 * U0 * r, a01 = U1 - U0 * U1 * r, a02 = U2 - U0 * U2 * r;
+      const double a11 = i11[o + l] - U1 * U1 * r, a12 = i12[o + l] - U1 * U2 * r, a22 = i22[o + l] - U2 * U2 * r;
+      const double ccy = cy[o + l], ccz = cz[o + l], ur = ui * r;
+      const double pa0 = p0[o + l] + a01 * ccy + a02 * ccz + U0 * ur;
+      const double pa1 = p1[o + l] + a11 * ccy + a12 * ccz + U1 * ur;
+      const double pa2 = p2[o + l] + a12 * ccy + a22 * ccz + U2 * ur;
+      // Parent += X^T Ia X and X^T pa
+      const double c = cq[o + l], s = sq[o + l], lp = len[op + l], sl = s * lp, cl = c * lp;
+      const double P0 = a00 + a01 * sl + a02 * cl, P1 = a01 + a11 * sl + a12 * cl, P2 = a02 + a12 * sl + a22 * cl;
+      const double Q0 = a01 * c - a02 * s, Q1 = a11 * c - a12 * s, Q2 = a12 * c - a22 * s;
+      const double R0 = a01 * s + a02 * c, R1 = a11 * s + a12 * c, R2 = a12 * s + a22 * c;
+      i00[op + l] += P0 + sl * P1 + cl * P2;
+      i01[op + l] += Q0 + sl * Q1 + cl * Q2;
+      i02[op + l] += R0 + sl * R1 + cl * R2;
+      i11[op + l] += c * Q1 - s * Q2;
+      i12[op + l] += c * R1 - s * R2;
+      i22[op + l] += s * R1 + c * R2;
+      p0[op + l] += pa0 + sl * pa1 + cl * pa2;
+      p1[op + l] += c * pa1 - s * pa2;
+      p2[op + l] += s * pa1 + c * pa2;
+    }
+  }
+
+  // Pass 3, root to tip: accelerations a_i = X a_parent + c_i, qdd_i = (u_i - U_i^T a_i) / d_i.
+  for (int i = 0; i < N; ++i) {
+    const int o = i * W, op = (i - 1) * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      double b0 = 0.0, b1 = 0.0, b2 = 0.0;  // fixed base, no gravity (horizontal plane)
+      if (i > 0) {
+        const double c = cq[o + l], s = sq[o + l], lp = len[op + l];
+        const double x0 = a0[op + l], x1 = a1[op + l], x2 = a2[op + l];
+        b0 = x0;
+        b1 = s * lp * x0 + c * x1 + s * x2 + cy[o + l];
+        b2 = c * lp * x0 - s * x1 + c * x2 + cz[o + l];
+      }
+      const double qa = (u[o + l] - (i00[o + l] * b0 + i01[o + l] * b1 + i02[o + l] * b2)) / d[o + l];
+      qdd[o + l] = qa;
+      a0[o + l] = b0 + qa;
+      a1[o + l] = b1;
+      a2[o + l] = b2;
+    }
+  }
+}
+
+void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
+                          double* qdd, Workspace& ws) {
+  compute_joint_torques(bm, q, v, tau_hub, ws);
+  compute_forward_dynamics(bm, q, v, qdd, ws);
+}
+
+TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane) {
+  const int W = bm.W;
+  double phi = 0.0, defl = 0.0, along = 0.0;
+  for (int i = 0; i < bm.nseg; ++i) {
+    if (i > 0) phi += q[i * W + lane];  // segment angle relative to the hub
+    const double li = bm.seg_length[i * W + lane];
+    defl += li * std::sin(phi);
+    along += li * std::cos(phi);
+  }
+  return {defl, along, q[lane] + std::atan2(defl, along)};
+}
+
+double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* v, int lane) {
+  const int W = bm.W;
+  double w = 0.0, x = 0.0, y = 0.0, T = 0.0;
+  for (int i = 0; i < bm.nseg; ++i) {
+    const int o = i * W + lane;
+    const double c = std::cos(q[o]), s = std::sin(q[o]);
+    if (i == 0) {
+      w = v[o];
+    } else {
+      const double lp = bm.seg_length[o - W];
+      const double xn = s * lp * w + c * x + s * y, yn = c * lp * w - s * x + c * y;
+      w += v[o];
+      x = xn;
+      y = yn;
+    }
+    // 1/2 v^T I v with I = [[J, 0, h], [0, m, 0], [h, 0, m]]
+    T += 0.5 * (bm.body_inertia[o] * w * w + 2.0 * bm.body_first[o] * w * y + bm.body_mass[o] * (x * x + y * y));
+  }
+  return T;
+}
+
+double calc_spring_energy(const BatchModel& bm, const double* q, int lane) {
+  double V = 0.0;
+  for (int i = 1; i < bm.nseg; ++i) {
+    const int o = i * bm.W + lane;
+    V += 0.5 * bm.joint_k[o] * q[o] * q[o];
+  }
+  return V;
+}
+
+}  // namespace ff

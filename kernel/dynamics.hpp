@@ -1,0 +1,34 @@
+// Exact nonlinear dynamics of the planar chain: hub + N rigid segments on torsional springs,
+// horizontal plane (no gravity). Free functions over all lanes of a batch.
+#pragma once
+
+#include "kernel/batch.hpp"
+
+namespace ff {
+
+// Joint torques: tau_0 = hub torque, tau_i = -k_i q_i - c_i v_i (i >= 1). Writes ws.tau_joint.
+void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
+                           Workspace& ws);
+
+// Forward dynamics qdd = M(q)^-1 (tau - C(q, v) v) by the articulated-body algorithm
+// (Featherstone, Rigid Body Dynamics Algorithms, 2008, Table 7.1, planar form), O(N) per lane.
+// Reads ws.tau_joint and ws.armature; q, v, qdd are (N x W).
+void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, double* qdd, Workspace& ws);
+
+// Everything at once: joint torques from the hub torque, then qdd.
+void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
+                          double* qdd, Workspace& ws);
+
+// Tip deflection (m) and tip angle (rad) of one lane (reference-rig.md, "Signals").
+struct TipKinematics {
+  double deflection;  // sum L_i sin(theta_i - theta_h), m
+  double along;       // sum L_i cos(theta_i - theta_h), m
+  double angle;       // theta_h + atan2(deflection, along), rad
+};
+TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane);
+
+// Kinetic energy 1/2 v^T M(q) v and spring energy 1/2 sum k_i q_i^2 of one lane, J.
+double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* v, int lane);
+double calc_spring_energy(const BatchModel& bm, const double* q, int lane);
+
+}  // namespace ff

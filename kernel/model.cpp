@@ -1,0 +1,149 @@
+#include "kernel/model.hpp"
+
+#include <cmath>
+
+#include "kernel/errors.hpp"
+#include "kernel/batch.hpp"
+#include "kernel/modes.hpp"
+#include "kernel/notch.hpp"
+
+namespace ff {
+
+double calc_beam_mass(const BeamSpec& b) { return b.density * b.height * b.thickness * b.length; }
+
+double calc_area_moment(const BeamSpec& b) { return b.height * b.thickness * b.thickness * b.thickness / 12.0; }
+
+double calc_cantilever_stiffness(const BeamSpec& b, double length) {
+  return 3.0 * b.youngs_modulus * calc_area_moment(b) / length;  // seed eq. 5
+}
+
+namespace {
+
+// Physical-range checks; the key names the YAML path so the loader can add the line.
+void validate(const ModelSpec& s, const std::string& src) {
+  auto positive = [&](double x, const char* key) {
+    if (!(x > 0) || !std::isfinite(x)) throw ConfigError(src, 0, key, "must be a finite number > 0, got " + std::to_string(x));
+  };
+  auto non_negative = [&](double x, const char* key) {
+    if (!(x >= 0) || !std::isfinite(x)) throw ConfigError(src, 0, key, "must be a finite number >= 0, got " + std::to_string(x));
+  };
+  positive(s.beam.length, "beam.length");
+  positive(s.beam.height, "beam.height");
+  positive(s.beam.thickness, "beam.thickness");
+  positive(s.beam.density, "beam.density");
+  positive(s.beam.youngs_modulus, "beam.youngs_modulus");
+  if (s.segments < 2) throw ConfigError(src, 0, "segments", "must be >= 2, got " + std::to_string(s.segments));
+  if (s.segments > 4096) throw ConfigError(src, 0, "segments", "must be <= 4096, got " + std::to_string(s.segments));
+  positive(s.joints.stiffness, "joints.stiffness");
+  non_negative(s.joints.damping, "joints.damping");
+  positive(s.joints.reference_cell, "joints.reference_cell");
+  non_negative(s.hub_inertia, "hub.inertia");
+  non_negative(s.payload_mass, "payload.mass");
+  non_negative(s.payload_inertia, "payload.inertia");
+  positive(s.controller.rate, "controller.rate");
+  non_negative(s.controller.kp, "controller.kp");
+  non_negative(s.controller.ki, "controller.ki");
+  non_negative(s.controller.kd, "controller.kd");
+  non_negative(s.controller.torque_limit, "controller.torque_limit");
+  if (!std::isfinite(s.controller.load_compensation))
+    throw ConfigError(src, 0, "controller.load_compensation", "must be a finite number");
+  if (s.notch.order < 1 || s.notch.order > 8)
+    throw ConfigError(src, 0, "notch.order", "must be between 1 and 8, got " + std::to_string(s.notch.order));
+  for (int i = 0; i < 2; ++i) {
+    positive(s.notch.alpha[i], "notch.alpha");
+    positive(s.notch.zeta[i], "notch.zeta");
+    non_negative(s.notch.omega_z[i], "notch.omega_z");
+  }
+  if ((s.notch.omega_z[0] > 0) != (s.notch.omega_z[1] > 0))
+    throw ConfigError(src, 0, "notch.omega_z", "give both zero frequencies or neither");
+  positive(s.trajectory.move_time, "trajectory.move_time");
+  double previous = 0.0;
+  for (std::size_t j = 0; j < s.trajectory.moves.size(); ++j) {
+    const auto& m = s.trajectory.moves[j];
+    const std::string key = "trajectory.moves[" + std::to_string(j) + "]";
+    if (!std::isfinite(m.target)) throw ConfigError(src, 0, key + ".target", "must be finite");
+    if (m.target == previous) throw ConfigError(src, 0, key + ".target", "a move must change the target (zero amplitude)");
+    if (!(m.hold >= 0)) throw ConfigError(src, 0, key + ".hold", "must be >= 0");
+    previous = m.target;
+  }
+  non_negative(s.simulation.duration, "simulation.duration");
+  if (s.simulation.substeps < 0 || s.simulation.substeps > 100000)
+    throw ConfigError(src, 0, "simulation.substeps", "must be between 0 (automatic) and 100000");
+  positive(s.simulation.rtol, "simulation.rtol");
+  positive(s.simulation.atol, "simulation.atol");
+}
+
+}  // namespace
+
+Model make_model(const ModelSpec& spec, const std::string& source) {
+  validate(spec, source);
+  Model m;
+  m.spec = spec;
+  const int n = spec.segments;
+  m.nseg = n;
+  const auto& b = spec.beam;
+
+  // Segment lengths: joints at the centres of N-1 equal cells; end segments are half cells (reference-rig.md).
+  m.cell = b.length / (n - 1);
+  m.seg_length.assign(n, m.cell);
+  m.seg_length.front() = m.seg_length.back() = 0.5 * m.cell;
+
+  // Segment mass rho h t L_i and centroidal inertia m (L_i^2 + t^2) / 12.
+  for (int i = 0; i < n; ++i) {
+    const double li = m.seg_length[i];
+    const double mi = b.density * b.height * b.thickness * li;
+    m.seg_mass.push_back(mi);
+    m.seg_inertia.push_back(mi * (li * li + b.thickness * b.thickness) / 12.0);
+  }
+
+  // Body inertias about each joint axis: segment (parallel axis), hub on body 0, payload at the tip of body N-1.
+  for (int i = 0; i < n; ++i) {
+    const double li = m.seg_length[i], mi = m.seg_mass[i];
+    BodyInertia bi{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
+    if (i == 0) bi.inertia += spec.hub_inertia;
+    if (i == n - 1) {
+      bi.mass += spec.payload_mass;
+      bi.first += spec.payload_mass * li;
+      bi.inertia += spec.payload_inertia + spec.payload_mass * li * li;
+    }
+    m.body.push_back(bi);
+  }
+
+  // Joint springs and dampers scale as reference_cell / l (k = kappa EI / l).
+  const double scale = spec.joints.reference_cell / m.cell;
+  m.joint_k.assign(n, spec.joints.stiffness * scale);
+  m.joint_c.assign(n, spec.joints.damping * scale);
+  m.joint_k[0] = m.joint_c[0] = 0.0;
+
+  m.control_period = 1.0 / spec.controller.rate;
+  m.duration = spec.simulation.duration;
+  if (m.duration == 0.0)
+    for (const auto& mv : spec.trajectory.moves) m.duration += spec.trajectory.move_time + mv.hold;
+  if (!(m.duration > 0))
+    throw ConfigError(source, 0, "simulation.duration", "is 0 and there are no moves to take it from");
+  if (m.duration / m.control_period > 1e8)
+    throw ConfigError(source, 0, "simulation.duration", "needs more than 1e8 controller samples");
+
+  // Fixed-step substeps from the fastest linearised eigenvalue; notch zeros at the closed-loop resonances.
+  m.substeps = spec.simulation.substeps > 0 ? spec.simulation.substeps : calc_auto_substeps(m);
+  m.omega_z[0] = spec.notch.omega_z[0];
+  m.omega_z[1] = spec.notch.omega_z[1];
+  m.resonances = calc_closed_loop_resonances(m);
+  if (spec.notch.enabled && m.omega_z[0] == 0.0) {
+    const auto& res = m.resonances;
+    if (res.size() < 2)
+      throw ConfigError(source, 0, "notch.omega_z", "the closed loop has fewer than two resonances to place the notch at; give omega_z");
+    m.omega_z[0] = res[0];
+    m.omega_z[1] = res[1];
+  }
+  if (spec.notch.enabled) {
+    try {
+      make_notch_sections(make_notch_design(m), m.control_period);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(source, 0, "notch", e.what());
+    }
+  }
+  return m;
+}
+
+}  // namespace ff

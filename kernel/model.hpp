@@ -1,0 +1,118 @@
+// The immutable model of one flexible arm: a hub and a beam of N rigid segments joined by
+// torsional springs, its controller and its commanded motion (reference-rig.md).
+// Built and validated once by make_model(); never written afterwards.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace ff {
+
+// Beam geometry and material (reference-rig.md, "Beam").
+struct BeamSpec {
+  double length = 4.1656;         // L, m
+  double height = 0.3048;         // h (vertical), m
+  double thickness = 0.01905;     // t (bends in the horizontal plane), m
+  double density = 7750.0;        // rho, kg/m^3
+  double youngs_modulus = 207e9;  // E, Pa
+};
+
+// Torsional spring-dampers between segments; k and c scale as reference_cell / l.
+struct JointSpec {
+  double stiffness = 39.5e3;      // k at the reference cell length, N·m/rad
+  double damping = 90.4;          // c at the reference cell length, N·m·s/rad
+  double reference_cell = 0.83312;  // cell length the two values above belong to, m
+};
+
+// PID on the hub angle, sampled with zero-order hold (reference-rig.md, "Controller").
+struct ControllerSpec {
+  double rate = 1000.0;           // sample rate, Hz
+  double kp = 1.0e5;              // N·m/rad
+  double ki = 0.0;                // N·m/(rad·s)
+  double kd = 3.0e4;              // N·m·s/rad, acts on the measured hub rate
+  double torque_limit = 0.0;      // |tau| bound, N·m; 0 = unlimited
+  double load_compensation = 0.0; // gain on the measured root bending moment fed forward (seed, "load compensation")
+};
+
+// Robust notch filter of seed eq. 6 acting on the reference.
+struct NotchSpec {
+  bool enabled = false;
+  int order = 1;                  // n
+  double alpha[2] = {1.6, 1.6};   // omega_pi = alpha_i * omega_zi
+  double zeta[2] = {1.0, 1.0};    // zeta_pi
+  double omega_z[2] = {0.0, 0.0}; // rad/s; 0 = place at the computed closed-loop resonances
+};
+
+// One move of the cubic trajectory r = r0 + (r1 - r0)(3u^2 - 2u^3), u = t/T_m, then a hold.
+struct MoveSpec {
+  double target = 0.0;            // rad
+  double hold = 0.0;              // s, after the move ends
+};
+
+struct TrajectorySpec {
+  double move_time = 3.0;         // T_m, s
+  std::vector<MoveSpec> moves;    // executed in order from r = 0 at t = 0
+};
+
+enum class Integrator { kRk4, kCvodeDense, kCvodeKlu };
+
+struct SimulationSpec {
+  double duration = 0.0;          // s; 0 = end of the last hold
+  Integrator integrator = Integrator::kRk4;
+  int substeps = 0;               // fixed-step substeps per control period; 0 = chosen from the fastest mode
+  double rtol = 1e-8;             // CVODE relative tolerance
+  double atol = 1e-10;            // CVODE absolute tolerance
+};
+
+// Everything a user writes in a model YAML file.
+struct ModelSpec {
+  BeamSpec beam;
+  int segments = 6;               // N >= 2
+  JointSpec joints;
+  double hub_inertia = 50.0;      // kg·m^2, actuator + pinion + base frame
+  double payload_mass = 328.7;    // kg, at the tip point
+  double payload_inertia = 118.6; // kg·m^2 about its own centre of mass
+  ControllerSpec controller;
+  NotchSpec notch;
+  TrajectorySpec trajectory;
+  SimulationSpec simulation;
+};
+
+// A planar rigid body in its own joint frame: spatial inertia [[J, 0, h], [0, m, 0], [h, 0, m]].
+struct BodyInertia {
+  double mass;    // m, kg
+  double first;   // h = m * x_com, kg·m
+  double inertia; // J about the joint axis, kg·m^2
+};
+
+// The derived, immutable model. Body 0 is the hub with the first segment; joint 0 is the hub
+// axis, joint i >= 1 the spring between segments i-1 and i. Generalised coordinates:
+// q0 = hub angle (absolute), qi = relative joint angle.
+struct Model {
+  ModelSpec spec;
+  int nseg = 0;                          // N
+  std::vector<double> seg_length;        // L_i (N), m
+  std::vector<double> seg_mass;          // m_i (N), kg
+  std::vector<double> seg_inertia;       // m_i (L_i^2 + t^2)/12 about the centre (N), kg·m^2
+  std::vector<BodyInertia> body;         // per body, payload and hub included (N)
+  std::vector<double> joint_k;           // spring of joint i (N, entry 0 unused = 0), N·m/rad
+  std::vector<double> joint_c;           // damper of joint i (N, entry 0 unused = 0), N·m·s/rad
+  double cell = 0.0;                     // l = L/(N-1), m
+  double control_period = 0.0;           // 1/rate, s
+  double duration = 0.0;                 // s
+  double omega_z[2] = {0.0, 0.0};        // notch zeros in use, rad/s (placed when enabled)
+  int substeps = 1;                      // fixed-step substeps per control period
+  std::vector<double> resonances;        // closed-loop resonances (oscillatory, zeta < 0.3), ascending, rad/s
+};
+
+// Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.
+Model make_model(const ModelSpec& spec, const std::string& source = "<model>");
+
+// Beam mass rho h t L, kg.
+double calc_beam_mass(const BeamSpec& beam);
+// Area moment h t^3 / 12, m^4.
+double calc_area_moment(const BeamSpec& beam);
+// Equivalent cantilever torsional stiffness 3EI/L of a beam of length `length` (seed eq. 5), N·m/rad.
+double calc_cantilever_stiffness(const BeamSpec& beam, double length);
+
+}  // namespace ff

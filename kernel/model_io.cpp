@@ -1,0 +1,115 @@
+#include "kernel/model_io.hpp"
+
+#include "kernel/errors.hpp"
+#include "kernel/yaml_reader.hpp"
+
+namespace ff {
+
+const char* integrator_name(Integrator i) {
+  switch (i) {
+    case Integrator::kRk4: return "rk4";
+    case Integrator::kCvodeDense: return "cvode_dense";
+    case Integrator::kCvodeKlu: return "cvode_klu";
+  }
+  return "?";
+}
+
+namespace {
+
+Integrator parse_integrator(YamlReader& r) {
+  std::string name = "rk4";
+  r.optional("integrator", name);
+  for (auto i : {Integrator::kRk4, Integrator::kCvodeDense, Integrator::kCvodeKlu})
+    if (name == integrator_name(i)) return i;
+  r.fail("integrator", "unknown integrator '" + name + "' (rk4, cvode_dense, cvode_klu)");
+}
+
+ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lines) {
+  ModelSpec s;
+  YamlReader top(doc, src, "", &lines);
+  if (!doc || doc.IsNull()) top.fail("beam", "the file is empty");
+
+  auto beam = top.child("beam", true);
+  beam.required("length", s.beam.length);
+  beam.required("height", s.beam.height);
+  beam.required("thickness", s.beam.thickness);
+  beam.required("density", s.beam.density);
+  beam.required("youngs_modulus", s.beam.youngs_modulus);
+  beam.finish();
+
+  top.required("segments", s.segments);
+
+  auto joints = top.child("joints", true);
+  joints.required("stiffness", s.joints.stiffness);
+  joints.required("damping", s.joints.damping);
+  joints.required("reference_cell", s.joints.reference_cell);
+  joints.finish();
+
+  auto hub = top.child("hub", true);
+  hub.required("inertia", s.hub_inertia);
+  hub.finish();
+
+  auto payload = top.child("payload", true);
+  payload.required("mass", s.payload_mass);
+  payload.required("inertia", s.payload_inertia);
+  payload.finish();
+
+  auto ctrl = top.child("controller");
+  ctrl.optional("rate", s.controller.rate);
+  ctrl.optional("kp", s.controller.kp);
+  ctrl.optional("ki", s.controller.ki);
+  ctrl.optional("kd", s.controller.kd);
+  ctrl.optional("torque_limit", s.controller.torque_limit);
+  ctrl.optional("load_compensation", s.controller.load_compensation);
+  ctrl.finish();
+
+  auto notch = top.child("notch");
+  notch.optional("enabled", s.notch.enabled);
+  notch.optional("order", s.notch.order);
+  notch.optional_array("alpha", s.notch.alpha, 2);
+  notch.optional_array("zeta", s.notch.zeta, 2);
+  notch.optional_array("omega_z", s.notch.omega_z, 2);
+  notch.finish();
+
+  auto traj = top.child("trajectory");
+  traj.optional("move_time", s.trajectory.move_time);
+  for (auto& mv : traj.sequence("moves")) {
+    MoveSpec m;
+    mv.required("target", m.target);
+    mv.optional("hold", m.hold);
+    mv.finish();
+    s.trajectory.moves.push_back(m);
+  }
+  traj.finish();
+
+  auto sim = top.child("simulation");
+  sim.optional("duration", s.simulation.duration);
+  s.simulation.integrator = parse_integrator(sim);
+  sim.optional("substeps", s.simulation.substeps);
+  sim.optional("rtol", s.simulation.rtol);
+  sim.optional("atol", s.simulation.atol);
+  sim.finish();
+
+  top.finish();
+  return s;
+}
+
+}  // namespace
+
+Model parse_model(const YAML::Node& doc, const std::string& source) {
+  LineMap lines;
+  const ModelSpec spec = parse_spec(doc, source, lines);
+  try {
+    return make_model(spec, source);
+  } catch (const ConfigError& e) {
+    // Point a range error at the line of its key.
+    if (e.line() > 0) throw;
+    auto it = lines.find(e.key());
+    const int line = it != lines.end() ? it->second : 0;
+    throw ConfigError(source, line, e.key(), e.message());
+  }
+}
+
+Model load_model(const std::string& path) { return parse_model(load_yaml_file(path), path); }
+
+}  // namespace ff

@@ -1,0 +1,36 @@
+// Linearised modes of the arm about rest: the hub clamped, and the hub in the PID loop.
+// x = [q; v], xdot = A x with A = [[0, I], [-M^-1 K, -M^-1 C]], M = M(0) from the composite-rigid-body
+// algorithm (Featherstone 2008, Table 6.2). Each eigenvalue lambda gives omega_n = |lambda|,
+// zeta = -Re(lambda) / |lambda|.
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "kernel/model.hpp"
+
+namespace ff {
+
+struct Mode {
+  double omega_n;     // natural frequency, rad/s
+  double zeta;        // damping ratio (1 for a real pole)
+  bool oscillatory;   // a complex pair (reported once)
+  double frequency_hz() const;
+};
+
+// Joint-space mass matrix M(q) (N x N), kg·m^2.
+Eigen::MatrixXd calc_mass_matrix(const Model& m, const Eigen::VectorXd& q);
+
+// Modes with the hub held still (joint 0 removed), ascending in omega_n.
+std::vector<Mode> calc_clamped_modes(const Model& m);
+// Modes of the continuous-time closed loop: PD(+I) on the hub angle, load-compensation feed-forward.
+std::vector<Mode> calc_closed_loop_modes(const Model& m);
+// The closed loop's resonances: its oscillatory modes with zeta < 0.3, ascending, rad/s.
+// The robust notch filter places its zeros omega_z1, omega_z2 at the first two.
+std::vector<double> calc_closed_loop_resonances(const Model& m);
+
+// Fixed-step RK4 substeps per control period: h omega_n <= 1 for every oscillatory mode of the
+// clamped and the closed loop, h |lambda| <= 2.5 for every real pole (RK4 is stable to ~2.78).
+int calc_auto_substeps(const Model& m);
+
+}  // namespace ff

@@ -1,0 +1,101 @@
+#include "kernel/simulate.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "kernel/controller.hpp"
+#include "kernel/cvode.hpp"
+#include "kernel/dynamics.hpp"
+#include "kernel/files.hpp"
+#include "kernel/fixed_step.hpp"
+#include "kernel/trajectory.hpp"
+
+namespace ff {
+
+namespace {
+
+// Lanes whose state stopped being finite are marked; they keep running harmlessly in lock-step.
+void mark_nonfinite(const BatchModel& bm, BatchState& s) {
+  for (int l = 0; l < bm.W; ++l) {
+    if (s.status[l] != LaneStatus::kOk) continue;
+    for (int i = 0; i < bm.nseg; ++i)
+      if (!std::isfinite(s.q[i * bm.W + l]) || !std::isfinite(s.v[i * bm.W + l])) {
+        s.status[l] = LaneStatus::kNonfinite;
+        break;
+      }
+  }
+}
+
+void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f,
+            std::vector<Trace>& out) {
+  for (int l = 0; l < bm.W; ++l) {
+    Trace& tr = out[l];
+    const TipKinematics tip = calc_tip(bm, s.q.data(), l);
+    tr.t.push_back(s.t);
+    tr.ref.push_back(ref[l]);
+    tr.ref_filtered.push_back(ref_f[l]);
+    tr.torque.push_back(s.tau[l]);
+    tr.hub_angle.push_back(s.q[l]);
+    tr.hub_rate.push_back(s.v[l]);
+    tr.tip_deflection.push_back(tip.deflection);
+    tr.tip_angle.push_back(tip.angle);
+  }
+}
+
+}  // namespace
+
+BatchRun simulate(const BatchModel& bm) {
+  const int W = bm.W;
+  const double T = bm.control_period;
+  const long nsamples = std::lround(bm.duration / T) + 1;
+  const Integrator kind = bm.models[0].spec.simulation.integrator;
+
+  BatchState s = make_state(bm);
+  Workspace ws = make_workspace(bm);
+  std::unique_ptr<CvodeBatch> cvode;
+  if (kind != Integrator::kRk4) cvode = std::make_unique<CvodeBatch>(bm, kind);
+
+  BatchRun run;
+  run.traces.resize(W);
+  for (auto& tr : run.traces)
+    for (auto* x : {&tr.t, &tr.ref, &tr.ref_filtered, &tr.torque, &tr.hub_angle, &tr.hub_rate, &tr.tip_deflection,
+                    &tr.tip_angle})
+      x->reserve(nsamples);
+
+  std::vector<double> ref(W), ref_f(W);
+  const double h = T / bm.substeps;
+  for (long k = 0; k < nsamples; ++k) {
+    s.t = k * T;
+    s.sample = k;
+    // Controller sample: reference, filter, PID; then record the signals of this instant.
+    for (int l = 0; l < W; ++l) ref[l] = calc_reference(bm.models[l].spec.trajectory, s.t);
+    if (k == 0) reset_controller(bm, s, ref.data());
+    compute_control(bm, s, ref.data(), ref_f.data());
+    record(bm, s, ref.data(), ref_f.data(), run.traces);
+    if (k + 1 == nsamples) break;
+    // Plant: integrate to the next sample with the torque held.
+    if (cvode) {
+      cvode->advance(s, T);
+    } else {
+      for (int j = 0; j < bm.substeps; ++j) step_rk4(bm, s, ws, h);
+    }
+    mark_nonfinite(bm, s);
+  }
+  run.status = s.status;
+  return run;
+}
+
+void write_trace_csv(const Trace& tr, const std::string& path) {
+  std::string text = "t,ref,ref_filtered,hub_torque,hub_angle,hub_rate,tip_deflection,tip_angle\n";
+  char buf[512];
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    std::snprintf(buf, sizeof buf, "%.6f,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", tr.t[k], tr.ref[k],
+                  tr.ref_filtered[k], tr.torque[k], tr.hub_angle[k], tr.hub_rate[k], tr.tip_deflection[k],
+                  tr.tip_angle[k]);
+    text += buf;
+  }
+  write_file_atomic(path, text);
+}
+
+}  // namespace ff

@@ -1,0 +1,37 @@
+// One closed-loop run of a batch: the controller at its sample rate, the plant integrated
+// between samples with the torque held (fixed-step RK4 or CVODE).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kernel/batch.hpp"
+
+namespace ff {
+
+// One lane's signals at every controller sample, taken at the sample instant before that
+// sample's torque is applied (as in the reference traces).
+struct Trace {
+  std::vector<double> t;               // s
+  std::vector<double> ref;             // commanded hub angle r, rad
+  std::vector<double> ref_filtered;    // r after the notch filter, rad
+  std::vector<double> torque;          // hub torque of this sample, N·m
+  std::vector<double> hub_angle;       // rad
+  std::vector<double> hub_rate;        // rad/s
+  std::vector<double> tip_deflection;  // m
+  std::vector<double> tip_angle;       // rad
+};
+
+struct BatchRun {
+  std::vector<Trace> traces;           // (W)
+  std::vector<LaneStatus> status;      // (W)
+};
+
+// Runs every lane of the batch to bm.duration with the integrator the models ask for.
+BatchRun simulate(const BatchModel& bm);
+
+// Writes one trace as CSV (columns t, ref, ref_filtered, hub_torque, hub_angle, hub_rate,
+// tip_deflection, tip_angle), atomically.
+void write_trace_csv(const Trace& tr, const std::string& path);
+
+}  // namespace ff

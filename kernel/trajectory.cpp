@@ -1,0 +1,48 @@
+#include "kernel/trajectory.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace ff {
+
+double calc_reference(const TrajectorySpec& traj, double t) {
+  double r = 0.0, t0 = 0.0;
+  for (const auto& mv : traj.moves) {
+    if (t < t0) break;
+    const double u = std::clamp((t - t0) / traj.move_time, 0.0, 1.0);
+    const double target = mv.target;
+    const double r_now = r + (target - r) * u * u * (3.0 - 2.0 * u);
+    if (u < 1.0) return r_now;
+    r = target;
+    t0 += traj.move_time + mv.hold;
+  }
+  return r;
+}
+
+std::vector<Move> calc_moves(const TrajectorySpec& traj, double duration) {
+  std::vector<Move> out;
+  double r = 0.0, t0 = 0.0;
+  for (const auto& mv : traj.moves) {
+    if (t0 >= duration) break;
+    const double t_end = t0 + traj.move_time;
+    out.push_back({t0, {t_end, std::min(t_end + mv.hold, duration), r, mv.target}});
+    r = mv.target;
+    t0 = t_end + mv.hold;
+  }
+  if (!out.empty()) out.back().window.t_window_end = duration;
+  return out;
+}
+
+std::vector<std::string> describe_moves(const TrajectorySpec& traj) {
+  std::vector<std::string> out;
+  double from = 0.0;
+  for (const auto& mv : traj.moves) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g -> %g rad", from, mv.target);
+    out.push_back(buf);
+    from = mv.target;
+  }
+  return out;
+}
+
+}  // namespace ff

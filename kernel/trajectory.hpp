@@ -1,0 +1,26 @@
+// The commanded hub angle: a chain of cubic moves r = r0 + (r1 - r0)(3u^2 - 2u^3), u = t/T_m,
+// each followed by a hold (reference-rig.md, "Controller and motion"; the seed's TELEGRIP planner).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kernel/metrics.hpp"
+#include "kernel/model.hpp"
+
+namespace ff {
+
+// r(t), rad.
+double calc_reference(const TrajectorySpec& traj, double t);
+
+// One commanded move: when it starts, and the window in which its response is judged.
+struct Move {
+  double t_start;     // move begins, s
+  MoveWindow window;  // move end, window end (next move or end of record), start and target values
+};
+std::vector<Move> calc_moves(const TrajectorySpec& traj, double duration);
+
+// "0 -> 0.5 rad" for each move, for tables.
+std::vector<std::string> describe_moves(const TrajectorySpec& traj);
+
+}  // namespace ff

@@ -1,0 +1,131 @@
+#include "kernel/yaml_reader.hpp"
+
+#include <cmath>
+#include <fstream>
+
+#include "kernel/errors.hpp"
+
+namespace ff {
+
+namespace {
+int line_of(const YAML::Node& n) { return n.Mark().is_null() ? 0 : n.Mark().line + 1; }
+}  // namespace
+
+YamlReader::YamlReader(const YAML::Node& node, std::string file, std::string path, LineMap* lines)
+    : node_(node), file_(std::move(file)), path_(std::move(path)), lines_(lines) {
+  if (node_ && !node_.IsNull() && !node_.IsMap())
+    throw ConfigError(file_, line_of(node_), path_.empty() ? "<top>" : path_, "expected a map of keys");
+}
+
+std::string YamlReader::full_key(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+int YamlReader::line() const { return line_of(node_); }
+
+bool YamlReader::has(const std::string& key) const { return node_ && node_.IsMap() && node_[key]; }
+
+void YamlReader::fail(const std::string& key, const std::string& message) const {
+  const auto full = full_key(key);
+  int line = 0;
+  if (has(key)) line = line_of(node_[key]);
+  else if (lines_ && lines_->count(full)) line = lines_->at(full);
+  else line = line_of(node_);
+  throw ConfigError(file_, line, full, message);
+}
+
+YAML::Node YamlReader::value(const std::string& key, bool required) {
+  if (!has(key)) {
+    if (required) fail(key, "missing required value");
+    return YAML::Node(YAML::NodeType::Undefined);
+  }
+  used_.insert(key);
+  YAML::Node v = node_[key];
+  if (lines_) (*lines_)[full_key(key)] = line_of(v);
+  return v;
+}
+
+namespace {
+double to_number(const YamlReader& r, const std::string& key, const YAML::Node& v) {
+  if (!v.IsScalar()) r.fail(key, "expected a number");
+  double x = 0;
+  if (!YAML::convert<double>::decode(v, x)) r.fail(key, "expected a number, got '" + v.Scalar() + "'");
+  if (!std::isfinite(x)) r.fail(key, "must be a finite number, got '" + v.Scalar() + "'");
+  return x;
+}
+int to_int(const YamlReader& r, const std::string& key, const YAML::Node& v) {
+  int x = 0;
+  if (!v.IsScalar() || !YAML::convert<int>::decode(v, x))
+    r.fail(key, "expected an integer, got '" + (v.IsScalar() ? v.Scalar() : std::string("a non-scalar")) + "'");
+  return x;
+}
+}  // namespace
+
+void YamlReader::optional(const std::string& key, double& out) {
+  if (auto v = value(key, false)) out = to_number(*this, key, v);
+}
+void YamlReader::required(const std::string& key, double& out) { out = to_number(*this, key, value(key, true)); }
+void YamlReader::optional(const std::string& key, int& out) {
+  if (auto v = value(key, false)) out = to_int(*this, key, v);
+}
+void YamlReader::required(const std::string& key, int& out) { out = to_int(*this, key, value(key, true)); }
+
+void YamlReader::optional(const std::string& key, bool& out) {
+  auto v = value(key, false);
+  if (!v) return;
+  bool x = false;
+  if (!v.IsScalar() || !YAML::convert<bool>::decode(v, x)) fail(key, "expected true or false");
+  out = x;
+}
+
+void YamlReader::optional(const std::string& key, std::string& out) {
+  auto v = value(key, false);
+  if (!v) return;
+  if (!v.IsScalar()) fail(key, "expected a string");
+  out = v.Scalar();
+}
+
+void YamlReader::optional_array(const std::string& key, double* out, int count) {
+  auto v = value(key, false);
+  if (!v) return;
+  if (v.IsScalar()) {
+    const double x = to_number(*this, key, v);
+    for (int i = 0; i < count; ++i) out[i] = x;
+    return;
+  }
+  if (!v.IsSequence() || static_cast<int>(v.size()) != count)
+    fail(key, "expected a number or a list of " + std::to_string(count) + " numbers");
+  for (int i = 0; i < count; ++i) out[i] = to_number(*this, key + "[" + std::to_string(i) + "]", v[i]);
+}
+
+YamlReader YamlReader::child(const std::string& key, bool required) {
+  return YamlReader(value(key, required), file_, full_key(key), lines_);
+}
+
+std::vector<YamlReader> YamlReader::sequence(const std::string& key, bool required) {
+  std::vector<YamlReader> out;
+  auto v = value(key, required);
+  if (!v) return out;
+  if (!v.IsSequence()) fail(key, "expected a list");
+  for (std::size_t i = 0; i < v.size(); ++i)
+    out.emplace_back(v[i], file_, full_key(key) + "[" + std::to_string(i) + "]", lines_);
+  return out;
+}
+
+void YamlReader::finish() const {
+  if (!node_ || !node_.IsMap()) return;
+  for (const auto& kv : node_) {
+    const auto key = kv.first.as<std::string>();
+    if (!used_.count(key)) throw ConfigError(file_, line_of(kv.first), full_key(key), "unknown key");
+  }
+}
+
+YAML::Node load_yaml_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, 0, "", "cannot open file");
+  try {
+    return YAML::Load(in);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(path, e.mark.line + 1, "", e.msg);
+  }
+}
+
+}  // namespace ff

@@ -1,0 +1,59 @@
+// Strict reading of YAML maps: every key must be known, every value of the right type and finite.
+// Errors name the file, the line and the full key path (e.g. "configs/fbtb.yaml:12: payload.mass: ...").
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace ff {
+
+// Line numbers (1-based) of every key path read, so later validation can point at the line.
+using LineMap = std::map<std::string, int>;
+
+class YamlReader {
+ public:
+  YamlReader(const YAML::Node& node, std::string file, std::string path, LineMap* lines);
+
+  bool has(const std::string& key) const;
+  // Optional values: leave `out` untouched when the key is absent.
+  void optional(const std::string& key, double& out);
+  void optional(const std::string& key, int& out);
+  void optional(const std::string& key, bool& out);
+  void optional(const std::string& key, std::string& out);
+  // Required values: absent key is an error.
+  void required(const std::string& key, double& out);
+  void required(const std::string& key, int& out);
+  // A list of numbers, or one number meaning "all `count` entries".
+  void optional_array(const std::string& key, double* out, int count);
+  // A nested map (absent: an empty reader, so optional children keep their defaults).
+  YamlReader child(const std::string& key, bool required = false);
+  // The raw node of a key (null when absent), marked as read.
+  YAML::Node raw(const std::string& key) { return has(key) ? value(key, false) : YAML::Node(YAML::NodeType::Undefined); }
+  // Elements of a sequence of maps.
+  std::vector<YamlReader> sequence(const std::string& key, bool required = false);
+  // Throws for any key that was not read.
+  void finish() const;
+
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+  const std::string& file() const { return file_; }
+  std::string full_key(const std::string& key) const;
+  int line() const;
+
+ private:
+  // The value of `key` (marked as read); an absent required key is an error.
+  YAML::Node value(const std::string& key, bool required);
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+  LineMap* lines_;
+  std::set<std::string> used_;
+};
+
+// Loads a YAML file, turning parse errors into ConfigError with the file and line.
+YAML::Node load_yaml_file(const std::string& path);
+
+}  // namespace ff

@@ -1,0 +1,33 @@
+// The responses of one run, per commanded move (reference-rig.md, "Signals and sign conventions").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kernel/batch.hpp"
+#include "kernel/simulate.hpp"
+
+namespace ff {
+
+// Metrics of each move, in this order (column suffixes):
+//   tip_settling_s       settling time of the tip angle after the move ends (reference-rig.md), NaN = not
+//                        settled; also NaN unless the tip then stays in the band for one period of the
+//                        slowest closed-loop resonance before the window ends
+//   tip_overshoot_pct    overshoot of the tip angle, %
+//   hub_settling_s       settling time of the hub angle, NaN = not settled
+//   hub_overshoot_pct    overshoot of the hub angle, %
+//   peak_tip_deflection_m  largest |tip deflection| from the move's start to the next move, m
+//   residual_vibration_m   half the peak-to-peak tip deflection after the move ends, m
+//   peak_torque_Nm         largest |hub torque| from the move's start to the next move, N·m
+extern const std::vector<std::string> kMoveMetrics;
+
+// Column names "m1_tip_settling_s", ... for `nmoves` moves.
+std::vector<std::string> calc_metric_columns(int nmoves);
+
+// Values in calc_metric_columns order.
+std::vector<double> calc_run_metrics(const Model& model, const Trace& trace);
+
+// "ok", "not_settled" (a tip settling time is NaN), or the lane's failure.
+std::string calc_run_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values);
+
+}  // namespace ff

@@ -1,0 +1,104 @@
+#include "sweep/paths.hpp"
+
+#include <cctype>
+#include <vector>
+
+#include "kernel/errors.hpp"
+
+namespace ff {
+
+namespace {
+
+// One step of a path: a map key or a sequence index.
+struct Step {
+  std::string key;
+  int index = -1;
+};
+
+std::vector<Step> split_path(const std::string& path, const std::string& source) {
+  std::vector<Step> steps;
+  std::size_t i = 0;
+  auto bad = [&](const std::string& why) { throw ConfigError(source, 0, path, "bad parameter path: " + why); };
+  if (path.empty()) bad("empty");
+  while (i < path.size()) {
+    if (path[i] == '[') {
+      const auto close = path.find(']', i);
+      if (close == std::string::npos || close == i + 1) bad("unclosed or empty [ ]");
+      const std::string digits = path.substr(i + 1, close - i - 1);
+      for (char c : digits)
+        if (!std::isdigit(static_cast<unsigned char>(c))) bad("index '" + digits + "' is not a number");
+      steps.push_back({"", std::stoi(digits)});
+      i = close + 1;
+      if (i < path.size() && path[i] == '.') ++i;
+      continue;
+    }
+    std::size_t end = i;
+    while (end < path.size() && path[end] != '.' && path[end] != '[') ++end;
+    if (end == i) bad("empty key");
+    steps.push_back({path.substr(i, end - i), -1});
+    i = end;
+    if (i < path.size() && path[i] == '.') ++i;
+  }
+  return steps;
+}
+
+}  // namespace
+
+void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value, const std::string& source) {
+  const auto steps = split_path(path, source);
+  YAML::Node node = doc;  // yaml-cpp nodes are handles: walking reassigns the handle, not the value
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    const bool last = s + 1 == steps.size();
+    const Step& st = steps[s];
+    if (st.index >= 0) {
+      if (!node.IsSequence() || st.index >= static_cast<int>(node.size()))
+        throw ConfigError(source, 0, path, "index [" + std::to_string(st.index) + "] is not in the list");
+      if (last) {
+        node[st.index] = value;
+        return;
+      }
+      YAML::Node next = node[st.index];
+      node.reset(next);
+    } else {
+      if (!node.IsMap() && !node.IsNull())
+        throw ConfigError(source, 0, path, "'" + st.key + "' is inside a value that is not a map");
+      if (last) {
+        node[st.key] = value;
+        return;
+      }
+      YAML::Node next = node[st.key];
+      node.reset(next);
+    }
+  }
+}
+
+YAML::Node get_path(const YAML::Node& doc, const std::string& path) {
+  YAML::Node node = YAML::Clone(doc);
+  for (const auto& st : split_path(path, "<path>")) {
+    if (st.index >= 0) {
+      if (!node.IsSequence() || st.index >= static_cast<int>(node.size())) return YAML::Node();
+      YAML::Node next = node[st.index];
+      node.reset(next);
+    } else {
+      if (!node.IsMap() || !node[st.key]) return YAML::Node();
+      YAML::Node next = node[st.key];
+      node.reset(next);
+    }
+  }
+  return node;
+}
+
+void apply_assignment(YAML::Node& doc, const std::string& assignment, const std::string& source) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw ConfigError(source, 0, assignment, "expected PATH=VALUE, e.g. payload.mass=400");
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source, 0, assignment.substr(0, eq), "value is not valid YAML: " + e.msg);
+  }
+  set_path(doc, assignment.substr(0, eq), value, source);
+}
+
+}  // namespace ff
