@@ -14,9 +14,10 @@ function(flexfarm_library name)
   endif()
 endfunction()
 
-# flexfarm_tests(FOLDER LIBS...): one GoogleTest program per folder of tests/, each test registered with ctest.
+# flexfarm_tests(FOLDER LIBS...): one GoogleTest program per folder of tests/ (its *_test.cpp files and
+# their helpers), each test registered with ctest.
 function(flexfarm_tests folder)
-  file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/${folder}/*_test.cpp)
+  file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/${folder}/*.cpp)
   if(NOT srcs)
     return()
   endif()

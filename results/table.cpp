@@ -27,9 +27,16 @@ std::string format_results_csv(const ResultTable& t) {
   for (const auto& c : t.columns) out += "," + c;
   out += "\n";
   for (const auto& r : t.rows) {
-    out += std::to_string(r.eval_id) + "," + csv_quote(r.label) + "," + r.status;
-    for (double x : r.values) out += "," + (std::isnan(x) ? std::string() : fmt("%.10g", x));
-    out += "\n";
+    out += std::to_string(r.eval_id);
+    out += ',';
+    out += csv_quote(r.label);
+    out += ',';
+    out += r.status;
+    for (double x : r.values) {
+      out += ',';
+      if (!std::isnan(x)) out += fmt("%.10g", x);
+    }
+    out += '\n';
   }
   return out;
 }
