@@ -1,0 +1,56 @@
+// Throughput of the batch kernel: variant-steps per second of the closed loop (controller at 1 kHz,
+// plant between samples) against lane width, segment count and integrator.
+// Run: build/kernel_bench --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "kernel/model.hpp"
+#include "kernel/simulate.hpp"
+
+namespace {
+
+// The reference rig: 0.5 rad cubic move over a 2 s run, W lanes with slightly different payloads.
+ff::BatchModel rig_batch(int nseg, int W, ff::Integrator integ, int substeps) {
+  std::vector<ff::Model> models;
+  for (int l = 0; l < W; ++l) {
+    ff::ModelSpec s;
+    s.segments = nseg;
+    s.payload_mass = 328.7 * (1.0 + 0.01 * l);
+    s.trajectory.moves = {{0.5, 0.0}};
+    s.simulation.duration = 2.0;
+    s.simulation.integrator = integ;
+    s.simulation.substeps = substeps;
+    models.push_back(ff::make_model(s));
+  }
+  return ff::make_batch(models);
+}
+
+// args: segments, lanes, substeps (0 = automatic)
+void BM_Rk4ClosedLoop(benchmark::State& state) {
+  const auto bm = rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), ff::Integrator::kRk4,
+                            static_cast<int>(state.range(2)));
+  const double samples = bm.duration / bm.control_period;
+  for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
+  state.counters["substeps"] = bm.substeps;
+  state.counters["variant_samples/s"] = benchmark::Counter(samples * bm.W, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["x_realtime/core"] = benchmark::Counter(bm.duration * bm.W, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Rk4ClosedLoop)
+    ->ArgNames({"N", "W", "sub"})
+    ->Args({6, 1, 1})->Args({6, 4, 1})->Args({6, 8, 1})->Args({6, 16, 1})
+    ->Args({24, 1, 0})->Args({24, 8, 0})
+    ->Unit(benchmark::kMillisecond);
+
+void BM_CvodeClosedLoop(benchmark::State& state) {
+  const auto integ = state.range(1) == 0 ? ff::Integrator::kCvodeDense : ff::Integrator::kCvodeKlu;
+  const auto bm = rig_batch(static_cast<int>(state.range(0)), 1, integ, 1);
+  for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
+  state.counters["x_realtime/core"] = benchmark::Counter(bm.duration, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_CvodeClosedLoop)->ArgNames({"N", "klu"})->Args({6, 0})->Args({6, 1})->Args({24, 0})->Args({24, 1})
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,85 @@
+// jobs/runner.cpp: the paper study against its checked-in answer table, and thread-count independence.
+#include "jobs/runner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "results/table.hpp"
+
+namespace ff {
+namespace {
+
+const std::string kSource = FLEXFARM_SOURCE_DIR;
+
+std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::string cell;
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) {
+        cells.push_back(cell);
+        cell.clear();
+      } else cell += c;
+    }
+    cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+TEST(Runner, PaperStudyMatchesItsAnswerTable) {
+  // Regression table written by `flexfarm run configs/studies/fbtb_paper.yaml` (tests/data/README.md).
+  const Study study = load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  const StudyRun run = run_study(study, RunOptions{});
+  std::ifstream in(kSource + "/tests/data/fbtb_paper_results.csv");
+  std::stringstream expected;
+  expected << in.rdbuf();
+  const auto want = parse_csv(expected.str());
+  const auto got = parse_csv(format_results_csv(run.table));
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t r = 0; r < want.size(); ++r) {
+    ASSERT_EQ(got[r].size(), want[r].size()) << "row " << r;
+    for (std::size_t c = 0; c < want[r].size(); ++c) {
+      if (r == 0 || c < 3 || want[r][c].empty()) {
+        EXPECT_EQ(got[r][c], want[r][c]) << "row " << r << " column " << want[0][c];
+      } else {
+        const double w = std::stod(want[r][c]), g = std::stod(got[r][c]);
+        EXPECT_NEAR(g, w, 1e-6 * std::max(1.0, std::fabs(w))) << "row " << r << " column " << want[0][c];
+      }
+    }
+  }
+}
+
+TEST(Runner, ResultTableIsIdenticalForOneAndTwoThreads) {
+  const Study study = load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  RunOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.keep_traces = two.keep_traces = false;
+  EXPECT_EQ(format_results_csv(run_study(study, one).table), format_results_csv(run_study(study, two).table));
+}
+
+TEST(Runner, ProgressReachesTheVariantCount) {
+  const Study study = load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  RunOptions opt;
+  int last = 0, calls = 0;
+  opt.progress = [&](int done, int total) {
+    EXPECT_EQ(total, 4);
+    EXPECT_EQ(done, last + 1);
+    last = done;
+    ++calls;
+  };
+  run_study(study, opt);
+  EXPECT_EQ(calls, 4);
+}
+
+}  // namespace
+}  // namespace ff

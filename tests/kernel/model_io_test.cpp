@@ -1,0 +1,403 @@
+// Tests of model YAML parsing (kernel/model_io.hpp, kernel/yaml_reader.hpp, validate() in kernel/model.cpp):
+// every bad document is configs/fbtb.yaml with one line changed, and must be rejected with one
+// ConfigError naming the file, the exact line and the full dotted key, saying what is wrong.
+#include "kernel/model_io.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "kernel/errors.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kReference = std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml";
+
+// The reference file, one string per line.
+std::vector<std::string> reference_lines() {
+  std::ifstream in(kReference);
+  std::vector<std::string> lines;
+  for (std::string s; std::getline(in, s);) lines.push_back(s);
+  return lines;
+}
+
+std::string join(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const auto& l : lines) text += l + "\n";
+  return text;
+}
+
+// The reference text with line `n` (1-based) replaced by `text`; the line count is unchanged.
+std::string with_line(int n, const std::string& text) {
+  auto lines = reference_lines();
+  EXPECT_GE(n, 1);
+  EXPECT_LE(n, static_cast<int>(lines.size()));
+  lines.at(n - 1) = text;
+  return join(lines);
+}
+
+// The reference text with lines first..last blanked (line numbers of the rest unchanged).
+std::string without_lines(int first, int last) {
+  auto lines = reference_lines();
+  for (int n = first; n <= last; ++n) lines.at(n - 1) = "";
+  return join(lines);
+}
+
+// Parses `text` as "bad.yaml"; it must fail. Returns the error for further checks.
+ff::ConfigError parse_error(const std::string& text) {
+  try {
+    ff::parse_model(YAML::Load(text), "bad.yaml");
+  } catch (const ff::ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "the document was accepted:\n" << text;
+  return ff::ConfigError("", 0, "", "");
+}
+
+// One rejection: file, line, key and the gist of the message, and what() carrying all of them.
+void expect_rejected(const std::string& text, int line, const std::string& key, const std::string& gist) {
+  const auto e = parse_error(text);
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_EQ(e.line(), line) << e.what();
+  EXPECT_EQ(e.key(), key) << e.what();
+  EXPECT_NE(e.message().find(gist), std::string::npos) << "message '" << e.message() << "' lacks '" << gist << "'";
+  const std::string prefix = "bad.yaml:" + std::to_string(line) + ": " + key + ": ";
+  EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what();
+  EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "one line: " << e.what();
+}
+
+// A fresh directory, removed with its contents.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("ff_model_io_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path / name) << text;
+    return (path / name).string();
+  }
+};
+
+// ---- the reference file ----------------------------------------------------------------
+
+TEST(ModelIo, ReferenceLinesAreWhereTheseTestsExpect) {
+  // The line numbers below are those of configs/fbtb.yaml; fail loudly if the file moves them.
+  const auto l = reference_lines();
+  ASSERT_GE(l.size(), 50u);
+  EXPECT_EQ(l[4 - 1].rfind("beam:", 0), 0u);
+  EXPECT_EQ(l[5 - 1].rfind("  length: 4.1656", 0), 0u);
+  EXPECT_EQ(l[6 - 1].rfind("  height: 0.3048", 0), 0u);
+  EXPECT_EQ(l[8 - 1].rfind("  density: 7750", 0), 0u);
+  EXPECT_EQ(l[11 - 1].rfind("segments: 6", 0), 0u);
+  EXPECT_EQ(l[15 - 1].rfind("  damping: 90.4", 0), 0u);
+  EXPECT_EQ(l[19 - 1].rfind("  inertia: 50.0", 0), 0u);
+  EXPECT_EQ(l[21 - 1].rfind("payload:", 0), 0u);
+  EXPECT_EQ(l[22 - 1].rfind("  mass: 328.7", 0), 0u);
+  EXPECT_EQ(l[23 - 1].rfind("  inertia: 118.6", 0), 0u);
+  EXPECT_EQ(l[24 - 1], "");
+  EXPECT_EQ(l[29 - 1].rfind("  kd: 3.0e4", 0), 0u);
+  EXPECT_EQ(l[34 - 1].rfind("  enabled: false", 0), 0u);
+  EXPECT_EQ(l[35 - 1].rfind("  order: 1", 0), 0u);
+  EXPECT_EQ(l[36 - 1].rfind("  alpha: [1.6, 1.6]", 0), 0u);
+  EXPECT_EQ(l[43 - 1].rfind("    - {target: 0.5, hold: 7.0}", 0), 0u);
+  EXPECT_EQ(l[44 - 1].rfind("    - {target: 0.0, hold: 45.0}", 0), 0u);
+  EXPECT_EQ(l[47 - 1].rfind("  integrator: rk4", 0), 0u);
+}
+
+TEST(ModelIo, ReferenceFileParsesToTheSeedRig) {
+  const ff::Model m = ff::load_model(kReference);
+  EXPECT_EQ(m.nseg, 6);
+  EXPECT_DOUBLE_EQ(m.spec.beam.length, 4.1656);
+  EXPECT_DOUBLE_EQ(m.spec.beam.height, 0.3048);
+  EXPECT_DOUBLE_EQ(m.spec.beam.thickness, 0.01905);
+  EXPECT_DOUBLE_EQ(m.spec.beam.density, 7750.0);
+  EXPECT_DOUBLE_EQ(m.spec.beam.youngs_modulus, 207.0e9);
+  EXPECT_NEAR(m.cell, 0.83312, 1e-12);
+  // N = 6 is the reference cell, so the joints keep the file's k and c.
+  EXPECT_NEAR(m.joint_k[1], 39500.0, 1e-6);
+  EXPECT_NEAR(m.joint_c[1], 90.4, 1e-9);
+  EXPECT_EQ(m.joint_k[0], 0.0);
+  EXPECT_DOUBLE_EQ(m.spec.hub_inertia, 50.0);
+  EXPECT_DOUBLE_EQ(m.spec.payload_mass, 328.7);
+  EXPECT_DOUBLE_EQ(m.spec.payload_inertia, 118.6);
+  EXPECT_DOUBLE_EQ(m.control_period, 1e-3);
+  EXPECT_DOUBLE_EQ(m.spec.controller.kp, 1.0e5);
+  EXPECT_DOUBLE_EQ(m.spec.controller.kd, 3.0e4);
+  EXPECT_FALSE(m.spec.notch.enabled);
+  EXPECT_EQ(m.spec.notch.order, 1);
+  EXPECT_DOUBLE_EQ(m.spec.notch.alpha[1], 1.6);
+  ASSERT_EQ(m.spec.trajectory.moves.size(), 2u);
+  EXPECT_DOUBLE_EQ(m.spec.trajectory.moves[0].target, 0.5);
+  EXPECT_DOUBLE_EQ(m.spec.trajectory.moves[1].hold, 45.0);
+  EXPECT_DOUBLE_EQ(m.duration, 3.0 + 7.0 + 3.0 + 45.0);
+  EXPECT_EQ(m.spec.simulation.integrator, ff::Integrator::kRk4);
+  EXPECT_STREQ(ff::integrator_name(m.spec.simulation.integrator), "rk4");
+  // Closed-loop resonances: 0.274 Hz and 2.289 Hz.
+  ASSERT_GE(m.resonances.size(), 2u);
+  EXPECT_NEAR(m.resonances[0] / (2 * std::numbers::pi), 0.2740, 5e-4);
+  EXPECT_NEAR(m.resonances[1] / (2 * std::numbers::pi), 2.2892, 5e-4);
+  // Total mass: beam plus payload.
+  double mass = 0;
+  for (const auto& b : m.body) mass += b.mass;
+  EXPECT_NEAR(mass, ff::calc_beam_mass(m.spec.beam) + 328.7, 1e-9);
+}
+
+TEST(ModelIo, ReferenceTextParsesIdenticallyFromMemory) {
+  const ff::Model m = ff::parse_model(YAML::Load(join(reference_lines())), "bad.yaml");
+  EXPECT_EQ(m.nseg, 6);
+  EXPECT_NEAR(m.joint_k[1], 39500.0, 1e-6);
+}
+
+// ---- unknown keys ------------------------------------------------------------------------
+
+TEST(ModelIo, UnknownTopLevelKeyIsRejectedWithItsLine) {
+  expect_rejected(with_line(3, "gravity: 9.81"), 3, "gravity", "unknown key");
+}
+
+TEST(ModelIo, UnknownNestedKeyNamesFullPath) {
+  expect_rejected(with_line(24, "  colour: red"), 24, "payload.colour", "unknown key");
+}
+
+TEST(ModelIo, MisspeltOptionalKeyIsAnUnknownKey) {
+  expect_rejected(with_line(29, "  kdd: 3.0e4"), 29, "controller.kdd", "unknown key");
+}
+
+TEST(ModelIo, MisspeltRequiredKeyIsReportedMissing) {
+  // "hieght" for "height": the required key is missing (reported first), pointing into the beam block.
+  const auto e = parse_error(with_line(6, "  hieght: 0.3048"));
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_EQ(e.key(), "beam.height");
+  EXPECT_NE(e.message().find("missing"), std::string::npos) << e.what();
+  EXPECT_TRUE(e.line() == 4 || e.line() == 5) << e.what();
+}
+
+TEST(ModelIo, MisspeltKeyInAMoveIsAnUnknownKey) {
+  expect_rejected(with_line(43, "    - {target: 0.5, hodl: 7.0}"), 43, "trajectory.moves[0].hodl", "unknown key");
+}
+
+// ---- wrong types -------------------------------------------------------------------------
+
+TEST(ModelIo, SegmentsAsWordIsNotAnInteger) {
+  expect_rejected(with_line(11, "segments: six"), 11, "segments", "expected an integer, got 'six'");
+}
+
+TEST(ModelIo, SegmentsAsFractionIsNotAnInteger) {
+  expect_rejected(with_line(11, "segments: 6.5"), 11, "segments", "expected an integer, got '6.5'");
+}
+
+TEST(ModelIo, BeamLengthAsListIsNotANumber) {
+  expect_rejected(with_line(5, "  length: [1, 2]"), 5, "beam.length", "expected a number");
+}
+
+TEST(ModelIo, PayloadMassAsWordIsNotANumber) {
+  expect_rejected(with_line(22, "  mass: heavy"), 22, "payload.mass", "expected a number, got 'heavy'");
+}
+
+TEST(ModelIo, NotchEnabledMaybeIsNotABoolean) {
+  expect_rejected(with_line(34, "  enabled: maybe"), 34, "notch.enabled", "expected true or false");
+}
+
+TEST(ModelIo, NotchAlphaListOfWrongLengthIsRejected) {
+  expect_rejected(with_line(36, "  alpha: [1.6, 1.6, 1.6]"), 36, "notch.alpha", "list of 2 numbers");
+}
+
+TEST(ModelIo, BeamAsNumberIsNotAMap) {
+  // Line 4 becomes "beam: 5"; lines 5-9 are then indented children of nothing, so blank them.
+  auto lines = reference_lines();
+  lines[4 - 1] = "beam: 5";
+  for (int n = 5; n <= 9; ++n) lines[n - 1] = "";
+  expect_rejected(join(lines), 4, "beam", "expected a map");
+}
+
+TEST(ModelIo, MovesAsMapIsNotAList) {
+  auto lines = reference_lines();
+  lines[42 - 1] = "  moves: {target: 1}";
+  lines[43 - 1] = lines[44 - 1] = "";
+  expect_rejected(join(lines), 42, "trajectory.moves", "expected a list");
+}
+
+// ---- missing values ----------------------------------------------------------------------
+
+TEST(ModelIo, MissingBeamHeightNamesKey) {
+  const auto e = parse_error(with_line(6, ""));
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_EQ(e.key(), "beam.height");
+  EXPECT_NE(e.message().find("missing required value"), std::string::npos) << e.what();
+  // No line of its own: the error points at the beam block (its key or its first entry).
+  EXPECT_TRUE(e.line() == 4 || e.line() == 5) << e.what();
+}
+
+TEST(ModelIo, MissingPayloadBlockNamesKey) {
+  const auto e = parse_error(without_lines(21, 23));
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_EQ(e.key(), "payload");
+  EXPECT_NE(e.message().find("missing required value"), std::string::npos) << e.what();
+}
+
+TEST(ModelIo, EmptyValueForRequiredKeyIsRejected) {
+  expect_rejected(with_line(22, "  mass:"), 22, "payload.mass", "expected a number");
+}
+
+TEST(ModelIo, MoveWithoutTargetIsRejected) {
+  expect_rejected(with_line(44, "    - {hold: 45.0}"), 44, "trajectory.moves[1].target", "missing required value");
+}
+
+TEST(ModelIo, EmptyDocumentIsRejected) {
+  const auto e = parse_error("# nothing here\n");
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_NE(e.message().find("empty"), std::string::npos) << e.what();
+}
+
+TEST(ModelIo, DocumentThatIsAListIsRejected) {
+  const auto e = parse_error("- 1\n- 2\n");
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_NE(e.message().find("expected a map"), std::string::npos) << e.what();
+}
+
+// ---- non-physical values -----------------------------------------------------------------
+
+TEST(ModelIo, NegativePayloadMassNamesKeyAndLine) {
+  expect_rejected(with_line(22, "  mass: -328.7"), 22, "payload.mass", ">= 0");
+}
+
+TEST(ModelIo, OneSegmentIsTooFew) {
+  expect_rejected(with_line(11, "segments: 1"), 11, "segments", "must be >= 2, got 1");
+}
+
+TEST(ModelIo, ZeroBeamLengthIsRejected) {
+  expect_rejected(with_line(5, "  length: 0"), 5, "beam.length", "> 0");
+}
+
+TEST(ModelIo, NanDensityIsRejected) {
+  expect_rejected(with_line(8, "  density: .nan"), 8, "beam.density", "finite");
+}
+
+TEST(ModelIo, InfiniteStiffnessIsRejected) {
+  expect_rejected(with_line(14, "  stiffness: .inf"), 14, "joints.stiffness", "finite");
+}
+
+TEST(ModelIo, NanInsideAListNamesTheElement) {
+  const auto e = parse_error(with_line(36, "  alpha: [1.6, .nan]"));
+  EXPECT_EQ(e.key(), "notch.alpha[1]");
+  EXPECT_NE(e.message().find("finite"), std::string::npos) << e.what();
+  EXPECT_EQ(e.line(), 36) << e.what();
+}
+
+TEST(ModelIo, NegativeJointDampingIsRejected) {
+  expect_rejected(with_line(15, "  damping: -90.4"), 15, "joints.damping", ">= 0");
+}
+
+TEST(ModelIo, NegativeHubInertiaIsRejected) {
+  expect_rejected(with_line(19, "  inertia: -50.0"), 19, "hub.inertia", ">= 0");
+}
+
+TEST(ModelIo, ZeroAmplitudeMoveIsRejected) {
+  // The second move goes back to 0.5, where the first one ended.
+  expect_rejected(with_line(44, "    - {target: 0.5, hold: 45.0}"), 44, "trajectory.moves[1].target",
+                  "zero amplitude");
+}
+
+TEST(ModelIo, NegativeHoldIsRejected) {
+  expect_rejected(with_line(43, "    - {target: 0.5, hold: -7.0}"), 43, "trajectory.moves[0].hold", ">= 0");
+}
+
+TEST(ModelIo, NotchOrderZeroIsRejected) {
+  expect_rejected(with_line(35, "  order: 0"), 35, "notch.order", "between 1 and 8, got 0");
+}
+
+TEST(ModelIo, NegativeNotchAlphaIsRejected) {
+  expect_rejected(with_line(36, "  alpha: [1.6, -1.6]"), 36, "notch.alpha", "> 0");
+}
+
+TEST(ModelIo, UnknownIntegratorIsRejected) {
+  expect_rejected(with_line(47, "  integrator: euler"), 47, "simulation.integrator", "unknown integrator 'euler'");
+}
+
+TEST(ModelIo, ZeroControllerRateIsRejected) {
+  expect_rejected(with_line(26, "  rate: 0"), 26, "controller.rate", "> 0");
+}
+
+// ---- files -------------------------------------------------------------------------------
+
+TEST(ModelIo, BadIndentationNamesTheFileAndLine) {
+  TempDir dir;
+  // "height" indented by one space more than "length": not valid YAML at line 6.
+  const auto path = dir.write("indent.yaml", with_line(6, "   height: 0.3048"));
+  try {
+    ff::load_model(path);
+    FAIL() << "bad indentation was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 6) << e.what();
+    EXPECT_FALSE(e.message().empty());
+    EXPECT_EQ(std::string(e.what()).rfind(path + ":6: ", 0), 0u) << e.what();
+  }
+}
+
+TEST(ModelIo, UnclosedListNamesTheFile) {
+  TempDir dir;
+  const auto path = dir.write("unclosed.yaml", with_line(36, "  alpha: [1.6, 1.6"));
+  try {
+    ff::load_model(path);
+    FAIL() << "an unclosed list was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_GE(e.line(), 36) << e.what();
+  }
+}
+
+TEST(ModelIo, LoadModelErrorsNameThePathGiven) {
+  TempDir dir;
+  const auto path = dir.write("neg.yaml", with_line(22, "  mass: -1"));
+  try {
+    ff::load_model(path);
+    FAIL() << "negative mass was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 22);
+    EXPECT_EQ(e.key(), "payload.mass");
+  }
+}
+
+TEST(ModelIo, MissingFileIsRejected) {
+  TempDir dir;
+  const std::string path = (dir.path / "no_such_model.yaml").string();
+  try {
+    ff::load_model(path);
+    FAIL() << "a missing file was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 0);
+    EXPECT_NE(e.message().find("cannot open"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind(path + ": ", 0), 0u) << e.what();
+  }
+}
+
+// ---- the error itself --------------------------------------------------------------------
+
+TEST(ConfigError, WhatReadsFileLineKeyMessage) {
+  EXPECT_STREQ(ff::ConfigError("a.yaml", 12, "payload.mass", "bad").what(), "a.yaml:12: payload.mass: bad");
+  EXPECT_STREQ(ff::ConfigError("a.yaml", 0, "payload.mass", "bad").what(), "a.yaml: payload.mass: bad");
+  EXPECT_STREQ(ff::ConfigError("a.yaml", 0, "", "cannot open file").what(), "a.yaml: cannot open file");
+}
+
+}  // namespace
