@@ -9,6 +9,12 @@ namespace ff {
 
 namespace {
 int line_of(const YAML::Node& n) { return n.Mark().is_null() ? 0 : n.Mark().line + 1; }
+// The line of `key` itself in `map` (an empty value has no line of its own), else that of its value.
+int key_line(const YAML::Node& map, const std::string& key) {
+  for (const auto& kv : map)
+    if (kv.first.IsScalar() && kv.first.Scalar() == key && line_of(kv.first) > 0) return line_of(kv.first);
+  return line_of(map[key]);
+}
 }  // namespace
 
 YamlReader::YamlReader(const YAML::Node& node, std::string file, std::string path, LineMap* lines)
@@ -26,7 +32,7 @@ bool YamlReader::has(const std::string& key) const { return node_ && node_.IsMap
 void YamlReader::fail(const std::string& key, const std::string& message) const {
   const auto full = full_key(key);
   int line = 0;
-  if (has(key)) line = line_of(node_[key]);
+  if (has(key)) line = key_line(node_, key);
   else if (lines_ && lines_->count(full)) line = lines_->at(full);
   else line = line_of(node_);
   throw ConfigError(file_, line, full, message);
@@ -39,7 +45,7 @@ YAML::Node YamlReader::value(const std::string& key, bool required) {
   }
   used_.insert(key);
   YAML::Node v = node_[key];
-  if (lines_) (*lines_)[full_key(key)] = line_of(v);
+  if (lines_) (*lines_)[full_key(key)] = key_line(node_, key);
   return v;
 }
 
@@ -93,7 +99,11 @@ void YamlReader::optional_array(const std::string& key, double* out, int count) 
   }
   if (!v.IsSequence() || static_cast<int>(v.size()) != count)
     fail(key, "expected a number or a list of " + std::to_string(count) + " numbers");
-  for (int i = 0; i < count; ++i) out[i] = to_number(*this, key + "[" + std::to_string(i) + "]", v[i]);
+  for (int i = 0; i < count; ++i) {
+    const std::string element = key + "[" + std::to_string(i) + "]";
+    if (lines_) (*lines_)[full_key(element)] = line_of(v[i]);  // so an error names the element's line
+    out[i] = to_number(*this, element, v[i]);
+  }
 }
 
 YamlReader YamlReader::child(const std::string& key, bool required) {

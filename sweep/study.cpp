@@ -80,8 +80,11 @@ Model make_variant_model(const Study& study, const Variant& v) {
     // An error in a value this run overrides belongs to the study file's line.
     for (const auto& a : v.set)
       if (e.key() == a.path || e.key().rfind(a.path + ".", 0) == 0 || e.key().rfind(a.path + "[", 0) == 0 ||
-          a.path.rfind(e.key(), 0) == 0)
-        throw ConfigError(study.source, a.line, a.key, e.message());
+          a.path.rfind(e.key(), 0) == 0) {
+        // Name the exact key: an error below the overridden path (payload: {mass: -1}) keeps its tail.
+        const bool below = e.key().size() > a.path.size() && e.key().rfind(a.path, 0) == 0;
+        throw ConfigError(study.source, a.line, below ? a.key + e.key().substr(a.path.size()) : a.key, e.message());
+      }
     throw;
   }
 }
