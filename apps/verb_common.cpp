@@ -10,9 +10,9 @@
 namespace ff {
 
 Model load_model_with(const std::string& path, const std::vector<std::string>& sets) {
-  YAML::Node doc = load_yaml_file(path);
-  for (const auto& s : sets) apply_assignment(doc, s, path + " (--set " + s + ")");
-  return parse_model(doc, path);
+  std::vector<Assignment> assignments;
+  for (const auto& s : sets) assignments.push_back(parse_assignment(s));
+  return make_model_with(load_yaml_file(path), path, assignments);
 }
 
 void write_trace_plots(const std::string& dir, const std::vector<std::string>& labels,

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "kernel/errors.hpp"
+#include "kernel/model_io.hpp"
 
 namespace ff {
 
@@ -60,7 +61,7 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
       YAML::Node next = node[st.index];
       node.reset(next);
     } else {
-      if (!node.IsMap() && !node.IsNull())
+      if (node.IsDefined() && !node.IsMap() && !node.IsNull())
         throw ConfigError(source, 0, path, "'" + st.key + "' is inside a value that is not a map");
       if (last) {
         node[st.key] = value;
@@ -88,17 +89,53 @@ YAML::Node get_path(const YAML::Node& doc, const std::string& path) {
   return node;
 }
 
-void apply_assignment(YAML::Node& doc, const std::string& assignment, const std::string& source) {
-  const auto eq = assignment.find('=');
+Assignment parse_assignment(const std::string& text) {
+  const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw ConfigError(source, 0, assignment, "expected PATH=VALUE, e.g. payload.mass=400");
-  YAML::Node value;
+    throw ConfigError("--set", 0, text, "expected PATH=VALUE, e.g. payload.mass=400");
+  Assignment a;
+  a.path = text.substr(0, eq);
+  a.source = "--set";
+  a.key = a.path;
   try {
-    value = YAML::Load(assignment.substr(eq + 1));
+    a.value = YAML::Load(text.substr(eq + 1));
   } catch (const YAML::Exception& e) {
-    throw ConfigError(source, 0, assignment.substr(0, eq), "value is not valid YAML: " + e.msg);
+    throw ConfigError("--set", 0, a.path, "value is not valid YAML: " + e.msg);
   }
-  set_path(doc, assignment.substr(0, eq), value, source);
+  split_path(a.path, "--set");  // reject a malformed path now
+  return a;
+}
+
+namespace {
+// The assignment an error key falls under (the same path, one below it, or one above it), or null.
+const Assignment* owner_of(const std::string& key, const std::vector<Assignment>& set) {
+  for (auto it = set.rbegin(); it != set.rend(); ++it) {  // the last assignment wins
+    const auto& p = it->path;
+    if (key == p || key.rfind(p + ".", 0) == 0 || key.rfind(p + "[", 0) == 0 || p.rfind(key + ".", 0) == 0 ||
+        p.rfind(key + "[", 0) == 0)
+      return &*it;
+  }
+  return nullptr;
+}
+}  // namespace
+
+Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set) {
+  for (const auto& a : set) {
+    try {
+      set_path(doc, a.path, a.value, a.source);
+    } catch (const ConfigError& e) {
+      throw ConfigError(a.source, a.line, a.key, e.message());
+    }
+  }
+  try {
+    return parse_model(doc, model_source);
+  } catch (const ConfigError& e) {
+    const Assignment* a = owner_of(e.key(), set);
+    if (!a) throw;
+    // Name the exact key: an error below the assigned path (payload: {mass: -1}) keeps its tail.
+    const bool below = e.key().size() > a->path.size() && e.key().rfind(a->path, 0) == 0;
+    throw ConfigError(a->source, a->line, below ? a->key + e.key().substr(a->path.size()) : a->key, e.message());
+  }
 }
 
 }  // namespace ff

@@ -6,8 +6,20 @@
 #include <yaml-cpp/yaml.h>
 
 #include <string>
+#include <vector>
+
+#include "kernel/model.hpp"
 
 namespace ff {
+
+// One model parameter set by path, and where the user wrote it (for error messages).
+struct Assignment {
+  std::string path;        // e.g. "payload.mass"
+  YAML::Node value;
+  std::string source;      // the study file, or "--set"
+  int line = 0;            // line in `source`, 0 = none
+  std::string key;         // how `source` names it, e.g. "runs[2].set.payload.mass"
+};
 
 // Replaces (or creates) the value at `path` in `doc` with `value`. Throws ConfigError naming
 // `source` and the path when the path cannot exist (indexing a map, a key inside a number, ...).
@@ -16,7 +28,12 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
 // The value at `path`, or a null node when absent.
 YAML::Node get_path(const YAML::Node& doc, const std::string& path);
 
-// Parses "path=value" (value in YAML syntax) and applies it.
-void apply_assignment(YAML::Node& doc, const std::string& assignment, const std::string& source);
+// Parses a command-line "path=value" (value in YAML syntax); source "--set".
+Assignment parse_assignment(const std::string& text);
+
+// Applies the assignments to a model document (loaded with line marks) and builds the model.
+// An error in an assigned value is reported where the assignment was written; any other error
+// names `model_source` and its line.
+Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set);
 
 }  // namespace ff

@@ -1,11 +1,12 @@
 #include "sweep/study.hpp"
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "kernel/errors.hpp"
 #include "kernel/model_io.hpp"
 #include "kernel/yaml_reader.hpp"
-#include "sweep/paths.hpp"
 
 namespace ff {
 
@@ -19,20 +20,9 @@ std::vector<Assignment> read_assignments(YamlReader& parent, const std::string& 
   if (!node.IsMap()) parent.fail(key, "expected a map of PARAMETER.PATH: value");
   for (const auto& kv : node) {
     const auto path = kv.first.as<std::string>();
-    out.push_back({path, YAML::Clone(kv.second), kv.first.Mark().line + 1, parent.full_key(key) + "." + path});
+    out.push_back({path, YAML::Clone(kv.second), parent.file(), kv.first.Mark().line + 1, parent.full_key(key) + "." + path});
   }
   return out;
-}
-
-// Applies assignments to a model document, errors pointing at the study line.
-void apply(YAML::Node& doc, const std::vector<Assignment>& set, const std::string& source) {
-  for (const auto& a : set) {
-    try {
-      set_path(doc, a.path, a.value, source);
-    } catch (const ConfigError& e) {
-      throw ConfigError(source, a.line, a.key, e.message());
-    }
-  }
 }
 
 }  // namespace
@@ -51,8 +41,12 @@ Study load_study(const std::string& path) {
   top.optional("model", model);
   st.model_path = (std::filesystem::path(path).parent_path() / model).lexically_normal().string();
   if (!std::filesystem::exists(st.model_path)) top.fail("model", "model file '" + st.model_path + "' does not exist");
-  st.model_doc = load_yaml_file(st.model_path);
-  apply(st.model_doc, read_assignments(top, "set"), path);
+  std::ifstream model_in(st.model_path);
+  std::stringstream text;
+  text << model_in.rdbuf();
+  st.model_text = text.str();
+  load_yaml_file(st.model_path);  // syntax errors name the model file and line
+  st.set = read_assignments(top, "set");
 
   auto runs = top.sequence("runs", true);
   if (runs.empty()) top.fail("runs", "needs at least one run");
@@ -72,21 +66,9 @@ Study load_study(const std::string& path) {
 }
 
 Model make_variant_model(const Study& study, const Variant& v) {
-  YAML::Node doc = YAML::Clone(study.model_doc);
-  apply(doc, v.set, study.source);
-  try {
-    return parse_model(doc, study.model_path);
-  } catch (const ConfigError& e) {
-    // An error in a value this run overrides belongs to the study file's line.
-    for (const auto& a : v.set)
-      if (e.key() == a.path || e.key().rfind(a.path + ".", 0) == 0 || e.key().rfind(a.path + "[", 0) == 0 ||
-          a.path.rfind(e.key(), 0) == 0) {
-        // Name the exact key: an error below the overridden path (payload: {mass: -1}) keeps its tail.
-        const bool below = e.key().size() > a.path.size() && e.key().rfind(a.path, 0) == 0;
-        throw ConfigError(study.source, a.line, below ? a.key + e.key().substr(a.path.size()) : a.key, e.message());
-      }
-    throw;
-  }
+  std::vector<Assignment> set = study.set;
+  set.insert(set.end(), v.set.begin(), v.set.end());
+  return make_model_with(YAML::Load(study.model_text), study.model_path, set);
 }
 
 }  // namespace ff

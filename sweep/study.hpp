@@ -8,16 +8,9 @@
 #include <vector>
 
 #include "kernel/model.hpp"
+#include "sweep/paths.hpp"
 
 namespace ff {
-
-// One model parameter set by path (sweep/paths.hpp) and where it was written.
-struct Assignment {
-  std::string path;
-  YAML::Node value;
-  int line = 0;            // line in the study file, 0 = unknown
-  std::string key;         // the study key that holds it, e.g. "runs[2].set.payload.mass"
-};
 
 // One evaluation of the model.
 struct Variant {
@@ -31,7 +24,8 @@ struct Study {
   std::string name;
   std::string description;
   std::string model_path;  // resolved relative to the study file
-  YAML::Node model_doc;    // the model document with the study-wide overrides applied
+  std::string model_text;  // its contents, parsed afresh per variant (keeps line numbers)
+  std::vector<Assignment> set;  // study-wide overrides, applied before each run's own
   std::vector<Variant> variants;
 };
 

@@ -1,0 +1,323 @@
+// End-to-end tests of the `flexfarm` command line: help, `modes` on the reference rig, bad models,
+// studies and `--set` values rejected with one clear line and nothing written, and a short
+// `simulate` / `run` writing complete outputs (no leftover temporary files).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSource = FLEXFARM_SOURCE_DIR;
+const std::string kBinary = FLEXFARM_BINARY;
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+// Single-quoted for /bin/sh.
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+  std::vector<std::string> lines() const { return split_lines(output); }
+};
+
+// Each test runs the binary in its own fresh working directory, `work`, inside `base`.
+class Cli : public ::testing::Test {
+ protected:
+  fs::path base, work;
+
+  void SetUp() override {
+    base = fs::temp_directory_path() / ("ff_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(base);
+    work = base / "work";
+    fs::create_directories(work / "configs");
+    fs::copy_file(kSource + "/configs/fbtb.yaml", work / "configs" / "fbtb.yaml");
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(base, ec);
+  }
+
+  // Runs `flexfarm ARGS` (ARGS already quoted as needed) in `work`.
+  Result run(const std::string& args) const {
+    const fs::path log = base / "output.txt";
+    const std::string cmd = "cd " + quote(work.string()) + " && " + quote(kBinary) + " " + args + " > " +
+                            quote(log.string()) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.output = read_text(log);
+    return r;
+  }
+
+  // The reference model with line `n` (1-based) replaced, written to work/NAME.
+  void write_model(const std::string& name, int n, const std::string& line) const {
+    auto lines = split_lines(read_text(kSource + "/configs/fbtb.yaml"));
+    lines.at(n - 1) = line;
+    std::ofstream out(work / name);
+    for (const auto& l : lines) out << l << "\n";
+  }
+  void write(const std::string& name, const std::string& text) const { std::ofstream(work / name) << text; }
+
+  // A rejected command: non-zero exit, exactly one line "flexfarm: error: <prefix>...".
+  static void expect_one_error_line(const Result& r, const std::string& prefix) {
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    const auto lines = r.lines();
+    ASSERT_EQ(lines.size(), 1u) << r.output;
+    EXPECT_EQ(lines[0].rfind("flexfarm: error: " + prefix, 0), 0u) << r.output;
+  }
+
+  // Everything under `dir`, relative paths.
+  static std::vector<std::string> tree(const fs::path& dir) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) out.push_back(fs::relative(e.path(), dir).string());
+    return out;
+  }
+  static void expect_no_tmp_files(const fs::path& dir) {
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+      EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
+  }
+  static void expect_png(const fs::path& p) {
+    ASSERT_TRUE(fs::exists(p)) << p;
+    const std::string bytes = read_text(p);
+    ASSERT_GT(bytes.size(), 8u) << p;
+    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
+  }
+};
+
+const char* kTraceHeader = "t,ref,ref_filtered,hub_torque,hub_angle,hub_rate,tip_deflection,tip_angle";
+const char* kPlots[] = {"tip_angle.png", "hub_angle.png", "tip_deflection.png", "hub_torque.png"};
+
+// ---- help --------------------------------------------------------------------------------
+
+TEST_F(Cli, HelpListsEveryVerb) {
+  const auto r = run("--help");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* verb : {"modes", "simulate", "run"}) EXPECT_NE(r.output.find(verb), std::string::npos) << verb;
+}
+
+TEST_F(Cli, VerbHelpListsEveryOption) {
+  const struct {
+    const char* verb;
+    std::vector<std::string> words;
+  } cases[] = {
+      {"modes", {"model", "--set", "--count"}},
+      {"simulate", {"model", "--out", "--set", "trace.csv"}},
+      {"run", {"study", "--out", "--threads"}},
+  };
+  for (const auto& c : cases) {
+    const auto r = run(std::string(c.verb) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << c.verb << ": " << r.output;
+    for (const auto& w : c.words) EXPECT_NE(r.output.find(w), std::string::npos) << c.verb << " lacks " << w;
+  }
+}
+
+TEST_F(Cli, NoVerbOrUnknownVerbFails) {
+  EXPECT_NE(run("").exit_code, 0);
+  EXPECT_NE(run("launch configs/fbtb.yaml").exit_code, 0);
+  EXPECT_NE(run("modes").exit_code, 0);  // the model is required
+}
+
+// ---- modes -------------------------------------------------------------------------------
+
+TEST_F(Cli, ModesOfTheReferenceRig) {
+  const auto r = run("modes configs/fbtb.yaml");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto& out = r.output;
+  EXPECT_NE(out.find("N = 6 segments"), std::string::npos) << out;
+  EXPECT_NE(out.find("130.89 kN m/rad"), std::string::npos) << out;
+  EXPECT_NE(out.find("26.18 kN m/rad"), std::string::npos) << out;
+  const auto clamped = out.find("clamped hub:");
+  const auto closed = out.find("closed loop");
+  ASSERT_NE(clamped, std::string::npos) << out;
+  ASSERT_NE(closed, std::string::npos) << out;
+  ASSERT_LT(clamped, closed);
+  const std::string clamped_table = out.substr(clamped, closed - clamped);
+  const std::string closed_table = out.substr(closed);
+  EXPECT_NE(clamped_table.find(" 0.3000 "), std::string::npos) << out;
+  EXPECT_NE(clamped_table.find(" 2.3003 "), std::string::npos) << out;
+  EXPECT_NE(closed_table.find(" 0.2740 "), std::string::npos) << out;
+  EXPECT_NE(closed_table.find(" 2.2892 "), std::string::npos) << out;
+  EXPECT_EQ(tree(work).size(), 2u) << "modes writes nothing";  // configs/ and configs/fbtb.yaml
+}
+
+TEST_F(Cli, ModesAcceptsSet) {
+  const auto r = run("modes configs/fbtb.yaml --set segments=11 --count 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("N = 11 segments"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, ModesOfAMissingFileFails) {
+  const auto r = run("modes configs/none.yaml");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("none.yaml"), std::string::npos) << r.output;
+}
+
+// ---- rejected input: one line, non-zero exit, nothing written ----------------------------
+
+TEST_F(Cli, SimulateBadModelWritesNothing) {
+  write_model("bad.yaml", 22, "  mass: -328.7");
+  const auto r = run("simulate bad.yaml --out out");
+  expect_one_error_line(r, "bad.yaml:22: payload.mass: ");
+  EXPECT_NE(r.output.find(">= 0"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, SimulateUnknownKeyWritesNothing) {
+  write_model("bad.yaml", 24, "  colour: red");
+  const auto r = run("simulate bad.yaml --out out");
+  expect_one_error_line(r, "bad.yaml:24: payload.colour: unknown key");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, ModesBadTypeIsOneLine) {
+  write_model("bad.yaml", 11, "segments: six");
+  const auto r = run("modes bad.yaml");
+  expect_one_error_line(r, "bad.yaml:11: segments: expected an integer");
+}
+
+TEST_F(Cli, SimulateUnparsableModelWritesNothing) {
+  write_model("bad.yaml", 6, "   height: 0.3048");
+  const auto r = run("simulate bad.yaml --out out");
+  expect_one_error_line(r, "bad.yaml:6: ");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, NegativeMassSetIsRejectedNamingTheKey) {
+  const auto r = run("simulate configs/fbtb.yaml --out out --set payload.mass=-3");
+  expect_one_error_line(r, "--set");
+  EXPECT_NE(r.output.find("payload.mass: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(">= 0"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, BadSetPathsAreRejected) {
+  for (const std::string set : {"payload.colour=1", "segments=1", "'trajectory.moves[7].target=1'", "payload.mass"}) {
+    const auto r = run("simulate configs/fbtb.yaml --out out --set " + set);
+    expect_one_error_line(r, "--set");
+    EXPECT_FALSE(fs::exists(work / "out")) << set;
+  }
+}
+
+// A range error in a `--set` value names --set, not the line of the file that holds the old value.
+TEST_F(Cli, NegativeMassSetSaysItCameFromSet) {
+  const auto r = run("modes configs/fbtb.yaml --set payload.mass=-3");
+  EXPECT_NE(r.output.find("--set"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, RunBadStudyWritesNothing) {
+  write("study.yaml",
+        "model: configs/fbtb.yaml\n"
+        "runs:\n"
+        "  - label: fine\n"
+        "  - label: heavy\n"
+        "    set:\n"
+        "      payload.mass: -1\n");
+  const auto r = run("run study.yaml --out out");
+  expect_one_error_line(r, "study.yaml:6: runs[1].set.payload.mass: ");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, RunStudyWithUnknownKeyWritesNothing) {
+  write("study.yaml", "model: configs/fbtb.yaml\nruns:\n  - label: a\n    colour: red\n");
+  const auto r = run("run study.yaml --out out");
+  expect_one_error_line(r, "study.yaml:4: runs[0].colour: unknown key");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, RunStudyWithMissingModelWritesNothing) {
+  write("study.yaml", "model: configs/none.yaml\nruns:\n  - label: a\n");
+  const auto r = run("run study.yaml --out out");
+  expect_one_error_line(r, "study.yaml:1: model: ");
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, RunStudyWithoutRunsWritesNothing) {
+  write("study.yaml", "model: configs/fbtb.yaml\nruns: []\n");
+  const auto r = run("run study.yaml --out out");
+  expect_one_error_line(r, "study.yaml:2: runs: ");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+// ---- complete outputs --------------------------------------------------------------------
+
+TEST_F(Cli, SimulateShortMoveWritesEveryOutput) {
+  const auto r = run("simulate configs/fbtb.yaml --out out/sim --set " + quote("trajectory.moves=[{target: 0.2, hold: 2}]"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path out = work / "out" / "sim";
+
+  const auto trace = split_lines(read_text(out / "trace.csv"));
+  ASSERT_FALSE(trace.empty());
+  EXPECT_EQ(trace[0], kTraceHeader);
+  EXPECT_EQ(trace.size() - 1, 5001u);  // 0 .. 5 s at the 1 kHz controller rate
+  EXPECT_EQ(trace[1].rfind("0.000000,", 0), 0u) << trace[1];
+  EXPECT_EQ(trace.back().rfind("5.000000,", 0), 0u) << trace.back();
+
+  const auto metrics = split_lines(read_text(out / "metrics.csv"));
+  ASSERT_EQ(metrics.size(), 2u);
+  EXPECT_EQ(metrics[0].rfind("eval_id,label,status", 0), 0u) << metrics[0];
+  EXPECT_EQ(metrics[1].rfind("0,", 0), 0u) << metrics[1];
+
+  const std::string table = read_text(out / "table.md");
+  EXPECT_NE(table.find("0 -> 0.2 rad"), std::string::npos) << table;
+
+  for (const char* png : kPlots) expect_png(out / png);
+  expect_no_tmp_files(work / "out");
+  EXPECT_EQ(tree(out).size(), 7u);  // trace.csv, metrics.csv, table.md, four PNGs
+}
+
+TEST_F(Cli, RunShortStudyWritesEveryOutput) {
+  write("study.yaml",
+        "name: short\n"
+        "model: configs/fbtb.yaml\n"
+        "set:\n"
+        "  trajectory.moves: [{target: 0.2, hold: 1}]\n"
+        "runs:\n"
+        "  - label: PD\n"
+        "  - label: PD + notch\n"
+        "    set: {notch.enabled: true}\n");
+  const auto r = run("run study.yaml --out res --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path out = work / "res";
+  const auto results = split_lines(read_text(out / "results.csv"));
+  ASSERT_EQ(results.size(), 3u);
+  EXPECT_EQ(results[1].rfind("0,PD,", 0), 0u) << results[1];
+  EXPECT_EQ(results[2].rfind("1,PD + notch,", 0), 0u) << results[2];
+  for (const char* trace : {"000000.csv", "000001.csv"}) {
+    const auto lines = split_lines(read_text(out / "traces" / trace));
+    ASSERT_FALSE(lines.empty()) << trace;
+    EXPECT_EQ(lines[0], kTraceHeader);
+    EXPECT_EQ(lines.size() - 1, 4001u) << trace;
+  }
+  EXPECT_EQ(read_text(out / "table.md").rfind("# short", 0), 0u);
+  for (const char* png : kPlots) expect_png(out / png);
+  expect_no_tmp_files(out);
+}
+
+}  // namespace

@@ -1,0 +1,260 @@
+// Tests of model parameter paths (sweep/paths.hpp): reading and writing "payload.mass",
+// "trajectory.moves[1].target", creating keys, and rejecting paths that cannot exist.
+#include "sweep/paths.hpp"
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <string>
+
+#include "kernel/errors.hpp"
+#include "kernel/model_io.hpp"
+
+namespace {
+
+const char* kDoc = R"(
+beam:
+  length: 4.1656
+segments: 6
+payload:
+  mass: 328.7
+  inertia: 118.6
+trajectory:
+  moves:
+    - {target: 0.5, hold: 7.0}
+    - {target: 0.0, hold: 45.0}
+)";
+
+YAML::Node doc() { return YAML::Load(kDoc); }
+
+// set_path must throw a ConfigError naming `source` and the path; returns it.
+ff::ConfigError set_error(YAML::Node& d, const std::string& path, const std::string& value = "1") {
+  try {
+    ff::set_path(d, path, YAML::Load(value), "study.yaml");
+  } catch (const ff::ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "path '" << path << "' was accepted";
+  return ff::ConfigError("", 0, "", "");
+}
+
+// ---- set_path ----------------------------------------------------------------------------
+
+TEST(SetPath, ReplacesANestedValue) {
+  auto d = doc();
+  ff::set_path(d, "payload.mass", YAML::Load("400"), "study.yaml");
+  EXPECT_DOUBLE_EQ(d["payload"]["mass"].as<double>(), 400.0);
+  EXPECT_DOUBLE_EQ(d["payload"]["inertia"].as<double>(), 118.6);  // the sibling is untouched
+}
+
+TEST(SetPath, ReplacesATopLevelValue) {
+  auto d = doc();
+  ff::set_path(d, "segments", YAML::Load("24"), "study.yaml");
+  EXPECT_EQ(d["segments"].as<int>(), 24);
+}
+
+TEST(SetPath, ReplacesAValueInsideAListElement) {
+  auto d = doc();
+  ff::set_path(d, "trajectory.moves[1].target", YAML::Load("-0.25"), "study.yaml");
+  EXPECT_DOUBLE_EQ(d["trajectory"]["moves"][1]["target"].as<double>(), -0.25);
+  EXPECT_DOUBLE_EQ(d["trajectory"]["moves"][1]["hold"].as<double>(), 45.0);
+  EXPECT_DOUBLE_EQ(d["trajectory"]["moves"][0]["target"].as<double>(), 0.5);
+}
+
+TEST(SetPath, ReplacesAWholeListElement) {
+  auto d = doc();
+  ff::set_path(d, "trajectory.moves[0]", YAML::Load("{target: 1.0, hold: 2}"), "study.yaml");
+  EXPECT_DOUBLE_EQ(d["trajectory"]["moves"][0]["target"].as<double>(), 1.0);
+  EXPECT_EQ(d["trajectory"]["moves"].size(), 2u);
+}
+
+TEST(SetPath, ReplacesAWholeList) {
+  auto d = doc();
+  ff::set_path(d, "trajectory.moves", YAML::Load("[{target: 0.2, hold: 2}]"), "study.yaml");
+  ASSERT_TRUE(d["trajectory"]["moves"].IsSequence());
+  EXPECT_EQ(d["trajectory"]["moves"].size(), 1u);
+  EXPECT_DOUBLE_EQ(d["trajectory"]["moves"][0]["target"].as<double>(), 0.2);
+}
+
+TEST(SetPath, CreatesAMissingKey) {
+  auto d = doc();
+  ff::set_path(d, "payload.colour", YAML::Load("red"), "study.yaml");
+  EXPECT_EQ(d["payload"]["colour"].as<std::string>(), "red");
+}
+
+// `--set notch.enabled=true` works on a model file without a notch: block.
+TEST(SetPath, CreatesMissingMapsOnTheWay) {
+  auto d = doc();
+  ff::set_path(d, "notch.omega_z", YAML::Load("[1.7, 14.4]"), "study.yaml");
+  ASSERT_TRUE(d["notch"].IsMap());
+  EXPECT_DOUBLE_EQ(d["notch"]["omega_z"][1].as<double>(), 14.4);
+  ff::set_path(d, "a.b.c", YAML::Load("3"), "study.yaml");
+  EXPECT_EQ(d["a"]["b"]["c"].as<int>(), 3);
+}
+
+TEST(SetPath, IndexOutOfRangeIsRejected) {
+  auto d = doc();
+  const auto e = set_error(d, "trajectory.moves[2].target");
+  EXPECT_EQ(e.file(), "study.yaml");
+  EXPECT_EQ(e.key(), "trajectory.moves[2].target");
+  EXPECT_NE(e.message().find("index [2] is not in the list"), std::string::npos) << e.what();
+  EXPECT_EQ(d["trajectory"]["moves"].size(), 2u);  // nothing appended
+}
+
+TEST(SetPath, IndexIntoAMapIsRejected) {
+  auto d = doc();
+  const auto e = set_error(d, "payload[0]");
+  EXPECT_EQ(e.key(), "payload[0]");
+  EXPECT_NE(e.message().find("not in the list"), std::string::npos) << e.what();
+}
+
+TEST(SetPath, KeyInsideANumberIsRejected) {
+  auto d = doc();
+  const auto e = set_error(d, "payload.mass.value");
+  EXPECT_EQ(e.file(), "study.yaml");
+  EXPECT_EQ(e.key(), "payload.mass.value");
+  EXPECT_NE(e.message().find("'value' is inside a value that is not a map"), std::string::npos) << e.what();
+  EXPECT_DOUBLE_EQ(d["payload"]["mass"].as<double>(), 328.7);
+}
+
+TEST(SetPath, KeyInsideAListIsRejected) {
+  auto d = doc();
+  const auto e = set_error(d, "trajectory.moves.target");
+  EXPECT_EQ(e.key(), "trajectory.moves.target");
+  EXPECT_NE(e.message().find("not a map"), std::string::npos) << e.what();
+}
+
+TEST(SetPath, BadSyntaxIsRejected) {
+  for (const std::string path : {"", "payload..mass", ".payload", "moves[x]", "moves[", "moves[]", "moves[-1]"}) {
+    auto d = doc();
+    const auto e = set_error(d, path);
+    EXPECT_EQ(e.file(), "study.yaml") << path;
+    EXPECT_EQ(e.key(), path);
+    EXPECT_NE(e.message().find("bad parameter path"), std::string::npos) << path << ": " << e.what();
+  }
+}
+
+// ---- get_path ----------------------------------------------------------------------------
+
+TEST(GetPath, ReadsNestedKeysAndListElements) {
+  const auto d = doc();
+  EXPECT_DOUBLE_EQ(ff::get_path(d, "payload.mass").as<double>(), 328.7);
+  EXPECT_EQ(ff::get_path(d, "segments").as<int>(), 6);
+  EXPECT_DOUBLE_EQ(ff::get_path(d, "trajectory.moves[1].hold").as<double>(), 45.0);
+  EXPECT_EQ(ff::get_path(d, "trajectory.moves").size(), 2u);
+}
+
+TEST(GetPath, AbsentPathsGiveANullNode) {
+  const auto d = doc();
+  EXPECT_TRUE(ff::get_path(d, "payload.colour").IsNull());
+  EXPECT_TRUE(ff::get_path(d, "trajectory.moves[2].target").IsNull());
+  EXPECT_TRUE(ff::get_path(d, "payload.mass.value").IsNull());
+  EXPECT_TRUE(ff::get_path(d, "payload[0]").IsNull());
+  EXPECT_FALSE(ff::get_path(d, "payload.mass").IsNull());
+}
+
+TEST(GetPath, BadSyntaxThrows) {
+  EXPECT_THROW(ff::get_path(doc(), "payload..mass"), ff::ConfigError);
+}
+
+TEST(GetPath, RoundTripsWithSetPath) {
+  auto d = doc();
+  ff::set_path(d, "trajectory.moves[0].hold", YAML::Load("3.5"), "study.yaml");
+  EXPECT_DOUBLE_EQ(ff::get_path(d, "trajectory.moves[0].hold").as<double>(), 3.5);
+}
+
+TEST(GetPath, DoesNotCreateKeys) {
+  const auto d = doc();
+  (void)ff::get_path(d, "payload.colour");
+  (void)ff::get_path(d, "notch.order");
+  EXPECT_FALSE(d["payload"]["colour"]);
+  EXPECT_FALSE(d["notch"]);
+}
+
+// ---- parse_assignment --------------------------------------------------------------------
+
+// A command-line `--set PATH=VALUE`, applied to a document.
+void assign(YAML::Node& d, const std::string& text) {
+  const ff::Assignment a = ff::parse_assignment(text);
+  ff::set_path(d, a.path, a.value, a.source);
+}
+
+TEST(ApplyAssignment, SetsAScalar) {
+  auto d = doc();
+  assign(d, "payload.mass=400");
+  EXPECT_DOUBLE_EQ(d["payload"]["mass"].as<double>(), 400.0);
+}
+
+TEST(ApplyAssignment, ValueIsYaml) {
+  auto d = doc();
+  assign(d, "trajectory.moves=[{target: 0.2, hold: 2}]");
+  ASSERT_EQ(d["trajectory"]["moves"].size(), 1u);
+  EXPECT_DOUBLE_EQ(d["trajectory"]["moves"][0]["hold"].as<double>(), 2.0);
+  assign(d, "payload.mass=.nan");  // any YAML value; checking it is parse_model's job
+  EXPECT_TRUE(std::isnan(d["payload"]["mass"].as<double>()));
+  assign(d, "beam.length=  2.5");
+  EXPECT_DOUBLE_EQ(d["beam"]["length"].as<double>(), 2.5);
+}
+
+TEST(ApplyAssignment, ValueMayContainEqualsSigns) {
+  auto d = doc();
+  assign(d, "name=a=b");
+  EXPECT_EQ(d["name"].as<std::string>(), "a=b");
+}
+
+TEST(ApplyAssignment, MissingEqualsIsRejected) {
+  auto d = doc();
+  for (const std::string a : {"payload.mass", "=400"}) {
+    try {
+      assign(d, a);
+      ADD_FAILURE() << a << " was accepted";
+    } catch (const ff::ConfigError& e) {
+      EXPECT_EQ(e.file(), "--set");
+      EXPECT_EQ(e.key(), a);
+      EXPECT_NE(e.message().find("expected PATH=VALUE"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(ApplyAssignment, InvalidYamlValueNamesThePath) {
+  auto d = doc();
+  try {
+    assign(d, "notch.alpha=[1.6");
+    FAIL() << "an unclosed list was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.key(), "notch.alpha");
+    EXPECT_NE(e.message().find("not valid YAML"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ApplyAssignment, BadPathIsRejected) {
+  auto d = doc();
+  EXPECT_THROW(assign(d, "trajectory.moves[9].target=1"), ff::ConfigError);
+  EXPECT_THROW(assign(d, "payload..mass=1"), ff::ConfigError);
+}
+
+TEST(ApplyAssignment, OverriddenValuesPassTheModelChecks) {
+  // A negative mass set on the reference model is caught by parse_model, naming the key.
+  auto d = YAML::LoadFile(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml");
+  assign(d, "payload.mass=-3");
+  try {
+    ff::parse_model(d, "fbtb.yaml");
+    FAIL() << "payload.mass=-3 was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.key(), "payload.mass");
+    EXPECT_NE(e.message().find(">= 0"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ApplyAssignment, OverridesReachTheModel) {
+  auto d = YAML::LoadFile(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml");
+  assign(d, "segments=11");
+  assign(d, "trajectory.moves[0].target=1.0");
+  const ff::Model m = ff::parse_model(d, "fbtb.yaml");
+  EXPECT_EQ(m.nseg, 11);
+  EXPECT_DOUBLE_EQ(m.spec.trajectory.moves[0].target, 1.0);
+  EXPECT_NEAR(m.cell, 4.1656 / 10, 1e-12);
+}
+
+}  // namespace

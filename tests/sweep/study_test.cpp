@@ -1,0 +1,322 @@
+// Tests of study files (sweep/study.hpp): the paper study loads into its four variants, and bad
+// study files are rejected with one ConfigError naming the study file, the line and the study key.
+#include "sweep/study.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+
+#include "kernel/errors.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSource = FLEXFARM_SOURCE_DIR;
+const std::string kModel = kSource + "/configs/fbtb.yaml";
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// A fresh directory per test, removed with its contents.
+class StudyFiles : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("ff_study_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return (dir / name).string();
+  }
+  // Loads `path`, which must fail; returns the error.
+  static ff::ConfigError load_error(const std::string& path) {
+    try {
+      ff::load_study(path);
+    } catch (const ff::ConfigError& e) {
+      return e;
+    }
+    ADD_FAILURE() << path << " was accepted";
+    return ff::ConfigError("", 0, "", "");
+  }
+};
+
+// ---- the paper study ---------------------------------------------------------------------
+
+TEST(PaperStudy, LoadsFourVariantsWithLabelsAndIds) {
+  const ff::Study st = ff::load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  EXPECT_EQ(st.name, "fbtb_paper");
+  EXPECT_FALSE(st.description.empty());
+  EXPECT_EQ(fs::path(st.model_path).filename(), "fbtb.yaml");
+  EXPECT_TRUE(fs::equivalent(st.model_path, kModel));
+  ASSERT_EQ(st.variants.size(), 4u);
+  const char* labels[] = {"PD, 0.5 rad", "PD + notch, 0.5 rad", "PD, 1.0 rad", "PD + notch, 1.0 rad"};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(st.variants[i].eval_id, i);
+    EXPECT_EQ(st.variants[i].label, labels[i]);
+    ASSERT_EQ(st.variants[i].set.size(), 2u);
+    EXPECT_EQ(st.variants[i].set[0].path, "trajectory.moves[0].target");
+    EXPECT_EQ(st.variants[i].set[0].key, "runs[" + std::to_string(i) + "].set.trajectory.moves[0].target");
+    EXPECT_EQ(st.variants[i].set[1].path, "notch.enabled");
+  }
+  // Line numbers of the set entries in the study file: runs start at line 14, four lines each.
+  EXPECT_EQ(st.variants[0].set[0].line, 16);
+  EXPECT_EQ(st.variants[1].set[1].line, 21);
+}
+
+TEST(PaperStudy, VariantOneHasTheNotchAtTheClosedLoopResonances) {
+  const ff::Study st = ff::load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  const ff::Model m = ff::make_variant_model(st, st.variants[1]);
+  EXPECT_TRUE(m.spec.notch.enabled);
+  EXPECT_EQ(m.spec.notch.order, 1);
+  EXPECT_DOUBLE_EQ(m.spec.notch.alpha[0], 1.6);
+  EXPECT_DOUBLE_EQ(m.spec.notch.zeta[1], 1.0);
+  EXPECT_NEAR(m.omega_z[0], kTwoPi * 0.274, 0.005);
+  EXPECT_NEAR(m.omega_z[1], kTwoPi * 2.289, 0.01);
+  EXPECT_DOUBLE_EQ(m.spec.trajectory.moves[0].target, 0.5);
+}
+
+TEST(PaperStudy, VariantsDifferOnlyInTheirOverrides) {
+  const ff::Study st = ff::load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  const double targets[] = {0.5, 0.5, 1.0, 1.0};
+  const bool notch[] = {false, true, false, true};
+  for (int i = 0; i < 4; ++i) {
+    const ff::Model m = ff::make_variant_model(st, st.variants[i]);
+    EXPECT_EQ(m.nseg, 6);
+    EXPECT_DOUBLE_EQ(m.spec.trajectory.moves[0].target, targets[i]) << i;
+    EXPECT_EQ(m.spec.notch.enabled, notch[i]) << i;
+    EXPECT_DOUBLE_EQ(m.spec.payload_mass, 328.7);
+  }
+  // A variant's overrides never leak into the shared model document.
+  EXPECT_FALSE(ff::make_variant_model(st, st.variants[0]).spec.notch.enabled);
+}
+
+// ---- good studies written here -----------------------------------------------------------
+
+TEST_F(StudyFiles, ModelPathIsRelativeToTheStudyFile) {
+  fs::create_directories(dir / "studies");
+  fs::copy_file(kModel, dir / "rig.yaml");
+  const auto path = write("studies/s.yaml", "model: ../rig.yaml\nruns:\n  - set: {payload.mass: 400}\n");
+  const ff::Study st = ff::load_study(path);
+  EXPECT_EQ(st.name, "s");  // defaults to the file's stem
+  EXPECT_TRUE(fs::equivalent(st.model_path, dir / "rig.yaml"));
+  ASSERT_EQ(st.variants.size(), 1u);
+  EXPECT_EQ(st.variants[0].label, "run 0");
+  EXPECT_DOUBLE_EQ(ff::make_variant_model(st, st.variants[0]).spec.payload_mass, 400.0);
+}
+
+TEST_F(StudyFiles, StudyWideSetAppliesToEveryRun) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nset:\n  segments: 8\nruns:\n  - label: a\n  - label: b\n");
+  const ff::Study st = ff::load_study(path);
+  for (const auto& v : st.variants) EXPECT_EQ(ff::make_variant_model(st, v).nseg, 8);
+}
+
+// ---- bad studies -------------------------------------------------------------------------
+
+TEST_F(StudyFiles, UnknownKeyInARunIsRejectedWithItsLine) {
+  const auto path = write("s.yaml",
+                          "model: " + kModel +
+                              "\n"
+                              "runs:\n"
+                              "  - label: a\n"
+                              "    colour: red\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.key(), "runs[0].colour");
+  EXPECT_NE(e.message().find("unknown key"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, UnknownTopLevelKeyIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nrusn:\n  - label: a\nruns:\n  - label: a\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.key(), "rusn");
+  EXPECT_NE(e.message().find("unknown key"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, NegativeMassInARunNamesTheStudyLineAndKey) {
+  const auto path = write("s.yaml",
+                          "name: bad\n"
+                          "model: " + kModel +
+                              "\n"
+                              "runs:\n"
+                              "  - label: heavy\n"
+                              "    set:\n"
+                              "      payload.mass: -1\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);  // the STUDY file, not the model
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_EQ(e.key(), "runs[0].set.payload.mass");
+  EXPECT_NE(e.message().find(">= 0"), std::string::npos) << e.what();
+  EXPECT_EQ(std::string(e.what()).rfind(path + ":6: runs[0].set.payload.mass: ", 0), 0u) << e.what();
+}
+
+TEST_F(StudyFiles, BadValueInALaterRunNamesThatRun) {
+  const auto path = write("s.yaml",
+                          "model: " + kModel +
+                              "\n"
+                              "runs:\n"
+                              "  - set: {segments: 4}\n"
+                              "  - label: b\n"
+                              "    set:\n"
+                              "      trajectory.moves[1].target: 0.5\n");  // = moves[0]: zero amplitude
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_EQ(e.key(), "runs[1].set.trajectory.moves[1].target");
+  EXPECT_NE(e.message().find("zero amplitude"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, WrongTypeInARunIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set:\n      segments: six\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.key(), "runs[0].set.segments");
+  EXPECT_NE(e.message().find("expected an integer"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, UnknownModelKeyInARunIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set:\n      payload.colour: red\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.key(), "runs[0].set.payload.colour");
+  EXPECT_NE(e.message().find("unknown key"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, ErrorBelowAnOverriddenMapNamesTheExactKey) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set:\n      payload: {mass: -1, inertia: 2}\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.key(), "runs[0].set.payload.mass");
+}
+
+TEST_F(StudyFiles, IndexOutOfRangeInASetIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set:\n      trajectory.moves[5].target: 1\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.key(), "runs[0].set.trajectory.moves[5].target");
+  EXPECT_NE(e.message().find("index [5]"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, BadPathInStudyWideSetIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nset:\n  payload..mass: 1\nruns:\n  - label: a\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.key(), "set.payload..mass");
+  EXPECT_NE(e.message().find("bad parameter path"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, SetThatIsNotAMapIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set: [payload.mass, 1]\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.key(), "runs[0].set");
+  EXPECT_NE(e.message().find("expected a map"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, MissingModelFileIsRejected) {
+  const auto path = write("s.yaml", "model: no_such_model.yaml\nruns:\n  - label: a\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_EQ(e.key(), "model");
+  EXPECT_NE(e.message().find("does not exist"), std::string::npos) << e.what();
+  EXPECT_NE(e.message().find("no_such_model.yaml"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, MissingModelKeyIsRejected) {
+  const auto path = write("s.yaml", "runs:\n  - label: a\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.key(), "model");
+  EXPECT_NE(e.message().find("missing required value"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, EmptyRunListIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns: []\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.key(), "runs");
+  EXPECT_NE(e.message().find("at least one run"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, MissingRunsIsRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.key(), "runs");
+  EXPECT_NE(e.message().find("missing required value"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, EmptyStudyFileIsRejected) {
+  const auto path = write("s.yaml", "# nothing\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_NE(e.message().find("empty"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, UnparsableStudyNamesItsLine) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - label: a\n   set: {segments: 4}\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 4) << e.what();
+}
+
+TEST_F(StudyFiles, MissingStudyFileIsRejected) {
+  const auto e = load_error((dir / "absent.yaml").string());
+  EXPECT_EQ(e.file(), (dir / "absent.yaml").string());
+  EXPECT_NE(e.message().find("cannot open"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, BadModelFileNamesTheModelFile) {
+  std::ifstream in(kModel);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find("  inertia: 50.0");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 15, "  inertia: -50.");
+  const auto model = write("rig.yaml", text);
+  const auto e = load_error(write("s.yaml", "model: rig.yaml\nruns:\n  - label: a\n"));
+  EXPECT_TRUE(fs::equivalent(e.file(), model)) << e.what();
+  EXPECT_EQ(e.key(), "hub.inertia");
+  EXPECT_NE(e.message().find(">= 0"), std::string::npos) << e.what();
+}
+
+// Each variant parses the model text afresh, so an error in the model file keeps its line.
+TEST_F(StudyFiles, BadModelFileNamesTheModelLine) {
+  std::ifstream in(kModel);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("  inertia: 50.0"), 15, "  inertia: -50.");
+  write("rig.yaml", text);
+  const auto e = load_error(write("s.yaml", "model: rig.yaml\nruns:\n  - label: a\n"));
+  EXPECT_EQ(e.line(), 19) << e.what();
+}
+
+// A bad value in the study-wide `set` is reported at the study file's line of that entry.
+TEST_F(StudyFiles, NegativeMassInStudyWideSetNamesTheStudyLine) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nset:\n  payload.mass: -1\nruns:\n  - label: a\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path) << e.what();
+  EXPECT_EQ(e.line(), 3) << e.what();
+  EXPECT_EQ(e.key(), "set.payload.mass") << e.what();
+}
+
+}  // namespace
