@@ -5,19 +5,26 @@
 #include <exception>
 
 #include "apps/verbs.hpp"
+#include "jobs/mpi.hpp"
 #include "kernel/errors.hpp"
 
 int main(int argc, char** argv) {
+  ff::MpiSession session(&argc, &argv);  // one rank of one unless started by mpirun
+  ff::set_mpi(&session);
   CLI::App app{"flexfarm: simulation farm for flexible robot manipulators (PNL Flexible Beam Testbed and kin)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "flexfarm 0.1.0");
   ff::add_modes_verb(app);
   ff::add_simulate_verb(app);
   ff::add_run_verb(app);
+  ff::add_merge_verb(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e);  // --help, bad options
+  } catch (const ff::ExitError& e) {
+    std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    return e.code;
   } catch (const ff::ConfigError& e) {
     std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
     return 2;

@@ -1,69 +1,128 @@
-// flexfarm run STUDY.yaml --out DIR: every run of a study, its result table and plots.
-#include <unistd.h>
-
-#include <chrono>
+// flexfarm run STUDY.yaml --out DIR: every variant of a study, on the cores, the MPI ranks or a
+// Slurm array task's shard; journalled, resumable; then the result table, database and plots.
 #include <cstdio>
-#include <filesystem>
+#include <regex>
 
 #include "apps/verbs.hpp"
-#include "jobs/runner.hpp"
+#include "jobs/farm.hpp"
+#include "jobs/mpi.hpp"
+#include "jobs/progress.hpp"
+#include "jobs/report.hpp"
 #include "kernel/files.hpp"
-#include "kernel/trajectory.hpp"
-#include "results/table.hpp"
 
 namespace ff {
 
+namespace {
+
+// "i/N" with 0 <= i < N.
+Partition parse_shard(const std::string& text) {
+  std::smatch m;
+  const std::regex re("^([0-9]+)/([0-9]+)$");
+  if (!std::regex_match(text, m, re)) throw CLI::ValidationError("--shard", "expected I/N, e.g. 3/16, got '" + text + "'");
+  Partition p{std::stoi(m[1]), std::stoi(m[2])};
+  if (p.count < 1 || p.index >= p.count) throw CLI::ValidationError("--shard", "needs 0 <= I < N, got '" + text + "'");
+  return p;
+}
+
+// Exit status 3 when any variant failed numerically (not_settled is a result, not a failure).
+int count_failed(const ResultTable& t) {
+  int failed = 0;
+  for (const auto& r : t.rows) failed += r.status == "nonfinite" || r.status == "solver_fail";
+  return failed;
+}
+
+}  // namespace
+
+// Assembles the journals of `dir` into the final outputs and prints where they are.
+void finish_study(const Study& study, const std::string& dir) {
+  const ResultTable table = assemble_results(study, dir);
+  const std::string md = write_study_report(study, table, dir);
+  std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", md.c_str(), dir.c_str());
+  const int failed = count_failed(table);
+  if (failed)
+    throw ExitError(std::to_string(failed) + " variant(s) failed numerically (status nonfinite or solver_fail in results.csv)", 3);
+}
+
 void add_run_verb(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "Run a study: writes DIR/results.csv (one row per run), DIR/table.md "
-                                        "(settling and overshoot), DIR/traces/*.csv and plots of all runs");
+  auto* cmd = app.add_subcommand(
+      "run", "Run a study: every variant on the cores (and MPI ranks under mpirun), journalled so --resume continues "
+             "a killed run; writes DIR/results.csv, results.sqlite, table.md, plots (and traces/ for small studies)");
   struct Args {
-    std::string study, out;
-    int threads = 0;
+    std::string study, out, shard;
+    int threads = 0, lanes = 8;
+    bool resume = false;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("study", args->study, "study YAML file, e.g. configs/studies/fbtb_paper.yaml")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "output directory (created)")->required();
-  cmd->add_option("--threads", args->threads, "worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--resume", args->resume, "continue the run journalled in --out: compute only the missing variants");
+  cmd->add_option("--threads", args->threads, "worker threads per process (default: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--lanes", args->lanes, "variants advanced together by one kernel call")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  cmd->add_option("--shard", args->shard,
+                  "I/N: compute only the variants with eval_id % N == I (a Slurm array task: "
+                  "--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT), then `flexfarm merge`");
   cmd->callback([args] {
     const Study study = load_study(args->study);
-    const auto t0 = std::chrono::steady_clock::now();
-    const bool tty = isatty(fileno(stderr));
-    RunOptions opt;
-    opt.threads = args->threads;
-    opt.progress = [&](int done, int total) {
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::fprintf(stderr, tty ? "\r%s: %d/%d runs, %.1f s elapsed   " : "%s: %d/%d runs, %.1f s elapsed\n",
-                   study.name.c_str(), done, total, el);
-      if (tty && done == total) std::fprintf(stderr, "\n");
-    };
-    const StudyRun run = run_study(study, opt);
-
-    // Outputs, each written whole (temporary file + rename).
-    make_directories(args->out + "/traces");
-    std::vector<std::string> labels;
-    std::vector<const Trace*> traces;
-    for (std::size_t i = 0; i < run.traces.size(); ++i) {
-      char name[32];
-      std::snprintf(name, sizeof name, "/traces/%06d.csv", run.table.rows[i].eval_id);
-      write_trace_csv(run.traces[i], args->out + name);
-      labels.push_back(run.table.rows[i].label);
-      traces.push_back(&run.traces[i]);
+    const MpiSession& comm = mpi();
+    FarmOptions opt;
+    opt.out = args->out;
+    opt.resume = args->resume;
+    opt.eval.lanes = args->lanes;
+    opt.eval.threads = args->threads;
+    opt.eval.keep_traces = study.keep_traces;
+    if (!args->shard.empty()) {
+      if (comm.size() > 1) throw CLI::ValidationError("--shard", "use either MPI ranks or --shard, not both");
+      opt.part = parse_shard(args->shard);
+      opt.tag = "shard-" + std::to_string(opt.part.index) + "-of-" + std::to_string(opt.part.count);
+    } else if (comm.size() > 1) {
+      opt.part = {comm.rank(), comm.size()};
+      opt.tag = "rank-" + std::to_string(comm.rank()) + "-of-" + std::to_string(comm.size());
     }
-    write_file_atomic(args->out + "/results.csv", format_results_csv(run.table));
-    std::vector<std::vector<std::string>> moves;
-    for (const auto& m : run.models) moves.push_back(describe_moves(m.spec.trajectory));
-    const std::string md = format_settling_table_md(run.table, moves);
-    write_file_atomic(args->out + "/table.md", "# " + study.name + "\n\n" + study.description + "\n\n" + md);
-    write_trace_plots(args->out, labels, traces, study.name);
-    int failed = 0;
-    for (const auto& r : run.table.rows) failed += r.status == "nonfinite" || r.status == "solver_fail";
-    std::printf("%s\nwrote %s/results.csv, %s/table.md, %s/traces/, plots %s/{tip_angle,hub_angle,tip_deflection,"
-                "hub_torque}.png\n",
-                md.c_str(), args->out.c_str(), args->out.c_str(), args->out.c_str(), args->out.c_str());
-    if (failed) throw std::runtime_error(std::to_string(failed) + " run(s) failed numerically; see results.csv");
+    if (comm.rank() == 0) make_directories(args->out + (study.keep_traces ? "/traces" : ""));
+    comm.barrier();
+
+    Progress progress(study.name + (opt.tag == "main" ? "" : " " + opt.tag), stderr_is_terminal());
+    int already = -1;
+    opt.progress = [&](int done, int total, double seconds) {
+      if (already < 0) already = done;
+      if (comm.rank() == 0) progress.update(done, total, done - already, seconds);
+    };
+    // Every rank runs its share; a failure on any rank stops them all after the barrier.
+    std::string error;
+    try {
+      run_farm(study, opt);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    progress.finish();
+    if (comm.any(!error.empty())) {
+      if (!error.empty()) throw std::runtime_error(error);
+      throw std::runtime_error("another rank failed");
+    }
+    if (!args->shard.empty()) {
+      std::printf("shard %s of %s done in %s; when every shard is done: flexfarm merge %s --out %s\n",
+                  args->shard.c_str(), study.name.c_str(), args->out.c_str(), args->study.c_str(), args->out.c_str());
+      return;
+    }
+    comm.barrier();
+    if (comm.rank() == 0) finish_study(study, args->out);
   });
+}
+
+void add_merge_verb(CLI::App& app) {
+  auto* cmd = app.add_subcommand("merge", "Assemble the journals of a sharded run (flexfarm run --shard I/N) into "
+                                          "DIR/results.csv, results.sqlite, table.md and plots");
+  struct Args {
+    std::string study, out;
+  };
+  auto args = std::make_shared<Args>();
+  cmd->add_option("study", args->study, "the study YAML file the shards ran")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", args->out, "the directory the shards wrote into")->required()->check(CLI::ExistingDirectory);
+  cmd->callback([args] { finish_study(load_study(args->study), args->out); });
 }
 
 }  // namespace ff

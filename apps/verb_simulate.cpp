@@ -3,6 +3,7 @@
 
 #include "apps/verbs.hpp"
 #include "kernel/files.hpp"
+#include "jobs/report.hpp"
 #include "kernel/trajectory.hpp"
 #include "kernel/model_io.hpp"
 #include "kernel/simulate.hpp"
@@ -30,7 +31,9 @@ void add_simulate_verb(CLI::App& app) {
     const BatchRun run = simulate(bm);
     ResultTable table;
     table.columns = calc_metric_columns(static_cast<int>(m.spec.trajectory.moves.size()));
-    ResultRow row{0, args->model, "", calc_run_metrics(m, run.traces[0])};
+    ResultRow row;
+    row.label = args->model;
+    row.values = calc_run_metrics(m, run.traces[0]);
     row.status = calc_run_status(run.status[0], table.columns, row.values);
     table.rows.push_back(row);
     const std::vector<std::vector<std::string>> moves{describe_moves(m.spec.trajectory)};

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -10,15 +11,18 @@
 
 namespace ff {
 
+// An error that ends the program with its own exit code (e.g. 3: some variants failed).
+struct ExitError : std::runtime_error {
+  ExitError(const std::string& what, int exit_code) : std::runtime_error(what), code(exit_code) {}
+  int code;
+};
+
 void add_modes_verb(CLI::App& app);
 void add_simulate_verb(CLI::App& app);
 void add_run_verb(CLI::App& app);
+void add_merge_verb(CLI::App& app);
 
 // Loads a model file and applies `--set PATH=VALUE` overrides (sweep/paths.hpp).
 Model load_model_with(const std::string& path, const std::vector<std::string>& sets);
-
-// Plots of recorded traces (tip angle, hub angle, tip deflection, torque) to DIR/<signal>.png.
-void write_trace_plots(const std::string& dir, const std::vector<std::string>& labels,
-                       const std::vector<const struct Trace*>& traces, const std::string& title);
 
 }  // namespace ff

@@ -1,4 +1,6 @@
-// Runs the variants of a study on the cores and collects one result row per variant.
+// Evaluates the variants of a study: lane batches on OpenMP threads, one result row per variant.
+// Rows are a pure function of the variant: the same bits for any thread count, lane width,
+// rank count or resume.
 #pragma once
 
 #include <functional>
@@ -11,21 +13,36 @@
 
 namespace ff {
 
-struct StudyRun {
-  ResultTable table;             // one row per variant, ascending eval_id
-  std::vector<Trace> traces;     // (variants), kept when asked for
-  std::vector<Model> models;     // (variants)
-};
-
-struct RunOptions {
-  bool keep_traces = true;
+struct EvalOptions {
+  int lanes = 8;                 // W: variants advanced together by one kernel call
   int threads = 0;               // 0 = OpenMP default
-  // Called after each finished variant with (done, total); from one thread at a time.
-  std::function<void(int, int)> progress;
+  bool keep_traces = false;
 };
 
-// Simulates every variant (each its own one-lane batch) and evaluates its metrics. The rows do
-// not depend on the thread count.
-StudyRun run_study(const Study& study, const RunOptions& opt);
+// A finished batch: its rows (ascending eval_id), their traces when kept, and its wall time.
+struct BatchResult {
+  std::vector<ResultRow> rows;
+  std::vector<Trace> traces;
+  double seconds = 0.0;
+};
+
+// The result row of one simulated variant.
+ResultRow make_result_row(const Study& study, int variant, const Trace& trace, LaneStatus status);
+
+// Simulates the variants `todo` (indices into study.variants) in batches on the threads. `done`
+// is called once per batch, from one thread at a time, in completion order.
+void evaluate_variants(const Study& study, const std::vector<int>& todo, const EvalOptions& opt,
+                       const std::function<void(BatchResult&&)>& done);
+
+// The empty result table of a study: its parameter and metric columns.
+ResultTable make_result_table(const Study& study);
+
+// In memory: every variant of the study, rows in eval_id order (traces when asked for).
+struct StudyRun {
+  ResultTable table;
+  std::vector<Trace> traces;     // (variants) when opt.keep_traces
+};
+StudyRun run_study(const Study& study, const EvalOptions& opt,
+                   const std::function<void(int, int)>& progress = nullptr);
 
 }  // namespace ff

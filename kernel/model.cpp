@@ -125,10 +125,17 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     throw ConfigError(source, 0, "simulation.duration", "needs more than 1e8 controller samples");
 
   // Fixed-step substeps from the fastest linearised eigenvalue; notch zeros at the closed-loop resonances.
-  m.substeps = spec.simulation.substeps > 0 ? spec.simulation.substeps : calc_auto_substeps(m);
+  const auto closed_loop = calc_closed_loop_modes(m);
+  m.resonances = calc_resonances(closed_loop);
+  if (spec.simulation.substeps > 0) {
+    m.substeps = spec.simulation.substeps;
+  } else {
+    auto modes = calc_clamped_modes(m);
+    modes.insert(modes.end(), closed_loop.begin(), closed_loop.end());
+    m.substeps = calc_auto_substeps(modes, m.control_period);
+  }
   m.omega_z[0] = spec.notch.omega_z[0];
   m.omega_z[1] = spec.notch.omega_z[1];
-  m.resonances = calc_closed_loop_resonances(m);
   if (spec.notch.enabled && m.omega_z[0] == 0.0) {
     const auto& res = m.resonances;
     if (res.size() < 2)

@@ -94,22 +94,27 @@ std::vector<Mode> calc_closed_loop_modes(const Model& m) {
   return eigen_modes(state_matrix(mass, stiff, damp, c.ki));
 }
 
-std::vector<double> calc_closed_loop_resonances(const Model& m) {
+std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop) {
   std::vector<double> out;
-  for (const auto& md : calc_closed_loop_modes(m))
+  for (const auto& md : closed_loop)
     if (md.oscillatory && md.zeta < 0.3) out.push_back(md.omega_n);
   return out;
 }
 
-int calc_auto_substeps(const Model& m) {
+std::vector<double> calc_closed_loop_resonances(const Model& m) { return calc_resonances(calc_closed_loop_modes(m)); }
+
+int calc_auto_substeps(const std::vector<Mode>& modes, double control_period) {
   // Oscillatory modes: h omega <= 1 keeps RK4 accurate; real poles: h |lambda| <= 2.5 keeps it stable.
   double need = 0.0;
-  auto consider = [&](const std::vector<Mode>& modes) {
-    for (const auto& md : modes) need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
-  };
-  consider(calc_closed_loop_modes(m));
-  consider(calc_clamped_modes(m));
-  return std::max(1, static_cast<int>(std::ceil(need * m.control_period)));
+  for (const auto& md : modes) need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
+  return std::max(1, static_cast<int>(std::ceil(need * control_period)));
+}
+
+int calc_auto_substeps(const Model& m) {
+  auto modes = calc_closed_loop_modes(m);
+  const auto clamped = calc_clamped_modes(m);
+  modes.insert(modes.end(), clamped.begin(), clamped.end());
+  return calc_auto_substeps(modes, m.control_period);
 }
 
 }  // namespace ff

@@ -28,9 +28,11 @@ std::vector<Mode> calc_closed_loop_modes(const Model& m);
 // The closed loop's resonances: its oscillatory modes with zeta < 0.3, ascending, rad/s.
 // The robust notch filter places its zeros omega_z1, omega_z2 at the first two.
 std::vector<double> calc_closed_loop_resonances(const Model& m);
+std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop);
 
 // Fixed-step RK4 substeps per control period: h omega_n <= 1 for every oscillatory mode of the
 // clamped and the closed loop, h |lambda| <= 2.5 for every real pole (RK4 is stable to ~2.78).
 int calc_auto_substeps(const Model& m);
+int calc_auto_substeps(const std::vector<Mode>& modes, double control_period);
 
 }  // namespace ff

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
 
 #include "kernel/controller.hpp"
 #include "kernel/cvode.hpp"
@@ -96,6 +97,27 @@ void write_trace_csv(const Trace& tr, const std::string& path) {
     text += buf;
   }
   write_file_atomic(path, text);
+}
+
+Trace read_trace_csv(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw std::runtime_error(path + ": cannot open");
+  Trace tr;
+  char line[1024];
+  int line_no = 0;
+  while (std::fgets(line, sizeof line, f)) {
+    if (++line_no == 1) continue;  // header
+    double x[8];
+    if (std::sscanf(line, "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &x[0], &x[1], &x[2], &x[3], &x[4], &x[5], &x[6], &x[7]) != 8) {
+      std::fclose(f);
+      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected 8 numbers");
+    }
+    std::vector<double>* cols[8] = {&tr.t, &tr.ref, &tr.ref_filtered, &tr.torque, &tr.hub_angle, &tr.hub_rate,
+                                    &tr.tip_deflection, &tr.tip_angle};
+    for (int c = 0; c < 8; ++c) cols[c]->push_back(x[c]);
+  }
+  std::fclose(f);
+  return tr;
 }
 
 }  // namespace ff

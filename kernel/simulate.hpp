@@ -33,5 +33,7 @@ BatchRun simulate(const BatchModel& bm);
 // Writes one trace as CSV (columns t, ref, ref_filtered, hub_torque, hub_angle, hub_rate,
 // tip_deflection, tip_angle), atomically.
 void write_trace_csv(const Trace& tr, const std::string& path);
+// Reads a trace written by write_trace_csv. Throws std::runtime_error naming the path and line.
+Trace read_trace_csv(const std::string& path);
 
 }  // namespace ff

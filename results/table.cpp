@@ -1,7 +1,10 @@
 #include "results/table.hpp"
 
 #include <cmath>
+#include <cctype>
 #include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
 
 namespace ff {
 
@@ -22,23 +25,108 @@ std::string fmt(const char* f, double x) {
 
 }  // namespace
 
-std::string format_results_csv(const ResultTable& t) {
-  std::string out = "eval_id,label,status";
+std::string format_results_header(const ResultTable& t) {
+  std::string out = "eval_id,seed,label,status";
+  for (const auto& c : t.params) out += "," + csv_quote(c);
   for (const auto& c : t.columns) out += "," + c;
-  out += "\n";
-  for (const auto& r : t.rows) {
-    out += std::to_string(r.eval_id);
-    out += ',';
-    out += csv_quote(r.label);
-    out += ',';
-    out += r.status;
-    for (double x : r.values) {
+  return out + "\n";
+}
+
+std::string format_results_row(const ResultRow& r) {
+  std::string out = std::to_string(r.eval_id);
+  out += ',';
+  out += std::to_string(r.seed);
+  out += ',';
+  out += csv_quote(r.label);
+  out += ',';
+  out += r.status;
+  for (const auto* v : {&r.params, &r.values})
+    for (double x : *v) {
       out += ',';
-      if (!std::isnan(x)) out += fmt("%.10g", x);
+      if (!std::isnan(x)) out += fmt("%.12g", x);
     }
-    out += '\n';
-  }
+  out += '\n';
   return out;
+}
+
+std::string format_results_csv(const ResultTable& t) {
+  std::string out = format_results_header(t);
+  for (const auto& r : t.rows) out += format_results_row(r);
+  return out;
+}
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> cells(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+      cells.back() += '"';
+      ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      cells.emplace_back();
+    } else if (c != '\r') {
+      cells.back() += c;
+    }
+  }
+  return cells;
+}
+
+ResultTable parse_results_csv(const std::string& text, const std::string& source) {
+  ResultTable t;
+  std::size_t pos = 0;
+  int line_no = 0;
+  std::vector<std::string> header;
+  int nparams = -1;
+  while (pos < text.size()) {
+    const std::size_t end = text.find('\n', pos);
+    const std::string line = text.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
+    pos = end == std::string::npos ? text.size() : end + 1;
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    auto cells = split_csv_line(line);
+    auto bad = [&](const std::string& col, const std::string& why) {
+      throw std::runtime_error(source + ":" + std::to_string(line_no) + ": " + col + ": " + why);
+    };
+    if (header.empty()) {
+      header = cells;
+      if (header.size() < 4 || header[0] != "eval_id" || header[1] != "seed" || header[2] != "label" || header[3] != "status")
+        bad("header", "expected eval_id,seed,label,status,...");
+      // Parameters come before the metrics; metric names start with "m<digit>".
+      for (std::size_t c = 4; c < header.size(); ++c) {
+        const bool metric = header[c].size() > 1 && header[c][0] == 'm' && std::isdigit(static_cast<unsigned char>(header[c][1]));
+        if (metric && nparams < 0) nparams = static_cast<int>(c) - 4;
+        (metric ? t.columns : t.params).push_back(header[c]);
+      }
+      if (nparams < 0) nparams = static_cast<int>(header.size()) - 4;
+      continue;
+    }
+    if (cells.size() != header.size())
+      bad("row", "has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
+    ResultRow r;
+    try {
+      r.eval_id = std::stoi(cells[0]);
+      r.seed = std::stoull(cells[1]);
+    } catch (const std::exception&) {
+      bad("eval_id", "not a number");
+    }
+    r.label = cells[2];
+    r.status = cells[3];
+    for (std::size_t c = 4; c < cells.size(); ++c) {
+      double x = std::nan("");
+      if (!cells[c].empty()) {
+        char* endp = nullptr;
+        x = std::strtod(cells[c].c_str(), &endp);
+        if (*endp != '\0') bad(header[c], "'" + cells[c] + "' is not a number");
+      }
+      (static_cast<int>(c) - 4 < nparams ? r.params : r.values).push_back(x);
+    }
+    t.rows.push_back(std::move(r));
+  }
+  if (header.empty()) throw std::runtime_error(source + ": no header row");
+  return t;
 }
 
 std::string format_settling_table_md(const ResultTable& t, const std::vector<std::vector<std::string>>& moves) {

@@ -1,7 +1,8 @@
-// The result table: one row per variant (eval_id, label, status, metrics), as CSV and as the
-// human-readable settling/overshoot table.
+// The result table: one row per variant (eval_id, seed, label, status, parameters, metrics), as
+// CSV and as the human-readable settling/overshoot table.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -9,18 +10,32 @@ namespace ff {
 
 struct ResultRow {
   int eval_id = 0;
+  std::uint64_t seed = 0;        // the variant's random seed (from the study seed and eval_id)
   std::string label;
   std::string status;            // ok, not_settled, nonfinite, solver_fail
+  std::vector<double> params;    // in ResultTable::params order
   std::vector<double> values;    // in ResultTable::columns order; NaN = no number (e.g. not settled)
 };
 
 struct ResultTable {
+  std::vector<std::string> params;   // parameter paths
   std::vector<std::string> columns;  // metric names
   std::vector<ResultRow> rows;       // ascending eval_id
 };
 
-// CSV with header eval_id,label,status,<columns>; NaN cells are empty; numbers with 10 significant digits.
+// CSV header: eval_id,seed,label,status,<params>,<columns>.
+std::string format_results_header(const ResultTable& table);
+// One CSV row (with its newline); NaN cells are empty; numbers with 12 significant digits.
+std::string format_results_row(const ResultRow& row);
+// Header and every row.
 std::string format_results_csv(const ResultTable& table);
+
+// Splits one CSV line (no newline) into cells; "..." quotes may hold commas and doubled quotes.
+std::vector<std::string> split_csv_line(const std::string& line);
+
+// Reads a results CSV (as written by format_results_csv). Throws std::runtime_error naming
+// `source`, the line and the column on a malformed file.
+ResultTable parse_results_csv(const std::string& text, const std::string& source);
 
 // Markdown table, one line per run and move: tip and hub settling (s, "not settled"), overshoot (%),
 // peak tip deflection (mm), residual vibration (mm), peak torque (kN·m).

@@ -1,16 +1,35 @@
 #include "sweep/study.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "kernel/errors.hpp"
 #include "kernel/model_io.hpp"
 #include "kernel/yaml_reader.hpp"
+#include "sweep/random.hpp"
 
 namespace ff {
 
 namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// 64-bit FNV-1a of a text: the study's fingerprint.
+std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 0xcbf29ce484222325ull) {
+  for (unsigned char c : s) h = (h ^ c) * 0x100000001b3ull;
+  return h;
+}
 
 // Reads a `set:` map of path -> value.
 std::vector<Assignment> read_assignments(YamlReader& parent, const std::string& key) {
@@ -25,6 +44,200 @@ std::vector<Assignment> read_assignments(YamlReader& parent, const std::string& 
   return out;
 }
 
+// A numeric reading of a YAML scalar (true/false as 1/0), NaN otherwise.
+double numeric_value(const YAML::Node& v) {
+  double x = 0;
+  bool b = false;
+  if (v.IsScalar() && YAML::convert<double>::decode(v, x)) return x;
+  if (v.IsScalar() && YAML::convert<bool>::decode(v, b)) return b ? 1.0 : 0.0;
+  return std::nan("");
+}
+
+// A parameter value as YAML: integers without a decimal point, others exactly (17 digits).
+YAML::Node value_node(double x) {
+  char buf[40];
+  if (x == std::floor(x) && std::fabs(x) < 1e15) std::snprintf(buf, sizeof buf, "%.0f", x);
+  else std::snprintf(buf, sizeof buf, "%.17g", x);
+  return YAML::Load(buf);
+}
+
+std::string short_number(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+DesignKind parse_design_kind(YamlReader& r, const std::string& name) {
+  const std::pair<const char*, DesignKind> kinds[] = {
+      {"grid", DesignKind::kGrid},           {"centered", DesignKind::kCentered},
+      {"monte_carlo", DesignKind::kMonteCarlo}, {"lhs", DesignKind::kLatinHypercube},
+      {"sobol", DesignKind::kSobol},         {"saltelli", DesignKind::kSaltelli},
+      {"morris", DesignKind::kMorris}};
+  for (const auto& [n, k] : kinds)
+    if (name == n) return k;
+  r.fail("type", "unknown design '" + name + "' (list, grid, centered, monte_carlo, lhs, sobol, saltelli, morris)");
+}
+
+Distribution parse_distribution(YamlReader r) {
+  Distribution d;
+  std::string type;
+  if (!r.has("type")) r.fail("type", "missing required value (uniform, normal, truncated_normal, lognormal, choice)");
+  r.optional("type", type);
+  if (type == "uniform") {
+    d.kind = DistributionKind::kUniform;
+    r.required("lower", d.lower);
+    r.required("upper", d.upper);
+  } else if (type == "normal" || type == "truncated_normal") {
+    d.kind = type == "normal" ? DistributionKind::kNormal : DistributionKind::kTruncatedNormal;
+    r.required("mean", d.mean);
+    r.required("std", d.std);
+    if (d.kind == DistributionKind::kTruncatedNormal) {
+      r.required("lower", d.lower);
+      r.required("upper", d.upper);
+    }
+  } else if (type == "lognormal") {
+    d.kind = DistributionKind::kLognormal;
+    r.required("mu", d.mu);
+    r.required("sigma", d.sigma);
+  } else if (type == "choice") {
+    d.kind = DistributionKind::kChoice;
+    for (const auto* key : {"values", "weights"}) {
+      const YAML::Node v = r.raw(key);
+      if (!v) continue;
+      if (!v.IsSequence()) r.fail(key, "expected a list of numbers");
+      auto& out = std::string(key) == "values" ? d.values : d.weights;
+      for (const auto& e : v) {
+        const double x = numeric_value(e);
+        if (std::isnan(x)) r.fail(key, "expected a list of numbers");
+        out.push_back(x);
+      }
+    }
+  } else {
+    r.fail("type", "unknown distribution '" + type + "' (uniform, normal, truncated_normal, lognormal, choice)");
+  }
+  r.finish();
+  try {
+    validate_distribution(d);
+  } catch (const std::invalid_argument& e) {
+    r.fail("type", e.what());
+  }
+  return d;
+}
+
+// One entry of `variables:`.
+Variable parse_variable(YamlReader& r, bool& integer) {
+  Variable v;
+  if (!r.has("path")) r.fail("path", "missing required value (the model parameter, e.g. payload.mass)");
+  r.optional("path", v.path);
+  if (const YAML::Node lv = r.raw("levels")) {
+    if (!lv.IsSequence() || lv.size() == 0) r.fail("levels", "expected a non-empty list of numbers");
+    for (const auto& e : lv) {
+      const double x = numeric_value(e);
+      if (!std::isfinite(x)) r.fail("levels", "expected a list of finite numbers");
+      v.levels.push_back(x);
+    }
+  }
+  if (r.has("range")) {
+    auto rg = r.child("range");
+    double lo = 0, hi = 0;
+    int count = 0;
+    rg.required("lower", lo);
+    rg.required("upper", hi);
+    rg.required("count", count);
+    rg.finish();
+    if (count < 2 || !(hi > lo)) r.fail("range", "needs upper > lower and count >= 2");
+    if (!v.levels.empty()) r.fail("range", "give levels or range, not both");
+    for (int i = 0; i < count; ++i) v.levels.push_back(lo + (hi - lo) * i / (count - 1));
+  }
+  v.nominal = v.levels.empty() ? 0.0 : v.levels[v.levels.size() / 2];
+  r.optional("nominal", v.nominal);
+  if (r.has("distribution")) v.dist = parse_distribution(r.child("distribution"));
+  integer = false;
+  r.optional("integer", integer);
+  r.finish();
+  return v;
+}
+
+void parse_design(Study& st, YamlReader& top) {
+  const bool has_runs = top.has("runs"), has_vars = top.has("variables");
+  if (has_runs == has_vars) top.fail("runs", "give either `runs:` (a list of runs) or `variables:` with a `design:`");
+
+  if (has_runs) {
+    st.listed = true;
+    if (top.has("design")) top.fail("design", "a list of `runs:` takes no design");
+    auto runs = top.sequence("runs", true);
+    if (runs.empty()) top.fail("runs", "needs at least one run");
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      Variant v;
+      v.eval_id = static_cast<int>(i);
+      v.label = "run " + std::to_string(i);
+      runs[i].optional("label", v.label);
+      v.set = read_assignments(runs[i], "set");
+      runs[i].finish();
+      for (const auto& a : v.set)
+        if (std::find(st.params.begin(), st.params.end(), a.path) == st.params.end()) st.params.push_back(a.path);
+      st.variants.push_back(std::move(v));
+    }
+    for (auto& v : st.variants) {
+      v.params.assign(st.params.size(), std::nan(""));
+      for (const auto& a : v.set)
+        v.params[std::find(st.params.begin(), st.params.end(), a.path) - st.params.begin()] = numeric_value(a.value);
+    }
+    return;
+  }
+
+  auto vars = top.sequence("variables", true);
+  if (vars.empty()) top.fail("variables", "needs at least one variable");
+  std::vector<bool> integer(vars.size());
+  std::vector<int> lines;
+  for (std::size_t i = 0; i < vars.size(); ++i) {
+    bool is_int = false;
+    st.variables.push_back(parse_variable(vars[i], is_int));
+    integer[i] = is_int;
+    lines.push_back(vars[i].line());
+    st.params.push_back(st.variables.back().path);
+  }
+  auto design = top.child("design", true);
+  DesignSpec spec;
+  std::string type;
+  if (!design.has("type")) design.fail("type", "missing required value");
+  design.optional("type", type);
+  spec.kind = parse_design_kind(design, type);
+  design.optional("samples", spec.samples);
+  design.optional("trajectories", spec.trajectories);
+  design.optional("levels", spec.morris_levels);
+  design.finish();
+  spec.seed = st.seed;
+  st.design = spec.kind;
+  const bool needs_levels = spec.kind == DesignKind::kGrid || spec.kind == DesignKind::kCentered;
+  for (std::size_t i = 0; i < vars.size(); ++i) {
+    if (needs_levels && st.variables[i].levels.empty())
+      vars[i].fail("levels", "a " + type + " design needs `levels:` or `range:` for every variable");
+    if (!needs_levels && !vars[i].has("distribution"))
+      vars[i].fail("distribution", "a " + type + " design needs a `distribution:` for every variable");
+  }
+
+  std::vector<std::vector<double>> rows;
+  try {
+    rows = make_design(spec, st.variables);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(st.source, design.line(), "design", e.what());
+  }
+  // Each design row becomes a variant: its values set by path (rounded where the variable is an integer).
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    Variant v;
+    v.eval_id = static_cast<int>(k);
+    for (std::size_t j = 0; j < st.variables.size(); ++j) {
+      const double x = integer[j] ? std::nearbyint(rows[k][j]) : rows[k][j];
+      v.params.push_back(x);
+      const std::string key = "variables[" + std::to_string(j) + "] (" + st.variables[j].path + ")";
+      v.set.push_back({st.variables[j].path, value_node(x), st.source, lines[j], key});
+      v.label += (j ? ", " : "") + st.variables[j].path + "=" + short_number(x);
+    }
+    st.variants.push_back(std::move(v));
+  }
+}
+
 }  // namespace
 
 Study load_study(const std::string& path) {
@@ -36,32 +249,55 @@ Study load_study(const std::string& path) {
   st.name = std::filesystem::path(path).stem().string();
   top.optional("name", st.name);
   top.optional("description", st.description);
+  double seed = 1;
+  top.optional("seed", seed);
+  if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) top.fail("seed", "must be a whole number >= 0");
+  st.seed = static_cast<std::uint64_t>(seed);
+
   std::string model;
   if (!top.has("model")) top.fail("model", "missing required value (path of the model YAML, relative to this file)");
   top.optional("model", model);
   st.model_path = (std::filesystem::path(path).parent_path() / model).lexically_normal().string();
   if (!std::filesystem::exists(st.model_path)) top.fail("model", "model file '" + st.model_path + "' does not exist");
-  std::ifstream model_in(st.model_path);
-  std::stringstream text;
-  text << model_in.rdbuf();
-  st.model_text = text.str();
   load_yaml_file(st.model_path);  // syntax errors name the model file and line
+  st.model_text = read_text(st.model_path);
   st.set = read_assignments(top, "set");
 
-  auto runs = top.sequence("runs", true);
-  if (runs.empty()) top.fail("runs", "needs at least one run");
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    Variant v;
-    v.eval_id = static_cast<int>(i);
-    v.label = "run " + std::to_string(i);
-    runs[i].optional("label", v.label);
-    v.set = read_assignments(runs[i], "set");
-    runs[i].finish();
-    st.variants.push_back(std::move(v));
+  parse_design(st, top);
+  for (auto& v : st.variants) v.seed = calc_variant_seed(st.seed, static_cast<std::uint64_t>(v.eval_id));
+
+  if (const YAML::Node specs = top.raw("specs")) {
+    if (!specs.IsMap()) top.fail("specs", "expected a map of RESPONSE: limit");
+    for (const auto& kv : specs) {
+      const double x = numeric_value(kv.second);
+      if (!std::isfinite(x)) top.fail("specs", "limit of '" + kv.first.as<std::string>() + "' must be a number");
+      st.specs[kv.first.as<std::string>()] = x;
+    }
   }
+  st.keep_traces = st.variants.size() <= 50;
+  auto outputs = top.child("outputs");
+  outputs.optional("traces", st.keep_traces);
+  outputs.finish();
   top.finish();
-  // Build every variant once: a bad override fails now, before any output exists.
-  for (const auto& v : st.variants) make_variant_model(st, v);
+
+  char hash[17];
+  std::snprintf(hash, sizeof hash, "%016llx",
+                static_cast<unsigned long long>(fnv1a(st.model_text, fnv1a(read_text(path)))));
+  st.hash = hash;
+  // Build every variant's model now: a bad override fails before any output exists.
+  const int n = static_cast<int>(st.variants.size());
+  st.models.resize(n);
+  std::vector<std::exception_ptr> errors(n);
+#pragma omp parallel for schedule(dynamic, 8)
+  for (int i = 0; i < n; ++i) {
+    try {
+      st.models[i] = make_variant_model(st, st.variants[i]);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  }
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
   return st;
 }
 

@@ -281,7 +281,7 @@ TEST_F(Cli, SimulateShortMoveWritesEveryOutput) {
 
   const auto metrics = split_lines(read_text(out / "metrics.csv"));
   ASSERT_EQ(metrics.size(), 2u);
-  EXPECT_EQ(metrics[0].rfind("eval_id,label,status", 0), 0u) << metrics[0];
+  EXPECT_EQ(metrics[0].rfind("eval_id,seed,label,status,m1_tip_settling_s", 0), 0u) << metrics[0];
   EXPECT_EQ(metrics[1].rfind("0,", 0), 0u) << metrics[1];
 
   const std::string table = read_text(out / "table.md");
@@ -307,8 +307,11 @@ TEST_F(Cli, RunShortStudyWritesEveryOutput) {
   const fs::path out = work / "res";
   const auto results = split_lines(read_text(out / "results.csv"));
   ASSERT_EQ(results.size(), 3u);
-  EXPECT_EQ(results[1].rfind("0,PD,", 0), 0u) << results[1];
-  EXPECT_EQ(results[2].rfind("1,PD + notch,", 0), 0u) << results[2];
+  EXPECT_EQ(results[0].rfind("eval_id,seed,label,status,notch.enabled,m1_tip_settling_s", 0), 0u) << results[0];
+  EXPECT_NE(results[1].find(",PD,"), std::string::npos) << results[1];
+  EXPECT_EQ(results[1].rfind("0,", 0), 0u) << results[1];
+  EXPECT_NE(results[2].find(",PD + notch,"), std::string::npos) << results[2];
+  EXPECT_EQ(results[2].rfind("1,", 0), 0u) << results[2];
   for (const char* trace : {"000000.csv", "000001.csv"}) {
     const auto lines = split_lines(read_text(out / "traces" / trace));
     ASSERT_FALSE(lines.empty()) << trace;

@@ -1,6 +1,8 @@
 // Tests of the plotting library: tick maths, label text, colours, data mapping, NaN gaps, PNG output.
 #include "plotting/plot.hpp"
 
+#include "tests/plotting/test_support.hpp"
+
 #include <gtest/gtest.h>
 // OpenCV 4.6 headers mix enum types, which C++20 deprecates; keep that noise out of our build.
 #pragma GCC diagnostic push
@@ -18,23 +20,12 @@
 
 namespace {
 
-// Read access to an RGB buffer from render_line_plot_rgb.
-struct Image {
-  int width, height;
-  std::vector<unsigned char> rgb;
-  ff::Rgb at(int x, int y) const {
-    const size_t i = (size_t(y) * width + x) * 3;
-    return {rgb[i], rgb[i + 1], rgb[i + 2]};
-  }
-};
+using ff::test::Image;
+using ff::test::is_white;
+using ff::test::near;
+using ff::test::TempDir;
 
 Image render(const ff::LinePlot& p) { return {p.width, p.height, ff::render_line_plot_rgb(p)}; }
-
-bool near(ff::Rgb a, ff::Rgb b, int tol = 12) {
-  return std::abs(a.r - b.r) <= tol && std::abs(a.g - b.g) <= tol && std::abs(a.b - b.b) <= tol;
-}
-
-bool is_white(ff::Rgb c) { return c.r == 255 && c.g == 255 && c.b == 255; }
 
 // Pixels of colour c inside the frame's plot area.
 int count_in_frame(const Image& img, const ff::PlotFrame& f, ff::Rgb c) {
@@ -257,18 +248,6 @@ TEST(Plot, MismatchedSeriesThrows) {
   p.series = {line({0, 1, 2}, {0, 1})};
   EXPECT_THROW(ff::render_line_plot_rgb(p), std::invalid_argument);
 }
-
-// A fresh directory under the system temp dir, removed at the end of the test.
-struct TempDir {
-  std::filesystem::path path;
-  TempDir() {
-    path = std::filesystem::temp_directory_path() /
-           ("ff_plot_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-            std::to_string(reinterpret_cast<uintptr_t>(this)));
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() { std::filesystem::remove_all(path); }
-};
 
 TEST(Plot, WritesPngAtomically) {
   TempDir dir;

@@ -264,7 +264,7 @@ TEST_F(StudyFiles, MissingRunsIsRejected) {
   const auto e = load_error(path);
   EXPECT_EQ(e.file(), path);
   EXPECT_EQ(e.key(), "runs");
-  EXPECT_NE(e.message().find("missing required value"), std::string::npos) << e.what();
+  EXPECT_NE(e.message().find("give either `runs:`"), std::string::npos) << e.what();
 }
 
 TEST_F(StudyFiles, EmptyStudyFileIsRejected) {

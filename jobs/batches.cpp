@@ -1,0 +1,34 @@
+#include "jobs/batches.hpp"
+
+#include <map>
+#include <stdexcept>
+#include <tuple>
+
+namespace ff {
+
+namespace {
+// Everything two lanes of one batch must share.
+using Shape = std::tuple<int, int, int, double, double, int>;
+Shape shape_of(const Model& m) {
+  const int sections = m.spec.notch.enabled ? 2 * m.spec.notch.order + 1 : 0;
+  return {m.nseg, sections, m.substeps, m.control_period, m.duration, static_cast<int>(m.spec.simulation.integrator)};
+}
+}  // namespace
+
+std::vector<Batch> make_batches(const std::vector<Model>& models, const std::vector<int>& todo, int lanes) {
+  if (lanes < 1) throw std::invalid_argument("make_batches: lanes must be >= 1");
+  std::vector<Batch> out;
+  std::map<Shape, std::size_t> open;  // shape -> its batch still filling
+  for (int i : todo) {
+    const Shape s = shape_of(models[i]);
+    auto it = open.find(s);
+    if (it == open.end() || static_cast<int>(out[it->second].variants.size()) == lanes) {
+      out.push_back({});
+      it = open.insert_or_assign(s, out.size() - 1).first;
+    }
+    out[it->second].variants.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace ff

@@ -1,0 +1,44 @@
+// A study run on disk: a share of the variants (all of them, an MPI rank's or a Slurm array
+// task's) is evaluated batch by batch and journalled, so a killed run resumes where it stopped;
+// the final results are assembled from the journals, in eval_id order, byte-identical whatever
+// the thread count, lane width, rank count, sharding or interruptions.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "jobs/runner.hpp"
+
+namespace ff {
+
+// This process evaluates the variants with eval_id % count == index.
+struct Partition {
+  int index = 0;
+  int count = 1;
+};
+
+struct FarmOptions {
+  std::string out;               // output directory (exists)
+  bool resume = false;           // continue the journals found in `out`
+  EvalOptions eval;
+  Partition part;
+  std::string tag = "main";      // this process's journal: out/journal-<tag>.csv
+  // After each batch: (variants of this share done, of this share in total, seconds so far).
+  std::function<void(int, int, double)> progress;
+};
+
+struct FarmStatus {
+  int total = 0;                 // variants of this share
+  int already = 0;               // found in the journals (resume)
+  int computed = 0;              // evaluated now
+};
+
+// Evaluates this process's share. Throws std::runtime_error when `out` already holds this tag's
+// journal and resume is off, or a journal of another study.
+FarmStatus run_farm(const Study& study, const FarmOptions& opt);
+
+// Reads every journal in `out` and returns the complete result table; throws std::runtime_error
+// naming how many variants are missing when the journals do not cover the study.
+ResultTable assemble_results(const Study& study, const std::string& out);
+
+}  // namespace ff

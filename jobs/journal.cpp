@@ -1,0 +1,101 @@
+#include "jobs/journal.hpp"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace ff {
+
+namespace {
+
+const std::string kMagic = "# flexfarm journal study=";
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Number of cells in a CSV line, quotes respected.
+std::size_t count_cells(const std::string& line) {
+  std::size_t n = 1;
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) ++n;
+  }
+  return n;
+}
+
+}  // namespace
+
+std::map<int, std::string> read_journals(const std::string& dir, const std::string& hash, const std::string& header) {
+  std::map<int, std::string> rows;
+  if (!std::filesystem::is_directory(dir)) return rows;
+  const std::size_t cells = count_cells(header.substr(0, header.size() - 1));
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("journal-", 0) != 0 || entry.path().extension() != ".csv") continue;
+    const std::string text = read_all(entry.path().string());
+    const std::string path = entry.path().string();
+    std::size_t pos = text.find('\n');
+    if (pos == std::string::npos) continue;  // killed before its header was complete
+    if (text.rfind(kMagic, 0) != 0) throw std::runtime_error(path + ":1: not a flexfarm journal");
+    if (text.substr(kMagic.size(), pos - kMagic.size()) != hash)
+      throw std::runtime_error(path + ":1: journal of another study or model (the files changed since); use another --out directory");
+    const std::size_t hdr_end = text.find('\n', pos + 1);
+    if (hdr_end == std::string::npos) continue;
+    if (text.substr(pos + 1, hdr_end - pos) != header) throw std::runtime_error(path + ":2: journal with other columns");
+    // Complete rows only: a line without its newline, or with the wrong cell count, is a torn write.
+    pos = hdr_end + 1;
+    while (pos < text.size()) {
+      const std::size_t end = text.find('\n', pos);
+      if (end == std::string::npos) break;
+      const std::string line = text.substr(pos, end - pos);
+      pos = end + 1;
+      if (line.empty() || count_cells(line) != cells) continue;
+      try {
+        rows.emplace(std::stoi(line.substr(0, line.find(','))), line + "\n");
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  return rows;
+}
+
+JournalWriter::JournalWriter(const std::string& dir, const std::string& tag, const std::string& hash,
+                             const std::string& header)
+    : path_(dir + "/journal-" + tag + ".csv") {
+  std::string text = std::filesystem::exists(path_) ? read_all(path_) : std::string();
+  // Keep the complete lines of an existing journal of this study; start afresh otherwise.
+  const bool ours = text.rfind(kMagic + hash + "\n" + header, 0) == 0;
+  if (!ours) text.clear();
+  const std::size_t keep = text.rfind('\n');
+  text = keep == std::string::npos ? std::string() : text.substr(0, keep + 1);
+  if (text.empty()) text = kMagic + hash + "\n" + header;
+  // Replace the file whole (temporary + rename), then append: a kill at any point loses no row.
+  const std::string tmp = path_ + ".tmp";
+  file_ = std::fopen(tmp.c_str(), "wb");
+  if (!file_) throw std::runtime_error(path_ + ": cannot open the journal for writing");
+  append(text);
+  std::fclose(file_);
+  std::filesystem::rename(tmp, path_);
+  file_ = std::fopen(path_.c_str(), "ab");
+  if (!file_) throw std::runtime_error(path_ + ": cannot open the journal for writing");
+}
+
+JournalWriter::~JournalWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void JournalWriter::append(const std::string& rows) {
+  if (std::fwrite(rows.data(), 1, rows.size(), file_) != rows.size() || std::fflush(file_) != 0)
+    throw std::runtime_error(path_ + ": cannot write the journal");
+  fsync(fileno(file_));
+}
+
+}  // namespace ff

@@ -1,0 +1,95 @@
+#include "results/sqlite.hpp"
+
+#include <sqlite3.h>
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+namespace ff {
+
+namespace {
+
+std::string quote_ident(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+struct Db {
+  sqlite3* db = nullptr;
+  std::string path;
+  ~Db() {
+    if (db) sqlite3_close(db);
+  }
+  void exec(const std::string& sql) {
+    char* err = nullptr;
+    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+      const std::string msg = err ? err : "unknown error";
+      sqlite3_free(err);
+      throw std::runtime_error(path + ": sqlite: " + msg);
+    }
+  }
+  sqlite3_stmt* prepare(const std::string& sql) {
+    sqlite3_stmt* st = nullptr;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr) != SQLITE_OK)
+      throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
+    return st;
+  }
+  void step(sqlite3_stmt* st) {
+    if (sqlite3_step(st) != SQLITE_DONE) throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
+    sqlite3_reset(st);
+  }
+};
+
+}  // namespace
+
+void write_results_sqlite(const ResultTable& t, const std::map<std::string, std::string>& info, const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  std::filesystem::remove(tmp);
+  {
+    Db d;
+    d.path = path;
+    if (sqlite3_open(tmp.c_str(), &d.db) != SQLITE_OK) throw std::runtime_error(path + ": cannot create the database");
+    d.exec("BEGIN");
+    d.exec("CREATE TABLE study (key TEXT PRIMARY KEY, value TEXT)");
+    sqlite3_stmt* si = d.prepare("INSERT INTO study VALUES (?, ?)");
+    for (const auto& [k, v] : info) {
+      sqlite3_bind_text(si, 1, k.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(si, 2, v.c_str(), -1, SQLITE_TRANSIENT);
+      d.step(si);
+    }
+    sqlite3_finalize(si);
+
+    // One REAL column per parameter and metric; NULL where the CSV cell is empty.
+    std::string cols = "eval_id INTEGER PRIMARY KEY, seed INTEGER, label TEXT, status TEXT";
+    std::string marks = "?, ?, ?, ?";
+    for (const auto* names : {&t.params, &t.columns})
+      for (const auto& c : *names) {
+        cols += ", " + quote_ident(c) + " REAL";
+        marks += ", ?";
+      }
+    d.exec("CREATE TABLE results (" + cols + ")");
+    sqlite3_stmt* st = d.prepare("INSERT INTO results VALUES (" + marks + ")");
+    for (const auto& r : t.rows) {
+      sqlite3_bind_int64(st, 1, r.eval_id);
+      sqlite3_bind_int64(st, 2, static_cast<sqlite3_int64>(r.seed));
+      sqlite3_bind_text(st, 3, r.label.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(st, 4, r.status.c_str(), -1, SQLITE_TRANSIENT);
+      int k = 5;
+      for (const auto* vals : {&r.params, &r.values})
+        for (double x : *vals) {
+          if (std::isnan(x)) sqlite3_bind_null(st, k++);
+          else sqlite3_bind_double(st, k++, x);
+        }
+      d.step(st);
+    }
+    sqlite3_finalize(st);
+    d.exec("COMMIT");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot rename the database into place");
+}
+
+}  // namespace ff
