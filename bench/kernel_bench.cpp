@@ -39,7 +39,22 @@ void BM_Rk4ClosedLoop(benchmark::State& state) {
 BENCHMARK(BM_Rk4ClosedLoop)
     ->ArgNames({"N", "W", "sub"})
     ->Args({6, 1, 1})->Args({6, 4, 1})->Args({6, 8, 1})->Args({6, 16, 1})
-    ->Args({24, 1, 0})->Args({24, 8, 0})
+    ->Args({24, 8, 0})
+    ->Unit(benchmark::kMillisecond);
+
+// args: segments, lanes; SDIRK2 at its automatic step (one step per 1 ms sample for these N)
+void BM_Sdirk2ClosedLoop(benchmark::State& state) {
+  const auto bm = rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), ff::Integrator::kSdirk2, 0);
+  const double samples = bm.duration / bm.control_period;
+  for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
+  state.counters["substeps"] = bm.substeps;
+  state.counters["variant_samples/s"] = benchmark::Counter(samples * bm.W, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["x_realtime/core"] = benchmark::Counter(bm.duration * bm.W, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Sdirk2ClosedLoop)
+    ->ArgNames({"N", "W"})
+    ->Args({6, 1})->Args({6, 4})->Args({6, 8})->Args({6, 16})
+    ->Args({24, 8})->Args({48, 1})->Args({48, 8})->Args({96, 8})
     ->Unit(benchmark::kMillisecond);
 
 void BM_CvodeClosedLoop(benchmark::State& state) {

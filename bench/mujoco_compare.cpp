@@ -1,7 +1,9 @@
 // Side by side, in one run: flexfarm's batch kernel against MuJoCo (2.2) on the reference rig
 // (docs/reference-rig.md): throughput in variant-steps per second (1 ms controller steps) and
 // tip-deflection accuracy of both against flexfarm's CVODE reference.
-// Run: mujoco_compare [--segments 6,24,48] [--variants 16] [--reps 5]
+// The controller is sampled every 1 ms and held in between. MuJoCo's timestep is 1 ms / K with
+// K = ff::calc_auto_substeps (h omega_max <= 1; K = 1 at N = 6, i.e. 1 ms) unless --mujoco-substeps K.
+// Run: mujoco_compare [--segments 6,24,48] [--variants 16] [--reps 7] [--mujoco-substeps K]
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Dense>
@@ -11,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -55,13 +58,13 @@ struct Diag {
 };
 
 // MJCF of the rig: nested bodies, one hinge about z per segment, payload body welded at the tip.
-std::string make_mjcf(const ff::Model& m, const char* integrator) {
+std::string make_mjcf(const ff::Model& m, const char* integrator, int substeps) {
   const auto& b = m.spec.beam;
   std::ostringstream x;
   x.precision(17);
   x << "<mujoco model=\"fbtb\">\n"
     << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" balanceinertia=\"false\"/>\n"
-    << "  <option gravity=\"0 0 0\" timestep=\"" << m.control_period << "\" integrator=\"" << integrator << "\">\n"
+    << "  <option gravity=\"0 0 0\" timestep=\"" << m.control_period / substeps << "\" integrator=\"" << integrator << "\">\n"
     << "    <flag contact=\"disable\"/>\n  </option>\n  <worldbody>\n";
   std::string indent = "    ";
   for (int i = 0; i < m.nseg; ++i) {
@@ -150,9 +153,19 @@ double mujoco_tip(const double* qpos, const ff::Model& m) {
   return defl;
 }
 
-// One variant from rest: PD sampled at t_k = k T from the state at t_k, held over one mj_step.
-// tip (nsamples) receives the tip deflection at every sample, as flexfarm's traces do.
-void run_mujoco(const mjModel* mm, mjData* d, const ff::Model& m, long nsamples, double* tip) {
+// MuJoCo's warnings are checked per run in mjData::warning instead of printed.
+void quiet_warning(const char*) {}
+
+bool mujoco_diverged(const mjData* d) {
+  for (int w : {mjWARN_BADQPOS, mjWARN_BADQVEL, mjWARN_BADQACC, mjWARN_BADCTRL})
+    if (d->warning[w].number > 0) return true;
+  return false;
+}
+
+// One variant from rest: PD sampled at t_k = k T from the state at t_k, held over the substeps of the
+// period. tip (nsamples) receives the tip deflection at every sample, as flexfarm's traces do.
+// Returns false (early) when MuJoCo diverged.
+bool run_mujoco(const mjModel* mm, mjData* d, const ff::Model& m, int substeps, long nsamples, double* tip) {
   mj_resetData(mm, d);
   const double T = m.control_period, kp = m.spec.controller.kp, kd = m.spec.controller.kd;
   for (long k = 0; k < nsamples; ++k) {
@@ -160,23 +173,24 @@ void run_mujoco(const mjModel* mm, mjData* d, const ff::Model& m, long nsamples,
     d->ctrl[0] = kp * (r - d->qpos[0]) - kd * d->qvel[0];
     tip[k] = mujoco_tip(d->qpos, m);
     if (k + 1 == nsamples) break;
-    mj_step(mm, d);
+    for (int j = 0; j < substeps; ++j) mj_step(mm, d);
+    if (mujoco_diverged(d)) return false;
   }
+  return true;
 }
 
 // ---------------------------------------------------------------- timing and statistics
 
-template <class F>
-double median_seconds(int reps, F&& f) {
-  f();  // warm-up
-  std::vector<double> t;
-  for (int r = 0; r < reps; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
-  std::sort(t.begin(), t.end());
-  return reps % 2 ? t[reps / 2] : 0.5 * (t[reps / 2 - 1] + t[reps / 2]);
+double seconds(const std::function<void()>& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double median(std::vector<double> x) {
+  std::sort(x.begin(), x.end());
+  const std::size_t n = x.size();
+  return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
 }
 
 struct Error {
@@ -200,24 +214,34 @@ double rms(const std::vector<double>& a) {
 }
 
 struct Summary {
-  int nseg;
   double ratio, ff_rms, mj_rms;
 };
 
+// One timed configuration: a full run of all M variants.
+struct Row {
+  std::string name;
+  int substeps = 0, threads = 1;
+  std::function<void()> run;
+  bool stable = true;
+  std::vector<double> times;
+  double rate = NAN;  // variant-steps/s, median
+};
+
 // Everything for one segment count. Returns false when the two rigs differ.
-bool run_case(int nseg, int M, int reps, Summary& out) {
+bool run_case(int nseg, int M, int reps, int mj_sub_override, Summary& out) {
   const FlexfarmConfig cfg = flexfarm_config();
   const ff::Model m = ff::make_model(rig_spec(nseg, cfg.integrator, cfg.substeps));
   const ff::Model mref = ff::make_model(rig_spec(nseg, ff::Integrator::kCvodeDense, 0));
   const long nsamples = std::lround(m.duration / m.control_period) + 1;
-  const double steps = static_cast<double>(nsamples - 1) * M;  // variant-steps per repetition
+  const double steps = static_cast<double>(nsamples - 1) * M;  // variant-steps per run
+  const int mj_sub = mj_sub_override > 0 ? mj_sub_override : ff::calc_auto_substeps(m);
 
-  std::printf("\n=== N = %d segments, M = %d variants x %ld steps of %g ms (%.0f s), median of %d ===\n", nseg, M,
-              nsamples - 1, 1e3 * m.control_period, m.duration, reps);
+  std::printf("\n=== N = %d segments: M = %d variants x %ld controller steps of %g ms (%.0f s), median of %d ===\n",
+              nseg, M, nsamples - 1, 1e3 * m.control_period, m.duration, reps);
 
   // The MuJoCo rig must be flexfarm's rig.
-  mjModel* mj_euler = load_mjcf(make_mjcf(m, "Euler"));
-  mjModel* mj_rk4 = load_mjcf(make_mjcf(m, "RK4"));
+  mjModel* mj_euler = load_mjcf(make_mjcf(m, "Euler", mj_sub));
+  mjModel* mj_rk4 = load_mjcf(make_mjcf(m, "RK4", mj_sub));
   const double dM = mass_matrix_difference(mj_euler, m);
   const bool inertia_ok = mujoco_inertia_as_written(mj_euler, m);
   std::printf("mass matrix M(0), MuJoCo vs ff::calc_mass_matrix: max rel diff %.2e; body inertias %s\n", dM,
@@ -229,8 +253,7 @@ bool run_case(int nseg, int M, int reps, Summary& out) {
     return false;
   }
 
-  // Reference and flexfarm batches.
-  const std::vector<double> ref = ff::simulate(ff::make_batch(std::vector<ff::Model>{mref})).traces[0].tip_deflection;
+  // flexfarm: M / W batches of W identical lanes; each thread simulates whole batches.
   const int W = cfg.lanes;
   if (M % W != 0) throw std::runtime_error("--variants must be a multiple of the lane width W");
   const int nbatch = M / W;
@@ -241,32 +264,49 @@ bool run_case(int nseg, int M, int reps, Summary& out) {
     for (int bi = 0; bi < nbatch; ++bi) runs[bi] = ff::simulate(bm);
   };
 
-  // MuJoCo: one mjData and one trace per variant.
-  std::vector<mjData*> data(M);
-  std::vector<std::vector<double>> tips(M, std::vector<double>(nsamples));
-  auto run_mj = [&](const mjModel* mm, int threads) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int v = 0; v < M; ++v) run_mujoco(mm, data[v], m, nsamples, tips[v].data());
+  // MuJoCo: one mjData and one trace per variant and integrator; each thread runs whole variants.
+  struct MjSide {
+    const mjModel* mm;
+    std::vector<mjData*> data;
+    std::vector<std::vector<double>> tips;
+    int diverged = 0;
+  };
+  MjSide sides[2] = {{mj_euler, {}, {}, 0}, {mj_rk4, {}, {}, 0}};
+  for (auto& sd : sides) {
+    for (int v = 0; v < M; ++v) sd.data.push_back(mj_makeData(sd.mm));
+    sd.tips.assign(M, std::vector<double>(nsamples));
+  }
+  auto run_mj = [&](MjSide& sd, int threads) {
+    int bad = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : bad)
+    for (int v = 0; v < M; ++v) bad += !run_mujoco(sd.mm, sd.data[v], m, mj_sub, nsamples, sd.tips[v].data());
+    sd.diverged = bad;
   };
 
-  struct Row {
-    std::string name;
-    int substeps, threads;
-    double rate;
-  };
-  std::vector<Row> rows;
-  std::vector<double> tip_euler, tip_rk4;
-  for (const mjModel* mm : {mj_euler, mj_rk4}) {
-    for (auto& d : data) d = mj_makeData(mm);
-    const std::string name = mm == mj_euler ? "MuJoCo Euler (semi-implicit)" : "MuJoCo RK4";
-    for (int th : {1, 2}) rows.push_back({name, 1, th, steps / median_seconds(reps, [&] { run_mj(mm, th); })});
-    (mm == mj_euler ? tip_euler : tip_rk4) = tips[0];
-    for (auto& d : data) mj_deleteData(d);
-  }
   const std::string ffname = std::string(cfg.label) + " W=" + std::to_string(W);
-  for (int th : {1, 2}) rows.push_back({ffname, m.substeps, th, steps / median_seconds(reps, [&] { run_ff(th); })});
-  mj_deleteModel(mj_euler);
-  mj_deleteModel(mj_rk4);
+  std::vector<Row> rows;
+  auto add = [&](std::string name, int sub, int th, std::function<void()> f) {
+    Row r;
+    r.name = std::move(name);
+    r.substeps = sub;
+    r.threads = th;
+    r.run = std::move(f);
+    rows.push_back(std::move(r));
+  };
+  for (int th : {1, 2}) add("MuJoCo Euler (semi-implicit)", mj_sub, th, [&, th] { run_mj(sides[0], th); });
+  for (int th : {1, 2}) add("MuJoCo RK4", mj_sub, th, [&, th] { run_mj(sides[1], th); });
+  for (int th : {1, 2}) add(ffname, m.substeps, th, [&, th] { run_ff(th); });
+
+  // Warm-up (and divergence check), then the repetitions round-robin so load drift hits every row alike.
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    rows[r].run();
+    if (r < 4) rows[r].stable = sides[r / 2].diverged == 0;
+  }
+  for (int rep = 0; rep < reps; ++rep)
+    for (auto& row : rows)
+      if (row.stable) row.times.push_back(seconds(row.run));
+  for (auto& row : rows)
+    if (row.stable) row.rate = steps / median(row.times);
   for (const auto& r : runs)
     for (auto st : r.status)
       if (st != ff::LaneStatus::kOk) throw std::runtime_error("a flexfarm lane failed");
@@ -274,20 +314,34 @@ bool run_case(int nseg, int M, int reps, Summary& out) {
   std::printf("\n%-34s %8s %7s %18s %12s\n", "throughput", "substeps", "threads", "variant-steps/s", "/ MuJoCo Eu");
   for (const auto& r : rows) {
     const double base = rows[r.threads == 1 ? 0 : 1].rate;  // MuJoCo Euler, same thread count
-    std::printf("%-34s %8d %7d %18.4g %12.2f\n", r.name.c_str(), r.substeps, r.threads, r.rate, r.rate / base);
+    if (r.stable)
+      std::printf("%-34s %8d %7d %18.4g %12.2f\n", r.name.c_str(), r.substeps, r.threads, r.rate, r.rate / base);
+    else
+      std::printf("%-34s %8d %7d %18s %12s\n", r.name.c_str(), r.substeps, r.threads, "diverged", "-");
   }
   if (nbatch < 2) std::printf("(only one batch of W lanes: flexfarm's 2-thread row has nothing to share)\n");
 
-  const Error e_eu = compare(tip_euler, ref), e_rk = compare(tip_rk4, ref),
-              e_ff = compare(runs[0].traces[0].tip_deflection, ref);
-  std::printf("\n%-34s %14s %14s   (reference: CVODE dense rtol %g; tip deflection RMS %.1f mm)\n", "accuracy vs CVODE",
-              "RMS error mm", "max error mm", mref.spec.simulation.rtol, 1e3 * rms(ref));
-  std::printf("%-34s %14.4g %14.4g\n", "MuJoCo Euler (semi-implicit)", 1e3 * e_eu.rms, 1e3 * e_eu.max);
-  std::printf("%-34s %14.4g %14.4g\n", "MuJoCo RK4", 1e3 * e_rk.rms, 1e3 * e_rk.max);
-  std::printf("%-34s %14.4g %14.4g\n", ffname.c_str(), 1e3 * e_ff.rms, 1e3 * e_ff.max);
+  const std::vector<double> ref = ff::simulate(ff::make_batch(std::vector<ff::Model>{mref})).traces[0].tip_deflection;
+  std::printf("\n%-34s %14s %14s   (reference: CVODE dense, rtol %g; tip deflection RMS %.1f mm)\n",
+              "accuracy vs reference", "RMS error mm", "max error mm", mref.spec.simulation.rtol, 1e3 * rms(ref));
+  Error err[3];
+  const char* names[3] = {"MuJoCo Euler (semi-implicit)", "MuJoCo RK4", ffname.c_str()};
+  for (int i = 0; i < 3; ++i) {
+    if (i < 2 && sides[i].diverged) {
+      err[i] = {NAN, NAN};
+      std::printf("%-34s %14s %14s\n", names[i], "diverged", "diverged");
+      continue;
+    }
+    err[i] = compare(i < 2 ? sides[i].tips[0] : runs[0].traces[0].tip_deflection, ref);
+    std::printf("%-34s %14.4g %14.4g\n", names[i], 1e3 * err[i].rms, 1e3 * err[i].max);
+  }
+  for (auto& sd : sides)
+    for (auto* d : sd.data) mj_deleteData(d);
+  mj_deleteModel(mj_euler);
+  mj_deleteModel(mj_rk4);
 
-  out = {nseg, rows[4].rate / rows[0].rate, e_ff.rms, e_eu.rms};
-  std::printf("\nN=%d: flexfarm / MuJoCo(Euler) throughput = %.2f (1 thread), %.2f (2 threads)\n", nseg, out.ratio,
+  out = {rows[4].rate / rows[0].rate, err[2].rms, err[0].rms};
+  std::printf("\nN=%d: flexfarm / MuJoCo(Euler) throughput = %.3g (1 thread), %.3g (2 threads)\n", nseg, out.ratio,
               rows[5].rate / rows[1].rate);
   return true;
 }
@@ -304,7 +358,7 @@ std::vector<int> parse_list(const std::string& s) {
 
 int main(int argc, char** argv) {
   std::vector<int> segments = {6};
-  int M = 16, reps = 5;
+  int M = 16, reps = 7, mj_sub = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
@@ -314,22 +368,25 @@ int main(int argc, char** argv) {
       M = std::atoi(argv[++i]);
     } else if (a == "--reps" && has) {
       reps = std::atoi(argv[++i]);
+    } else if (a == "--mujoco-substeps" && has) {
+      mj_sub = std::atoi(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: %s [--segments 6,24,48] [--variants 16] [--reps 5]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--segments 6,24,48] [--variants 16] [--reps 7] [--mujoco-substeps K]\n", argv[0]);
       return 2;
     }
   }
-  if (segments.empty() || M < 1 || reps < 1) {
+  if (segments.empty() || M < 1 || reps < 1 || mj_sub < 0) {
     std::fprintf(stderr, "bad arguments\n");
     return 2;
   }
+  mju_user_warning = quiet_warning;
   std::printf("MuJoCo %s, flexfarm config: %s, substeps %d (0 = auto), W = %d\n", mj_versionString(),
               flexfarm_config().label, flexfarm_config().substeps, flexfarm_config().lanes);
   try {
     std::vector<Summary> sums;
     for (int n : segments) {
       Summary s{};
-      if (!run_case(n, M, reps, s)) return 1;
+      if (!run_case(n, M, reps, mj_sub, s)) return 1;
       sums.push_back(s);
     }
     // One line for the docs: the first segment count asked for (default N = 6), single thread.

@@ -93,7 +93,7 @@ Workspace make_workspace(const BatchModel& bm) {
   const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
   for (auto* x : {&ws.cq, &ws.sq, &ws.vw, &ws.vx, &ws.vy, &ws.cy, &ws.cz, &ws.i00, &ws.i01, &ws.i02, &ws.i11,
                   &ws.i12, &ws.i22, &ws.p0, &ws.p1, &ws.p2, &ws.d, &ws.u, &ws.a0, &ws.a1, &ws.a2, &ws.armature,
-                  &ws.q1, &ws.v1, &ws.tau_joint})
+                  &ws.q1, &ws.v1, &ws.tau_joint, &ws.a_prev})
     x->assign(nw, 0.0);
   for (int k = 0; k < 4; ++k) {
     ws.kq[k].assign(nw, 0.0);

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "kernel/fastmath.hpp"
+
 namespace ff {
 
 // Planar spatial vectors in body coordinates: motion (w, vx, vy), force (n, fx, fy).
@@ -41,43 +43,45 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   double *d = ws.d.data(), *u = ws.u.data(), *a0 = ws.a0.data(), *a1 = ws.a1.data(), *a2 = ws.a2.data();
 
   // Pass 1, root to tip: velocities, velocity-product accelerations, rigid-body inertia and bias force.
-  for (int i = 0; i < N; ++i) {
+  // Body i given its spatial velocity (w, x, y) and joint rate qd.
+  auto body = [=](int o, int l, double w, double x, double y) {
+    vw[o + l] = w;
+    vx[o + l] = x;
+    vy[o + l] = y;
+    // c_i = crm(v_i) S qd_i = (0, vy qd, -vx qd)
+    cy[o + l] = y * v[o + l];
+    cz[o + l] = -x * v[o + l];
+    // I_i = [[J, 0, h], [0, m, 0], [h, 0, m]]; bias p_i = crf(v_i) I_i v_i
+    const double J = binert[o + l], h = bfirst[o + l], m = bmass[o + l];
+    const double fx = m * x, fy = h * w + m * y;
+    i00[o + l] = J;
+    i01[o + l] = 0.0;
+    i02[o + l] = h;
+    i11[o + l] = m;
+    i12[o + l] = 0.0;
+    i22[o + l] = m;
+    p0[o + l] = -y * fx + x * fy;
+    p1[o + l] = -w * fy;
+    p2[o + l] = w * fx;
+  };
+  // Body 0 turns about the fixed hub axis; its own rotation never enters (no gravity).
+#pragma omp simd
+  for (int l = 0; l < W; ++l) body(0, l, v[l], 0.0, 0.0);
+  for (int i = 1; i < N; ++i) {
     const int o = i * W, op = (i - 1) * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      const double c = std::cos(q[o + l]), s = std::sin(q[o + l]);
+      double c, s;
+      calc_sincos(q[o + l], s, c);
       cq[o + l] = c;
       sq[o + l] = s;
-      double w = v[o + l], x = 0.0, y = 0.0;
-      if (i > 0) {
-        const double lp = len[op + l], wp = vw[op + l], xp = vx[op + l], yp = vy[op + l];
-        w += wp;
-        x = s * lp * wp + c * xp + s * yp;
-        y = c * lp * wp - s * xp + c * yp;
-      }
-      vw[o + l] = w;
-      vx[o + l] = x;
-      vy[o + l] = y;
-      // c_i = crm(v_i) S qd_i = (0, vy qd, -vx qd)
-      cy[o + l] = y * v[o + l];
-      cz[o + l] = -x * v[o + l];
-      // I_i = [[J, 0, h], [0, m, 0], [h, 0, m]]; bias p_i = crf(v_i) I_i v_i
-      const double J = binert[o + l], h = bfirst[o + l], m = bmass[o + l];
-      const double fx = m * x, fy = h * w + m * y;
-      i00[o + l] = J;
-      i01[o + l] = 0.0;
-      i02[o + l] = h;
-      i11[o + l] = m;
-      i12[o + l] = 0.0;
-      i22[o + l] = m;
-      p0[o + l] = -y * fx + x * fy;
-      p1[o + l] = -w * fy;
-      p2[o + l] = w * fx;
+      const double lp = len[op + l], wp = vw[op + l], xp = vx[op + l], yp = vy[op + l];
+      body(o, l, wp + v[o + l], s * lp * wp + c * xp + s * yp, c * lp * wp - s * xp + c * yp);
     }
   }
 
   // Pass 2, tip to root: articulated inertias and bias forces, projected across each revolute joint.
-  for (int i = N - 1; i >= 0; --i) {
+  for (int i = N - 1; i >= 1; --i) {
     const int o = i * W, op = (i - 1) * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
@@ -87,7 +91,6 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
       const double ui = tau[o + l] - p0[o + l];
       d[o + l] = di;
       u[o + l] = ui;
-      if (i == 0) continue;
       // Ia = IA - U U^T / d ;  pa = pA + Ia c + U u / d
       const double r = 1.0 / di;
       const double a00 = U0 - U0 * U0 * r, a01 = U1 - U0 * U1 * r, a02 = U2 - U0 * U2 * r;
@@ -114,21 +117,26 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   }
 
   // Pass 3, root to tip: accelerations a_i = X a_parent + c_i, qdd_i = (u_i - U_i^T a_i) / d_i.
-  for (int i = 0; i < N; ++i) {
+  // The hub: fixed base, no gravity (horizontal plane), so a = S qdd_0.
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    const double qa = (tau[l] - p0[l]) / (i00[l] + arm[l]);
+    qdd[l] = qa;
+    a0[l] = qa;
+    a1[l] = 0.0;
+    a2[l] = 0.0;
+  }
+  for (int i = 1; i < N; ++i) {
     const int o = i * W, op = (i - 1) * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      double b0 = 0.0, b1 = 0.0, b2 = 0.0;  // fixed base, no gravity (horizontal plane)
-      if (i > 0) {
-        const double c = cq[o + l], s = sq[o + l], lp = len[op + l];
-        const double x0 = a0[op + l], x1 = a1[op + l], x2 = a2[op + l];
-        b0 = x0;
-        b1 = s * lp * x0 + c * x1 + s * x2 + cy[o + l];
-        b2 = c * lp * x0 - s * x1 + c * x2 + cz[o + l];
-      }
-      const double qa = (u[o + l] - (i00[o + l] * b0 + i01[o + l] * b1 + i02[o + l] * b2)) / d[o + l];
+      const double c = cq[o + l], s = sq[o + l], lp = len[op + l];
+      const double x0 = a0[op + l], x1 = a1[op + l], x2 = a2[op + l];
+      const double b1 = s * lp * x0 + c * x1 + s * x2 + cy[o + l];
+      const double b2 = c * lp * x0 - s * x1 + c * x2 + cz[o + l];
+      const double qa = (u[o + l] - (i00[o + l] * x0 + i01[o + l] * b1 + i02[o + l] * b2)) / d[o + l];
       qdd[o + l] = qa;
-      a0[o + l] = b0 + qa;
+      a0[o + l] = x0 + qa;
       a1[o + l] = b1;
       a2[o + l] = b2;
     }
@@ -139,6 +147,36 @@ void compute_acceleration(const BatchModel& bm, const double* q, const double* v
                           double* qdd, Workspace& ws) {
   compute_joint_torques(bm, q, v, tau_hub, ws);
   compute_forward_dynamics(bm, q, v, qdd, ws);
+}
+
+void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws) {
+  const int W = bm.W;
+  // Running angle of each segment relative to the hub, as cos/sin by angle addition.
+  double* cphi = ws.a0.data();
+  double* sphi = ws.a1.data();
+  double* along = ws.a2.data();
+  const double* len = bm.seg_length.data();
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    cphi[l] = 1.0;
+    sphi[l] = 0.0;
+    deflection[l] = 0.0;
+    along[l] = len[l];
+  }
+  for (int i = 1; i < bm.nseg; ++i) {
+    const int o = i * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      double s, c;
+      calc_sincos(q[o + l], s, c);
+      const double cn = cphi[l] * c - sphi[l] * s, sn = sphi[l] * c + cphi[l] * s;
+      cphi[l] = cn;
+      sphi[l] = sn;
+      deflection[l] += len[o + l] * sn;
+      along[l] += len[o + l] * cn;
+    }
+  }
+  for (int l = 0; l < W; ++l) angle[l] = q[l] + std::atan2(deflection[l], along[l]);
 }
 
 TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane) {

@@ -43,4 +43,55 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   }
 }
 
+void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
+  const std::size_t n = s.q.size();
+  const int W = bm.W;
+  const double g = 1.0 - 0.70710678118654752440;  // gamma
+  const double gh = g * h;
+  // Joint armature h gamma c + (h gamma)^2 k: the implicit spring-damper terms (row 0: the hub, none).
+  if (ws.armature_step != h) {
+    for (std::size_t j = static_cast<std::size_t>(W); j < n; ++j)
+      ws.armature[j] = gh * bm.joint_c[j] + gh * gh * bm.joint_k[j];
+    ws.armature_step = h;
+  }
+  double* q = s.q.data();
+  double* v = s.v.data();
+  double* a_prev = ws.a_prev.data();
+  double *qs = ws.kq[0].data(), *vs = ws.kv[0].data();        // spring state: Qpre + gh Vpre, Vpre
+  double *qk = ws.kq[1].data(), *vk = ws.kv[1].data();        // kinematic predictor of the stage
+  double *A1 = ws.kq[2].data(), *A2 = ws.kv[2].data();        // stage accelerations
+  // Stage 1 (t + gamma h): Q1 = q + gh V1, V1 = v + gh A1.
+#pragma omp simd
+  for (std::size_t j = 0; j < n; ++j) {
+    qs[j] = q[j] + gh * v[j];
+    vs[j] = v[j];
+    qk[j] = qs[j];
+    vk[j] = v[j] + gh * a_prev[j];
+  }
+  compute_joint_torques(bm, qs, vs, s.tau.data(), ws);
+  compute_forward_dynamics(bm, qk, vk, A1, ws);
+  // Stage 2 (t + h): Q2 = q + (1-g) h V1 + gh V2, V2 = v + (1-g) h A1 + gh A2.
+  const double b1 = (1.0 - g) * h;
+  double* vpre = ws.v1.data();
+  double* qpre = ws.q1.data();
+#pragma omp simd
+  for (std::size_t j = 0; j < n; ++j) {
+    qpre[j] = q[j] + b1 * (v[j] + gh * A1[j]);  // V1 = v + gh A1
+    vpre[j] = v[j] + b1 * A1[j];
+    qs[j] = qpre[j] + gh * vpre[j];
+    vs[j] = vpre[j];
+    qk[j] = qs[j];
+    vk[j] = vpre[j] + gh * A1[j];
+  }
+  compute_joint_torques(bm, qs, vs, s.tau.data(), ws);
+  compute_forward_dynamics(bm, qk, vk, A2, ws);
+  // The second stage is the new state (stiffly accurate).
+#pragma omp simd
+  for (std::size_t j = 0; j < n; ++j) {
+    v[j] = vpre[j] + gh * A2[j];
+    q[j] = qpre[j] + gh * v[j];
+    a_prev[j] = A2[j];
+  }
+}
+
 }  // namespace ff

@@ -1,4 +1,4 @@
-// The batch kernel's fixed-step integrator: classical Runge-Kutta 4 with the hub torque held.
+// The batch kernel's fixed-step integrators, with the hub torque held over the step.
 #pragma once
 
 #include "kernel/batch.hpp"
@@ -7,5 +7,12 @@ namespace ff {
 
 // Advances (q, v) of every lane by one step h, s, with s.tau held (zero-order hold).
 void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h);
+
+// One step of the L-stable two-stage SDIRK of Alexander (1977), gamma = 1 - 1/sqrt(2), stiffly
+// accurate, second order. The joint springs and dampers, which make the chain stiff, are implicit
+// and linear: each stage solves (M + diag(h gamma c + (h gamma)^2 k)) A = tau - bias with the
+// articulated-body algorithm (the diagonal enters as joint armature). M and the velocity terms are
+// taken at a second-order predictor of the stage state, so two ABA passes make a step at any N.
+void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h);
 
 }  // namespace ff

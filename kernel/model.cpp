@@ -132,7 +132,7 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
   } else {
     auto modes = calc_clamped_modes(m);
     modes.insert(modes.end(), closed_loop.begin(), closed_loop.end());
-    m.substeps = calc_auto_substeps(modes, m.control_period);
+    m.substeps = calc_auto_substeps(modes, m.control_period, spec.simulation.integrator);
   }
   m.omega_z[0] = spec.notch.omega_z[0];
   m.omega_z[1] = spec.notch.omega_z[1];

@@ -54,7 +54,9 @@ struct TrajectorySpec {
   std::vector<MoveSpec> moves;    // executed in order from r = 0 at t = 0
 };
 
-enum class Integrator { kRk4, kCvodeDense, kCvodeKlu };
+// rk4: classical Runge-Kutta (explicit; fine for small N). sdirk2: L-stable two-stage SDIRK with the
+// joint springs and dampers implicit (any N). cvode_*: BDF reference with a dense or KLU solver.
+enum class Integrator { kRk4, kSdirk2, kCvodeDense, kCvodeKlu };
 
 struct SimulationSpec {
   double duration = 0.0;          // s; 0 = end of the last hold

@@ -8,6 +8,7 @@ namespace ff {
 const char* integrator_name(Integrator i) {
   switch (i) {
     case Integrator::kRk4: return "rk4";
+    case Integrator::kSdirk2: return "sdirk2";
     case Integrator::kCvodeDense: return "cvode_dense";
     case Integrator::kCvodeKlu: return "cvode_klu";
   }
@@ -19,9 +20,9 @@ namespace {
 Integrator parse_integrator(YamlReader& r) {
   std::string name = "rk4";
   r.optional("integrator", name);
-  for (auto i : {Integrator::kRk4, Integrator::kCvodeDense, Integrator::kCvodeKlu})
+  for (auto i : {Integrator::kRk4, Integrator::kSdirk2, Integrator::kCvodeDense, Integrator::kCvodeKlu})
     if (name == integrator_name(i)) return i;
-  r.fail("integrator", "unknown integrator '" + name + "' (rk4, cvode_dense, cvode_klu)");
+  r.fail("integrator", "unknown integrator '" + name + "' (rk4, sdirk2, cvode_dense, cvode_klu)");
 }
 
 ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lines) {

@@ -103,10 +103,15 @@ std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop) {
 
 std::vector<double> calc_closed_loop_resonances(const Model& m) { return calc_resonances(calc_closed_loop_modes(m)); }
 
-int calc_auto_substeps(const std::vector<Mode>& modes, double control_period) {
-  // Oscillatory modes: h omega <= 1 keeps RK4 accurate; real poles: h |lambda| <= 2.5 keeps it stable.
-  double need = 0.0;
-  for (const auto& md : modes) need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
+int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, Integrator integrator) {
+  double need = 0.0;  // the largest 1/h the modes ask for, 1/s
+  for (const auto& md : modes) {
+    if (integrator == Integrator::kSdirk2) {
+      if (md.oscillatory && md.zeta < 0.3) need = std::max(need, md.omega_n / 0.5);
+    } else {
+      need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
+    }
+  }
   return std::max(1, static_cast<int>(std::ceil(need * control_period)));
 }
 
@@ -114,7 +119,7 @@ int calc_auto_substeps(const Model& m) {
   auto modes = calc_closed_loop_modes(m);
   const auto clamped = calc_clamped_modes(m);
   modes.insert(modes.end(), clamped.begin(), clamped.end());
-  return calc_auto_substeps(modes, m.control_period);
+  return calc_auto_substeps(modes, m.control_period, m.spec.simulation.integrator);
 }
 
 }  // namespace ff

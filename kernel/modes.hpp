@@ -30,9 +30,11 @@ std::vector<Mode> calc_closed_loop_modes(const Model& m);
 std::vector<double> calc_closed_loop_resonances(const Model& m);
 std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop);
 
-// Fixed-step RK4 substeps per control period: h omega_n <= 1 for every oscillatory mode of the
-// clamped and the closed loop, h |lambda| <= 2.5 for every real pole (RK4 is stable to ~2.78).
+// Fixed-step substeps per control period, from the modes of the clamped and the closed loop.
+// RK4: h omega_n <= 1 for every oscillatory mode, h |lambda| <= 2.5 for every real pole (RK4 is
+// stable to ~2.78). SDIRK2 (L-stable): accuracy only, h omega_n <= 0.5 for the lightly damped
+// modes (zeta < 0.3); the stiff, heavily damped ones decay whatever h.
 int calc_auto_substeps(const Model& m);
-int calc_auto_substeps(const std::vector<Mode>& modes, double control_period);
+int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, Integrator integrator);
 
 }  // namespace ff

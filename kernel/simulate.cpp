@@ -28,19 +28,19 @@ void mark_nonfinite(const BatchModel& bm, BatchState& s) {
   }
 }
 
-void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f,
-            std::vector<Trace>& out) {
+void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f, double* defl,
+            double* tip_angle, Workspace& ws, std::vector<Trace>& out) {
+  compute_tip(bm, s.q.data(), defl, tip_angle, ws);
   for (int l = 0; l < bm.W; ++l) {
     Trace& tr = out[l];
-    const TipKinematics tip = calc_tip(bm, s.q.data(), l);
     tr.t.push_back(s.t);
     tr.ref.push_back(ref[l]);
     tr.ref_filtered.push_back(ref_f[l]);
     tr.torque.push_back(s.tau[l]);
     tr.hub_angle.push_back(s.q[l]);
     tr.hub_rate.push_back(s.v[l]);
-    tr.tip_deflection.push_back(tip.deflection);
-    tr.tip_angle.push_back(tip.angle);
+    tr.tip_deflection.push_back(defl[l]);
+    tr.tip_angle.push_back(tip_angle[l]);
   }
 }
 
@@ -55,7 +55,7 @@ BatchRun simulate(const BatchModel& bm) {
   BatchState s = make_state(bm);
   Workspace ws = make_workspace(bm);
   std::unique_ptr<CvodeBatch> cvode;
-  if (kind != Integrator::kRk4) cvode = std::make_unique<CvodeBatch>(bm, kind);
+  if (kind == Integrator::kCvodeDense || kind == Integrator::kCvodeKlu) cvode = std::make_unique<CvodeBatch>(bm, kind);
 
   BatchRun run;
   run.traces.resize(W);
@@ -64,7 +64,7 @@ BatchRun simulate(const BatchModel& bm) {
                     &tr.tip_angle})
       x->reserve(nsamples);
 
-  std::vector<double> ref(W), ref_f(W);
+  std::vector<double> ref(W), ref_f(W), defl(W), tip_angle(W);
   const double h = T / bm.substeps;
   for (long k = 0; k < nsamples; ++k) {
     s.t = k * T;
@@ -73,11 +73,13 @@ BatchRun simulate(const BatchModel& bm) {
     for (int l = 0; l < W; ++l) ref[l] = calc_reference(bm.models[l].spec.trajectory, s.t);
     if (k == 0) reset_controller(bm, s, ref.data());
     compute_control(bm, s, ref.data(), ref_f.data());
-    record(bm, s, ref.data(), ref_f.data(), run.traces);
+    record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), ws, run.traces);
     if (k + 1 == nsamples) break;
     // Plant: integrate to the next sample with the torque held.
     if (cvode) {
       cvode->advance(s, T);
+    } else if (kind == Integrator::kSdirk2) {
+      for (int j = 0; j < bm.substeps; ++j) step_sdirk2(bm, s, ws, h);
     } else {
       for (int j = 0; j < bm.substeps; ++j) step_rk4(bm, s, ws, h);
     }

@@ -76,27 +76,29 @@ std::vector<LegendEntry> legend_entries(const Animation& a, const Style& st) {
   std::vector<LegendEntry> e{{"arm", {bgr(palette_colour(0)), st.px(6), false}},
                              {"undeformed", {kRefLineColour, st.px(2), true}},
                              {"payload", {bgr(palette_colour(1)), 1, false}, Swatch::box}};
-  if (a.tip_trace) e.push_back({"tip path", {bgr(palette_colour(2)), st.px(2), false}});
+  if (a.tip_trace) e.push_back({"tip path", {bgr(palette_colour(2)), std::max(2, st.px(2)), false}});
   return e;
 }
 
 // The legend's corner of the view that the arm visits least over the whole video (points and
 // points along the segments, all frames), so the legend stays put and covers little.
 cv::Point legend_corner(const View& v, cv::Size box) {
-  const int inset = v.st.px(10);
+  const int inset = v.st.px(10), reach = v.st.px(20);  // reach: arm thickness and payload around a point
   const int l = v.area.x + inset, r = v.area.x + v.area.width - inset - box.width;
   const int t = v.area.y + inset, b = v.area.y + v.area.height - inset - box.height;
-  const std::array<cv::Point, 4> corners{{{r, b}, {l, b}, {r, t}, {l, t}}};
+  const std::array<cv::Point, 4> corners{{{r, b}, {l, b}, {r, t}, {l, t}}};  // preferred order on ties
+  std::array<cv::Rect2d, 4> zones;
+  for (size_t c = 0; c < 4; ++c)
+    zones[c] = cv::Rect2d(corners[c].x - reach, corners[c].y - reach, box.width + 2.0 * reach, box.height + 2.0 * reach);
   std::array<long, 4> hits{};
   for (const auto& f : v.shown)
-    for (size_t i = 0; i < f.x.size(); ++i)
-      for (int s = 0; s < 8; ++s) {
-        const double u = s / 8.0;
-        const double x = i == 0 ? f.x[0] * u : f.x[i - 1] + (f.x[i] - f.x[i - 1]) * u;
-        const double y = i == 0 ? f.y[0] * u : f.y[i - 1] + (f.y[i] - f.y[i - 1]) * u;
-        const cv::Point2d p = v.px(x, y);
-        for (size_t c = 0; c < 4; ++c) hits[c] += cv::Rect2d(cv::Point2d(corners[c]) - cv::Point2d(12, 12), cv::Size2d(box) + cv::Size2d(24, 24)).contains(p);
+    for (size_t i = 0; i < f.x.size(); ++i) {
+      const double x0 = i == 0 ? 0 : f.x[i - 1], y0 = i == 0 ? 0 : f.y[i - 1];  // segment i from the point before
+      for (int s = 1; s <= 8; ++s) {
+        const cv::Point2d p = v.px(x0 + (f.x[i] - x0) * s / 8.0, y0 + (f.y[i] - y0) * s / 8.0);
+        for (size_t c = 0; c < 4; ++c) hits[c] += zones[c].contains(p);
       }
+    }
   return corners[size_t(std::min_element(hits.begin(), hits.end()) - hits.begin())];
 }
 
@@ -217,12 +219,13 @@ cv::Mat frame_bgr(const Animation& a, const View& v, size_t k) {
     if (a.tip_trace && k > 0) {
       Polyline trace;
       for (size_t j = 0; j <= k; ++j) trace.push_back(v.px(v.shown[j].x.back(), v.shown[j].y.back()));
-      draw_solid(world, trace, bgr(palette_colour(2)), v.st.px(2));
+      draw_solid(world, trace, bgr(palette_colour(2)), std::max(2, v.st.px(2)));
     }
     draw_arm(world, v, v.shown[k], v.length[k]);
     world(v.area).copyTo(roi);
   }
-  cv::rectangle(img, {v.area.x - 1, v.area.y - 1}, {v.area.x + v.area.width, v.area.y + v.area.height}, kLegendBorder, 1);
+  cv::rectangle(img, {v.area.x - 1, v.area.y - 1}, {v.area.x + v.area.width, v.area.y + v.area.height}, kLegendBorder,
+                1);
   draw_legend_at(img, v.legend_at, v.legend, v.st);
   draw_header(img, v, a, v.shown[k]);
   draw_scale(img, v, a);
@@ -289,7 +292,8 @@ void exaggerate_point(double& x, double& y, double hub_angle, double factor) {
 ArmFrame exaggerate_frame(const ArmFrame& f, double factor) {
   ArmFrame out = f;
   out.hub_angle = arm_hub_angle(f);
-  for (size_t i = 0; i < out.x.size() && i < out.y.size(); ++i) exaggerate_point(out.x[i], out.y[i], out.hub_angle, factor);
+  for (size_t i = 0; i < out.x.size() && i < out.y.size(); ++i)
+    exaggerate_point(out.x[i], out.y[i], out.hub_angle, factor);
   return out;
 }
 

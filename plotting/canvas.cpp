@@ -263,15 +263,28 @@ Ticks fit_fixed_y(const Ticks& t, Range y, int area_height, const Style& st) {
   return thinned(t, spacing >= need ? 1 : size_t(std::ceil(need / std::max(spacing, 1e-9))));
 }
 
-// Fixed x ticks with their font: shrunk to `min_font` at most so all labels fit, then thinned.
-std::pair<Ticks, Font> fit_fixed_x(const Ticks& t, Range x, int area_width, const Style& st, double min_font) {
+// Fixed x tick labels laid out to fit: the font shrunk to `opt.x_min_font` at most, on one row
+// or (with opt.x_stagger, once the font would go below 80 %) alternating over two; every k-th
+// label only if even that is too crowded.
+struct FixedX {
+  Ticks ticks;
+  Font font;
+  int rows;
+};
+
+FixedX fit_fixed_x(const Ticks& t, Range x, int area_width, const Style& st, const AxesOptions& opt) {
   const double spacing = min_spacing(t, x, area_width);
-  Font f = st.tick;
-  const int w = widest_label(t, f);
-  if (w + 2 * st.gap > spacing && w > 0)
-    f.scale *= std::clamp((spacing - 2 * st.gap) / w, min_font, 1.0);
-  const double need = widest_label(t, f) + 2 * st.gap;
-  return {thinned(t, spacing >= need ? 1 : size_t(std::ceil(need / std::max(spacing, 1e-9)))), f};
+  const int w = std::max(1, widest_label(t, st.tick));
+  const auto scale_for = [&](int rows) { return std::clamp((spacing * rows - 2 * st.gap) / w, opt.x_min_font, 1.0); };
+  const auto fits = [&](int rows, double scale) { return w * scale + 2 * st.gap <= spacing * rows; };
+  const auto font = [&](double scale) { return Font{st.tick.scale * scale, st.tick.thickness}; };
+  const double one = scale_for(1);
+  if (fits(1, one) && (!opt.x_stagger || one >= 0.8)) return {t, font(one), 1};
+  const int rows = opt.x_stagger ? 2 : 1;
+  const double scale = scale_for(rows);
+  const double need = w * scale + 2 * st.gap;
+  return {thinned(t, fits(rows, scale) ? 1 : size_t(std::ceil(need / std::max(spacing * rows, 1e-9)))), font(scale),
+          rows};
 }
 
 }  // namespace
@@ -279,22 +292,29 @@ std::pair<Ticks, Font> fit_fixed_x(const Ticks& t, Range x, int area_width, cons
 Axes layout_axes(cv::Size img, Range x, Range y, const AxesText& text, const Style& st, const AxesOptions& opt) {
   const int tick_h = measure("0", st.tick).ascent;
   const int top = st.pad + std::max(text.title.empty() ? 0 : line_height(st.title) + st.gap, tick_h);
-  const int bottom = st.tick_len + st.gap + tick_h + st.pad +
-                     (text.x_label.empty() ? 0 : st.gap + line_height(st.label));
-  const int area_h = std::max(10, img.height - top - bottom);
-  Ticks yt = opt.y_ticks ? fit_fixed_y(*opt.y_ticks, y, area_h, st) : y_ticks_for(y, area_h, st.s, opt.y_min_step);
-  const int left = st.pad + (text.y_label.empty() ? 0 : line_height(st.label) + st.gap) +
-                   widest_label(yt, st.tick) + st.gap + st.tick_len;
-  // Right margin leaves room for half of the last x label; two passes since ticks depend on width.
-  const auto x_ticks = [&](int width) {
-    return opt.x_ticks ? fit_fixed_x(*opt.x_ticks, x, width, st, opt.x_min_font) : std::pair{x_ticks_for(x, width, st), st.tick};
+  // One pass per number of x label rows: the rows need height, which changes the y ticks, which
+  // change the left margin and so the room for the x labels.
+  const auto pass = [&](int extra_rows) {
+    const int bottom = st.tick_len + st.gap + tick_h + st.pad + extra_rows * (tick_h + st.gap) +
+                       (text.x_label.empty() ? 0 : st.gap + line_height(st.label));
+    const int area_h = std::max(10, img.height - top - bottom);
+    Ticks yt = opt.y_ticks ? fit_fixed_y(*opt.y_ticks, y, area_h, st) : y_ticks_for(y, area_h, st.s, opt.y_min_step);
+    const int left = st.pad + (text.y_label.empty() ? 0 : line_height(st.label) + st.gap) +
+                     widest_label(yt, st.tick) + st.gap + st.tick_len;
+    // Right margin leaves room for half of the last x label; two passes since ticks depend on width.
+    const auto x_ticks = [&](int width) {
+      return opt.x_ticks ? fit_fixed_x(*opt.x_ticks, x, width, st, opt) : FixedX{x_ticks_for(x, width, st), st.tick, 1};
+    };
+    int right = st.pad + opt.reserve_right;
+    FixedX xt = x_ticks(std::max(10, img.width - left - right));
+    right = std::max(st.pad, widest_label(xt.ticks, xt.font) / 2 + st.gap) + opt.reserve_right;
+    xt = x_ticks(std::max(10, img.width - left - right));
+    const cv::Rect area(left, top, std::max(10, img.width - left - right), area_h);
+    return Axes{area, x, y, std::move(xt.ticks), std::move(yt), xt.font, st.tick, xt.rows};
   };
-  int right = st.pad + opt.reserve_right;
-  auto [xt, xf] = x_ticks(std::max(10, img.width - left - right));
-  right = std::max(st.pad, widest_label(xt, xf) / 2 + st.gap) + opt.reserve_right;
-  std::tie(xt, xf) = x_ticks(std::max(10, img.width - left - right));
-  const cv::Rect area(left, top, std::max(10, img.width - left - right), area_h);
-  return {area, x, y, std::move(xt), std::move(yt), xf, st.tick};
+  Axes a = pass(0);
+  if (a.x_label_rows > 1) a = pass(a.x_label_rows - 1);
+  return a;
 }
 
 void draw_grid(cv::Mat& img, const Axes& a, bool x_lines, bool y_lines) {
@@ -317,7 +337,8 @@ void draw_frame_and_ticks(cv::Mat& img, const Axes& a, const Style& st) {
     const std::string t = a.x_ticks.label(i);
     const int half = measure(t, a.x_font).width / 2;
     const int cx = std::clamp(X, half + 2, img.cols - half - 2);
-    put_text(img, t, {cx, below + st.tick_len + st.gap}, HAlign::centre, VAlign::top, a.x_font, kTickTextColour);
+    const int row = int(i % size_t(std::max(1, a.x_label_rows))) * (measure("0", st.tick).ascent + st.gap);
+    put_text(img, t, {cx, below + st.tick_len + st.gap + row}, HAlign::centre, VAlign::top, a.x_font, kTickTextColour);
   }
   // Y ticks and labels, right-aligned against the ticks.
   for (size_t i = 0; i < a.y_ticks.values.size(); ++i) {
@@ -337,7 +358,8 @@ void draw_axes_text(cv::Mat& img, const Axes& a, const AxesText& text, const Sty
     put_text(img, text.x_label, {cx, img.rows - st.pad}, HAlign::centre, VAlign::bottom, f, kTextColour);
   }
   if (!text.y_label.empty()) {
-    const cv::Mat patch = rotated_text(text.y_label, fitted(text.y_label, st.label, img.rows - 2 * st.pad), kTextColour);
+    const cv::Mat patch =
+        rotated_text(text.y_label, fitted(text.y_label, st.label, img.rows - 2 * st.pad), kTextColour);
     const int cy = std::clamp(r.y + r.height / 2, patch.rows / 2 + 1, img.rows - patch.rows / 2 - 1);
     paste(img, patch, {st.pad, cy - patch.rows / 2});
   }
@@ -493,7 +515,8 @@ void draw_legend_at(cv::Mat& img, cv::Point tl, const std::vector<LegendEntry>& 
     const double x0 = rect.x + st.gap, x1 = x0 + m.sample;
     if (e.swatch != Swatch::line) {  // box from 20 % to 80 % of the row
       const double h = m.row * 0.6;
-      const cv::Rect box(cv::Point(int(x0), int(std::lround(cy - h / 2))), cv::Point(int(x1), int(std::lround(cy + h / 2))));
+      const cv::Rect box(cv::Point(int(x0), int(std::lround(cy - h / 2))),
+                         cv::Point(int(x1), int(std::lround(cy + h / 2))));
       cv::rectangle(img, box, mix(kWhite, e.stroke.colour, e.alpha), cv::FILLED);
     }
     if (e.swatch != Swatch::box) {

@@ -29,13 +29,20 @@ cv::Scalar bgr(Rgb c);
 // a·(1 − t) + b·t per channel.
 cv::Scalar mix(const cv::Scalar& a, const cv::Scalar& b, double t);
 
-inline const cv::Scalar kWhite(255, 255, 255);
-inline const cv::Scalar kTextColour(25, 25, 25);
-inline const cv::Scalar kTickTextColour(55, 55, 55);
-inline const cv::Scalar kFrameColour(70, 70, 70);
-inline const cv::Scalar kGridColour(228, 228, 228);
-inline const cv::Scalar kRefLineColour(120, 120, 120);
-inline const cv::Scalar kLegendBorder(175, 175, 175);
+// A fixed colour, constant-initialised (cv::Scalar is not a literal type, and a dynamically
+// initialised one could still be black when a plot is rendered from another static initialiser).
+struct Bgr {
+  double b, g, r;
+  operator cv::Scalar() const { return {b, g, r}; }
+};
+
+inline constexpr Bgr kWhite{255, 255, 255};
+inline constexpr Bgr kTextColour{25, 25, 25};
+inline constexpr Bgr kTickTextColour{55, 55, 55};
+inline constexpr Bgr kFrameColour{70, 70, 70};
+inline constexpr Bgr kGridColour{228, 228, 228};
+inline constexpr Bgr kRefLineColour{120, 120, 120};
+inline constexpr Bgr kLegendBorder{175, 175, 175};
 
 // Palette index per item: explicit ones (>= 0) as given, -1 takes the next index no item claims.
 std::vector<int> assign_colours(const std::vector<int>& requested);
@@ -134,6 +141,7 @@ struct Axes {
   Range x, y;
   Ticks x_ticks, y_ticks;
   Font x_font, y_font;  // tick label fonts
+  int x_label_rows = 1; // x tick labels alternate over this many rows
   // Data → pixel inside the area (0 = first column/row of the area).
   double ax(double v) const { return (v - x.lo) / (x.hi - x.lo) * (area.width - 1); }
   double ay(double v) const { return (y.hi - v) / (y.hi - y.lo) * (area.height - 1); }
@@ -147,6 +155,7 @@ struct AxesOptions {
   // Fixed ticks with their labels (e.g. category names); thinned to every k-th when crowded.
   std::optional<Ticks> x_ticks, y_ticks;
   double x_min_font = 1.0;  // fixed x labels may shrink to this fraction of the tick font before any is dropped
+  bool x_stagger = false;   // fixed x labels may alternate over two rows before any is dropped
   int reserve_right = 0;  // px kept free right of the area, e.g. for a colour bar
   double y_min_step = 0;  // smallest automatic y tick step, e.g. 1 for counts
 };

@@ -17,8 +17,8 @@ using namespace canvas;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-const cv::Scalar kNanFill(200, 200, 200);
-const cv::Scalar kNanHatch(150, 150, 150);
+constexpr Bgr kNanFill{200, 200, 200};
+constexpr Bgr kNanHatch{150, 150, 150};
 
 // ---------------------------------------------------------------- shared
 
@@ -90,7 +90,7 @@ void hatch(cv::Mat& img, const cv::Rect& cell, const Style& st) {
   const cv::Rect r = cell & cv::Rect({0, 0}, img.size());
   if (r.empty()) return;
   cv::Mat roi = img(r);
-  roi.setTo(kNanFill);
+  roi.setTo(cv::Scalar(kNanFill));
   const int step = st.px(9);
   for (int k = -roi.rows; k < roi.cols; k += step)
     cv::line(roi, {k, roi.rows}, {k + roi.rows, 0}, kNanHatch, 1, cv::LINE_AA);
@@ -114,7 +114,8 @@ struct HeatLayout {
 Ticks centre_ticks(const std::vector<double>& centres) {
   Ticks t;
   t.step = 1;
-  for (size_t i = 0; i < centres.size(); ++i) t.values.push_back(double(i)), t.labels.push_back(format_value(centres[i], 4));
+  for (size_t i = 0; i < centres.size(); ++i)
+    t.values.push_back(double(i)), t.labels.push_back(format_value(centres[i], 4));
   return t;
 }
 
@@ -126,7 +127,8 @@ HeatLayout heat_layout(const HeatMap& m, const Style& st) {
   if (lo <= hi) std::tie(values.lo, values.hi) = widened(lo, hi);
   Ticks bar_ticks = nice_ticks(values.lo, values.hi, std::clamp(int(m.height / (110 * st.s)), 3, 8));
   int tick_w = has_nan ? measure("n/a", st.tick).width : 0;
-  for (size_t i = 0; i < bar_ticks.values.size(); ++i) tick_w = std::max(tick_w, measure(bar_ticks.label(i), st.tick).width);
+  for (size_t i = 0; i < bar_ticks.values.size(); ++i)
+    tick_w = std::max(tick_w, measure(bar_ticks.label(i), st.tick).width);
   const int bar_w = st.px(26);
   const std::string value_label = hershey_text(m.value_label);
   const int reserve = 3 * st.gap + bar_w + st.tick_len + st.gap + tick_w +
@@ -142,8 +144,12 @@ HeatLayout heat_layout(const HeatMap& m, const Style& st) {
 
 // Pixel rectangle of cell (ix, iy); neighbours share no pixels and together cover the area.
 cv::Rect cell_rect(const Axes& a, size_t ix, size_t iy) {
-  const auto col = [&](double v) { return a.area.x + int(std::lround((v - a.x.lo) / (a.x.hi - a.x.lo) * a.area.width)); };
-  const auto row = [&](double v) { return a.area.y + int(std::lround((a.y.hi - v) / (a.y.hi - a.y.lo) * a.area.height)); };
+  const auto col = [&](double v) {
+    return a.area.x + int(std::lround((v - a.x.lo) / (a.x.hi - a.x.lo) * a.area.width));
+  };
+  const auto row = [&](double v) {
+    return a.area.y + int(std::lround((a.y.hi - v) / (a.y.hi - a.y.lo) * a.area.height));
+  };
   return cv::Rect(cv::Point(col(ix - 0.5), row(iy + 0.5)), cv::Point(col(ix + 0.5), row(iy - 0.5)));
 }
 
@@ -212,7 +218,8 @@ cv::Mat heat_map_bgr(const HeatMap& m, ChartImage* info) {
       if (!std::isfinite(v)) { hatch(img, r, st); continue; }
       const cv::Scalar c = bgr(viridis_colour((v - L.values.lo) / (L.values.hi - L.values.lo)));
       cv::rectangle(img, r, c, cv::FILLED);
-      if (font) put_text(img, format_value(v), (r.tl() + r.br()) / 2, HAlign::centre, VAlign::middle, *font, text_on(c));
+      if (font)
+        put_text(img, format_value(v), (r.tl() + r.br()) / 2, HAlign::centre, VAlign::middle, *font, text_on(c));
     }
   if (separators) {  // thin white lines between cells
     for (size_t ix = 1; ix < nx; ++ix) {
@@ -252,8 +259,8 @@ Axes band_axes(const BandPlot& p, const Style& st) {
   }
   const Range x = resolve_range(NAN, NAN, xlo <= xhi ? xlo : NAN, xlo <= xhi ? xhi : NAN, 0.02);
   const Range y = resolve_range(NAN, NAN, ylo <= yhi ? ylo : NAN, ylo <= yhi ? yhi : NAN);
-  return layout_axes({p.width, p.height}, x, y, {hershey_text(p.title), hershey_text(p.x_label), hershey_text(p.y_label)},
-                     st);
+  return layout_axes({p.width, p.height}, x, y,
+                     {hershey_text(p.title), hershey_text(p.x_label), hershey_text(p.y_label)}, st);
 }
 
 // Band polygons (area pixels) over the runs where x, lo and hi are all finite.
@@ -311,8 +318,8 @@ void validate(const Histogram& h, const char* what) {
   check_image_size(what, h.width, h.height);
   if (h.bins < 0) throw std::invalid_argument(std::string(what) + ": bins must be >= 0, got " + std::to_string(h.bins));
   if (h.marker_labels.size() > h.markers.size())
-    throw std::invalid_argument(std::string(what) + ": " + std::to_string(h.marker_labels.size()) + " marker labels for " +
-                                std::to_string(h.markers.size()) + " markers");
+    throw std::invalid_argument(std::string(what) + ": " + std::to_string(h.marker_labels.size()) +
+                                " marker labels for " + std::to_string(h.markers.size()) + " markers");
 }
 
 // Title with the note on values that are not finite, e.g. "Settling time (12 of 500 not settled)".
@@ -335,7 +342,8 @@ cv::Mat histogram_bgr(const Histogram& h, ChartImage* info) {
   const Style st = style_for({h.width, h.height});
   const HistogramBins b = calc_histogram_bins(h.values, h.bins);
   const int top = b.counts.empty() ? 0 : *std::max_element(b.counts.begin(), b.counts.end());
-  const Range x = b.counts.empty() ? histogram_x(h, kInf, -kInf, 0.03) : histogram_x(h, b.edge(0), b.edge(b.counts.size()), 0.03);
+  const Range x =
+      b.counts.empty() ? histogram_x(h, kInf, -kInf, 0.03) : histogram_x(h, b.edge(0), b.edge(b.counts.size()), 0.03);
   const Range y = top > 0 ? resolve_range(0, NAN, 0, top, 0.06) : Range{0, 1};
   AxesOptions opt;
   opt.y_min_step = 1;
@@ -397,8 +405,9 @@ void validate(const BarChart& b) {
   check_image_size("BarChart", b.width, b.height);
   for (size_t g = 0; g < b.groups.size(); ++g)
     if (b.groups[g].size() != b.names.size())
-      throw std::invalid_argument("BarChart: group " + std::to_string(g) + " has " + std::to_string(b.groups[g].size()) +
-                                  " values for " + std::to_string(b.names.size()) + " names");
+      throw std::invalid_argument("BarChart: group " + std::to_string(g) + " has " +
+                                  std::to_string(b.groups[g].size()) + " values for " + std::to_string(b.names.size()) +
+                                  " names");
   if (!b.errors.empty()) {
     if (b.errors.size() != b.groups.size())
       throw std::invalid_argument("BarChart: " + std::to_string(b.errors.size()) + " error groups for " +
@@ -438,7 +447,8 @@ cv::Mat bar_chart_bgr(const BarChart& b, ChartImage* info) {
   const Style st = style_for({b.width, b.height});
   AxesOptions opt;
   opt.x_ticks = Ticks{};
-  opt.x_min_font = 0.6;  // names rather smaller than missing
+  opt.x_min_font = 0.6;  // names rather smaller, or on two rows, than missing
+  opt.x_stagger = true;
   for (size_t i = 0; i < b.names.size(); ++i)
     opt.x_ticks->values.push_back(double(i)), opt.x_ticks->labels.push_back(hershey_text(b.names[i]));
   const Range x{-0.5, std::max<double>(double(b.names.size()), 1.0) - 0.5};

@@ -379,6 +379,7 @@ double calc_quantile(const Distribution& d, double u) {
       const std::size_t n = d.values.size();
       if (n == 0) fail("choice distribution needs at least one value");
       const bool equal = d.weights.empty();
+      if (!equal && d.weights.size() != n) fail("choice distribution needs one weight per value");
       double total = 0.0;
       for (std::size_t k = 0; k < n; ++k) total += equal ? 1.0 : d.weights[k];
       const double target = u * total;

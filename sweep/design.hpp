@@ -109,8 +109,8 @@ std::vector<std::vector<double>> make_latin_hypercube(int n, int d, std::uint64_
 // Burley 2020 ("Practical hash-based Owen scrambling", JCGT 9(4)), with one full hash per digit rather than
 // the Laine-Karras approximation. The 32 scrambled digits are followed by 20 random digits (the scramble
 // of the remaining, all-zero digits), so points fill their cell; each dimension's key derives from
-// (seed, dimension). Nested scrambling keeps the net property: for n = 2^m, every elementary interval of
-// volume 2^-m of a (t, m, s)-net projection still holds exactly 2^t points.
+// (seed, dimension). Nested scrambling keeps the net property: for n = 2^m, each column has one point in
+// every [k 2^-m, (k+1) 2^-m), and a projection that is a (t, m, s)-net stays one.
 std::vector<std::vector<double>> make_sobol_points(int n, int d, std::uint64_t seed);
 
 // The unscrambled sequence (Joe & Kuo's sobol.cc): row 0 is the origin, then x_i = XOR of the direction

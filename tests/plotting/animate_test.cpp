@@ -12,6 +12,7 @@
 #include <opencv2/videoio.hpp>
 #pragma GCC diagnostic pop
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -106,7 +107,7 @@ ff::Animation slew(int frames = 40) {
   return a;
 }
 
-int count_colour(const Image& img, ff::Rgb c, int tol = 10) {
+int count_colour(const Image& img, ff::Rgb c, int tol = 30) {
   int n = 0;
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) n += near(img.at(x, y), c, tol);
@@ -131,18 +132,22 @@ TEST(Animate, FramesShowArmPayloadAndTrace) {
   EXPECT_THROW(ff::render_animation_frame(a, int(a.frames.size())), std::out_of_range);
 }
 
+// Whether two renders differ above the bottom band (where the "deflection x N" note goes).
+bool view_differs(const ff::Animation& a, const ff::Animation& b, int k) {
+  const auto p = ff::render_animation_frame(a, k), q = ff::render_animation_frame(b, k);
+  const size_t rows = size_t(a.height) * 85 / 100;
+  return !std::equal(p.begin(), p.begin() + long(rows * size_t(a.width) * 3), q.begin());
+}
+
 TEST(Animate, ExaggerationChangesOnlyBentArms) {
   ff::Animation a = slew(12);
-  for (auto& f : a.frames) f = bent_arm(f.t, 0.4, 0.0);  // straight beam, hub still
-  a.tip_trace = false;
+  for (auto& f : a.frames) f = bent_arm(f.t, 0.4, 0.0);  // straight beam
   ff::Animation b = a;
-  b.exaggeration = 1;
-  a.exaggeration = 1;
-  EXPECT_EQ(ff::render_animation_frame(a, 5), ff::render_animation_frame(b, 5));
-  for (auto& f : b.frames) f = bent_arm(f.t, 0.4, 0.01);
-  ff::Animation c = b;
-  c.exaggeration = 8;
-  EXPECT_NE(ff::render_animation_frame(b, 5), ff::render_animation_frame(c, 5));
+  b.exaggeration = 8;
+  EXPECT_FALSE(view_differs(a, b, 5));
+  for (auto* anim : {&a, &b})
+    for (auto& f : anim->frames) f = bent_arm(f.t, 0.4, 0.01);
+  EXPECT_TRUE(view_differs(a, b, 5));
 }
 
 // Mean absolute difference of two equally sized BGR images.
@@ -160,7 +165,8 @@ cv::Mat bgr_frame(const ff::Animation& a, int k) {
   return out;
 }
 
-void expect_video(const ff::Animation& a, const std::string& path) {
+// `tolerance`: mean difference allowed between a decoded frame and the rendered one (codec loss).
+void expect_video(const ff::Animation& a, const std::string& path, double tolerance) {
   ASSERT_TRUE(std::filesystem::exists(path)) << path;
   EXPECT_GT(std::filesystem::file_size(path), 1000u) << path;
   cv::VideoCapture in(path, cv::CAP_FFMPEG);
@@ -175,7 +181,7 @@ void expect_video(const ff::Animation& a, const std::string& path) {
   EXPECT_EQ(frames[0].rows, a.height);
   // Frame 20 of the video is frame 20 of the animation (up to compression), not frame 5.
   const cv::Mat want = bgr_frame(a, 20);
-  EXPECT_LT(mean_diff(frames[20], want), 2.0) << path;
+  EXPECT_LT(mean_diff(frames[20], want), tolerance) << path;
   EXPECT_GT(mean_diff(frames[5], want), mean_diff(frames[20], want) + 0.3) << path;
 }
 
@@ -184,7 +190,7 @@ TEST(Animate, WritesMjpgAvi) {
   const ff::Animation a = slew();
   const std::string path = (dir.path / "arm.avi").string();
   ff::render_animation(a, path);
-  expect_video(a, path);
+  expect_video(a, path, 2.0);
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path), {}), 1);  // no temporary left
   // Overwriting works the same way.
   ff::render_animation(a, path);
@@ -196,7 +202,7 @@ TEST(Animate, WritesMp4) {
   const ff::Animation a = slew();
   const std::string path = (dir.path / "arm.mp4").string();
   ff::render_animation(a, path);
-  expect_video(a, path);
+  expect_video(a, path, 6.0);  // mp4v at its default bit rate is lossier than Motion-JPEG
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path), {}), 1);
 }
 
