@@ -1,5 +1,7 @@
 #include "jobs/report.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -8,7 +10,11 @@
 #include "kernel/simulate.hpp"
 #include "kernel/trajectory.hpp"
 #include "plotting/plot.hpp"
+#include "plotting/charts.hpp"
 #include "results/sqlite.hpp"
+#include "results/statistics.hpp"
+#include "results/summaries.hpp"
+#include "sweep/design.hpp"
 
 namespace ff {
 
@@ -46,26 +52,129 @@ void write_trace_plots(const std::string& dir, const std::vector<std::string>& l
 
 namespace {
 
-// Summary of each metric over all variants: how many have a number, mean, min, max.
-std::string format_summary_md(const ResultTable& t) {
-  std::string out = "| metric | runs with a value | mean | min | max |\n|---|---|---|---|---|\n";
-  for (std::size_t c = 0; c < t.columns.size(); ++c) {
-    int n = 0;
-    double sum = 0, lo = INFINITY, hi = -INFINITY;
-    for (const auto& r : t.rows) {
-      const double x = r.values[c];
-      if (std::isnan(x)) continue;
-      ++n;
-      sum += x;
-      lo = std::min(lo, x);
-      hi = std::max(hi, x);
-    }
-    char buf[256];
-    if (n) std::snprintf(buf, sizeof buf, "| %s | %d of %zu | %.4g | %.4g | %.4g |\n", t.columns[c].c_str(), n, t.rows.size(), sum / n, lo, hi);
-    else std::snprintf(buf, sizeof buf, "| %s | 0 of %zu | | | |\n", t.columns[c].c_str(), t.rows.size());
-    out += buf;
-  }
+// The responses the study plots and summarises: the first move's.
+const std::vector<std::string> kKeyMetrics = {"m1_tip_settling_s", "m1_tip_overshoot_pct", "m1_peak_tip_deflection_m",
+                                              "m1_residual_vibration_m", "m1_peak_torque_Nm"};
+
+std::string file_safe(const std::string& s) {
+  std::string out;
+  for (char c : s) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
   return out;
+}
+
+// Grid and centred designs: settling time over the first two parameters, and against each.
+std::string report_grid(const Study& study, const ResultTable& t, const std::string& dir) {
+  const auto& p = t.params;
+  std::string md = "## Tip settling time by " + p[0] + (p.size() > 1 ? " and " + p[1] : "") + "\n\n";
+  md += format_groupby_md(t, std::vector<std::string>(p.begin(), p.begin() + std::min<std::size_t>(2, p.size())),
+                          {"m1_tip_settling_s", "m1_tip_overshoot_pct"}, study.specs);
+  const auto settle = column_values(t, "m1_tip_settling_s");
+  if (p.size() >= 2) {
+    // Heat map: mean settling over the other parameters; NaN where no variant of the cell settled.
+    HeatMap h;
+    h.title = "tip settling time (mean over the other parameters)";
+    h.x_label = p[0];
+    h.y_label = p[1];
+    h.value_label = "tip settling time (s)";
+    const auto groups = make_groups({column_values(t, p[0]), column_values(t, p[1])});
+    for (const auto& g : groups) {
+      if (std::find(h.x.begin(), h.x.end(), g.key[0]) == h.x.end()) h.x.push_back(g.key[0]);
+      if (std::find(h.y.begin(), h.y.end(), g.key[1]) == h.y.end()) h.y.push_back(g.key[1]);
+    }
+    std::sort(h.x.begin(), h.x.end());
+    std::sort(h.y.begin(), h.y.end());
+    h.values.assign(h.x.size() * h.y.size(), NAN);
+    for (const auto& g : groups) {
+      std::vector<double> v;
+      for (int r : g.rows) v.push_back(settle[r]);
+      const auto ix = std::find(h.x.begin(), h.x.end(), g.key[0]) - h.x.begin();
+      const auto iy = std::find(h.y.begin(), h.y.end(), g.key[1]) - h.y.begin();
+      h.values[iy * h.x.size() + ix] = calc_summary(v).mean;
+    }
+    render_heat_map(h, dir + "/heatmap_settling.png");
+  }
+  // Settling against each parameter: median with the 5-95 % band over the others.
+  for (const auto& name : p) {
+    BandPlot b;
+    b.title = "tip settling time against " + name;
+    b.x_label = name;
+    b.y_label = "tip settling time (s)";
+    BandSeries series;
+    series.label = "p50, band p5-p95 over the other parameters";
+    for (const auto& g : make_groups({column_values(t, name)})) {
+      std::vector<double> v;
+      for (int r : g.rows) v.push_back(settle[r]);
+      const Summary s = calc_summary(v);
+      series.x.push_back(g.key[0]);
+      series.mid.push_back(s.p50);
+      series.lo.push_back(s.p5);
+      series.hi.push_back(s.p95);
+    }
+    b.series.push_back(series);
+    render_band_plot(b, dir + "/settling_vs_" + file_safe(name) + ".png");
+  }
+  return md;
+}
+
+// Random designs: statistics with confidence intervals, spec misses, distributions.
+std::string report_monte_carlo(const Study& study, const ResultTable& t, const std::string& dir) {
+  std::string md = "## Responses (95 % percentile-bootstrap intervals; P(miss): Wilson interval)\n\n";
+  md += format_monte_carlo_md(t, kKeyMetrics, study.specs, study.seed);
+  const auto settle = column_values(t, "m1_tip_settling_s");
+  Histogram h;
+  h.title = "tip settling time";
+  h.x_label = "tip settling time (s)";
+  h.values = settle;
+  h.nan_label = "not settled";
+  const double p95 = calc_percentile(settle, 95);
+  if (!std::isnan(p95)) {
+    h.markers.push_back(p95);
+    h.marker_labels.push_back("p95");
+  }
+  if (study.specs.count("m1_tip_settling_s")) {
+    h.markers.push_back(study.specs.at("m1_tip_settling_s"));
+    h.marker_labels.push_back("spec");
+  }
+  render_histogram(h, dir + "/hist_settling.png");
+  render_cdf(h, dir + "/cdf_settling.png");
+  Histogram d;
+  d.title = "peak tip deflection";
+  d.x_label = "peak tip deflection (m)";
+  d.values = column_values(t, "m1_peak_tip_deflection_m");
+  render_histogram(d, dir + "/hist_peak_deflection.png");
+  return md;
+}
+
+// Sensitivity designs: Sobol' indices (Saltelli) or Morris screening, with bar charts.
+std::string report_sensitivity(const Study& study, const ResultTable& t, const std::string& dir) {
+  // Responses with a value for every variant: the estimators drop a base point with any NaN (not settled).
+  const std::vector<std::string> metrics = {"m1_tip_overshoot_pct", "m1_peak_tip_deflection_m", "m1_residual_vibration_m",
+                                            "m1_peak_torque_Nm", "m1_tip_settling_s"};
+  BarChart b;
+  b.names = t.params;
+  std::string md;
+  if (study.design.kind == DesignKind::kSaltelli) {
+    const auto idx = calc_sobol_for(t, metrics, static_cast<int>(t.params.size()), study.seed);
+    md = "## Sobol' indices (Saltelli design; first order: Saltelli 2010, total: Jansen 1999)\n\n" + format_sobol_md(idx, t.params);
+    const auto& s = idx.at("m1_peak_tip_deflection_m");
+    b.title = "Sobol' indices of the peak tip deflection";
+    b.y_label = "index";
+    b.groups = {s.first, s.total};
+    b.errors = {s.first_ci, s.total_ci};
+    b.group_labels = {"first order", "total"};
+  } else {
+    const auto x = make_morris_points(study.design.trajectories, static_cast<int>(t.params.size()),
+                                      study.design.morris_levels, study.design.seed);
+    const auto idx = calc_morris_for(t, metrics, x);
+    md = "## Morris elementary effects (per unit of the parameter range)\n\n" + format_morris_md(idx, t.params);
+    const auto& m = idx.at("m1_peak_tip_deflection_m");
+    b.title = "Morris screening of the peak tip deflection";
+    b.y_label = "elementary effect (m)";
+    b.groups = {m.mu_star, m.sigma};
+    b.group_labels = {"mu*", "sigma"};
+  }
+  render_bar_chart(b, dir + "/sensitivity_peak_deflection.png");
+  return md;
 }
 
 }  // namespace
@@ -84,12 +193,19 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
   std::snprintf(status, sizeof status, "%zu variants: %d ok, %d not settled, %d nonfinite, %d solver failures.\n\n",
                 table.rows.size(), counts[0], counts[1], counts[2], counts[3]);
   md += status;
-  if (table.rows.size() <= 24) {
+  if (study.listed) {
     std::vector<std::vector<std::string>> moves;
     for (const auto& m : study.models) moves.push_back(describe_moves(m.spec.trajectory));
     md += format_settling_table_md(table, moves);
   } else {
-    md += format_summary_md(table);
+    switch (study.design.kind) {
+      case DesignKind::kGrid:
+      case DesignKind::kCentered: md += report_grid(study, table, dir); break;
+      case DesignKind::kSaltelli:
+      case DesignKind::kMorris: md += report_sensitivity(study, table, dir); break;
+      default: md += report_monte_carlo(study, table, dir); break;
+    }
+    md += "\n## Every metric\n\n" + format_groupby_md(table, {}, table.columns, study.specs);
   }
   write_file_atomic(dir + "/table.md", md);
 

@@ -17,8 +17,9 @@ struct SaltelliBlocks {
 };
 
 // S_i and ST_i (appended to first / total) over the base indices `idx` of the blocks, in index order:
-// V = population variance of [fA, fB] (two-pass), V_i = mean fB (fAB_i - fA) (Saltelli et al. 2010, Table 2 b),
-// E_i = mean (fA - fAB_i)^2 / 2 (Jansen 1999).
+// V = population variance of [fA, fB] (two-pass), V_i = mean (fB - f0) (fAB_i - fA) (Saltelli et al. 2010,
+// Table 2 b, with the output centred on its mean f0: the same expectation, since E[fAB_i - fA] = 0, but
+// without the variance a large mean adds), E_i = mean (fA - fAB_i)^2 / 2 (Jansen 1999).
 void sobol_of(const SaltelliBlocks& s, const std::vector<std::size_t>& idx, std::vector<double>& first,
               std::vector<double>& total) {
   const double n = static_cast<double>(idx.size());
@@ -33,7 +34,7 @@ void sobol_of(const SaltelliBlocks& s, const std::vector<std::size_t>& idx, std:
   for (const auto& fab : s.fab) {
     double vi = 0.0, ei = 0.0;
     for (std::size_t k : idx) {
-      vi += s.fb[k] * (fab[k] - s.fa[k]);
+      vi += (s.fb[k] - mean) * (fab[k] - s.fa[k]);
       ei += (s.fa[k] - fab[k]) * (s.fa[k] - fab[k]);
     }
     first.push_back(var > 0.0 ? vi / n / var : kStatsNaN);

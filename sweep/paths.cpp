@@ -55,7 +55,7 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
       if (!node.IsSequence() || st.index >= static_cast<int>(node.size()))
         throw ConfigError(source, 0, path, "index [" + std::to_string(st.index) + "] is not in the list");
       if (last) {
-        node[st.index] = value;
+        node[st.index] = YAML::Clone(value);  // a fresh copy: assigning shared nodes merges their documents
         return;
       }
       YAML::Node next = node[st.index];
@@ -64,7 +64,7 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
       if (node.IsDefined() && !node.IsMap() && !node.IsNull())
         throw ConfigError(source, 0, path, "'" + st.key + "' is inside a value that is not a map");
       if (last) {
-        node[st.key] = value;
+        node[st.key] = YAML::Clone(value);
         return;
       }
       YAML::Node next = node[st.key];

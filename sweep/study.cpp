@@ -208,7 +208,7 @@ void parse_design(Study& st, YamlReader& top) {
   design.optional("levels", spec.morris_levels);
   design.finish();
   spec.seed = st.seed;
-  st.design = spec.kind;
+  st.design = spec;
   const bool needs_levels = spec.kind == DesignKind::kGrid || spec.kind == DesignKind::kCentered;
   for (std::size_t i = 0; i < vars.size(); ++i) {
     if (needs_levels && st.variables[i].levels.empty())

@@ -33,7 +33,7 @@ struct Study {
   std::string model_path;       // resolved relative to the study file
   std::string model_text;       // its contents, parsed afresh per variant (keeps line numbers)
   std::vector<Assignment> set;  // study-wide overrides, applied before each variant's own
-  DesignKind design = DesignKind::kGrid;
+  DesignSpec design;            // kind, sample counts and seed (ignored for a list of runs)
   bool listed = false;          // runs given one by one (`runs:`) rather than by a design
   std::vector<Variable> variables;
   std::vector<std::string> params;          // parameter columns: variable paths, or the paths the runs set

@@ -1,0 +1,187 @@
+#include "results/summaries.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "results/statistics.hpp"
+
+namespace ff {
+
+namespace {
+
+std::string num(double x, const char* f = "%.4g") {
+  if (std::isnan(x)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+
+std::string join(const std::vector<std::string>& cells, const char* sep) {
+  std::string out;
+  for (std::size_t i = 0; i < cells.size(); ++i) out += (i ? sep : "") + cells[i];
+  return out;
+}
+
+// The rows of each group, and the group's key as text.
+struct GroupRows {
+  std::vector<std::string> key;
+  std::vector<int> rows;
+};
+
+std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::string>& by) {
+  std::vector<GroupRows> out;
+  if (by.empty()) {
+    GroupRows all;
+    for (int i = 0; i < static_cast<int>(t.rows.size()); ++i) all.rows.push_back(i);
+    out.push_back(all);
+    return out;
+  }
+  std::vector<std::vector<double>> keys;
+  for (const auto& b : by) keys.push_back(column_values(t, b));
+  for (const auto& g : make_groups(keys)) {
+    GroupRows gr;
+    for (double k : g.key) gr.key.push_back(num(k, "%.6g"));
+    gr.rows = g.rows;
+    out.push_back(gr);
+  }
+  return out;
+}
+
+// The cells of one group and metric: count, missing, mean, min, p5, p50, p95, max, [miss, interval].
+std::vector<std::string> summary_cells(const std::vector<double>& v, const std::map<std::string, double>& specs,
+                                       const std::string& metric) {
+  const Summary s = calc_summary(v);
+  std::vector<std::string> c = {std::to_string(s.count), std::to_string(s.missing), num(s.mean), num(s.min),
+                                num(s.p5),               num(s.p50),                num(s.p95),  num(s.max)};
+  auto spec = specs.find(metric);
+  if (spec != specs.end()) {
+    const Interval m = calc_miss_probability(v, spec->second, 0.95);
+    c.push_back(num(m.estimate, "%.3f"));
+    c.push_back("[" + num(m.lower, "%.3f") + ", " + num(m.upper, "%.3f") + "]");
+  } else {
+    c.push_back("");
+    c.push_back("");
+  }
+  return c;
+}
+
+template <class Row>
+std::string groupby(const ResultTable& t, const std::vector<std::string>& by, const std::vector<std::string>& metrics,
+                    const std::map<std::string, double>& specs, Row row) {
+  std::vector<std::string> head = by;
+  for (const char* h : {"metric", "count", "missing", "mean", "min", "p5", "p50", "p95", "max", "P(miss spec)", "95% CI"})
+    head.push_back(h);
+  std::string out = row(head, true);
+  std::vector<std::vector<double>> cols;
+  for (const auto& m : metrics) cols.push_back(column_values(t, m));
+  for (const auto& g : group_rows(t, by)) {
+    for (std::size_t k = 0; k < metrics.size(); ++k) {
+      std::vector<double> v;
+      for (int r : g.rows) v.push_back(cols[k][r]);
+      std::vector<std::string> cells = g.key;
+      cells.push_back(metrics[k]);
+      for (auto& c : summary_cells(v, specs, metrics[k])) cells.push_back(c);
+      out += row(cells, false);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> column_values(const ResultTable& t, const std::string& name) {
+  std::vector<double> out;
+  for (std::size_t c = 0; c < t.params.size(); ++c)
+    if (t.params[c] == name) {
+      for (const auto& r : t.rows) out.push_back(r.params[c]);
+      return out;
+    }
+  for (std::size_t c = 0; c < t.columns.size(); ++c)
+    if (t.columns[c] == name) {
+      for (const auto& r : t.rows) out.push_back(r.values[c]);
+      return out;
+    }
+  throw std::invalid_argument("no column '" + name + "'; there are: " + join(t.params, ", ") + ", " + join(t.columns, ", "));
+}
+
+std::string format_groupby_md(const ResultTable& t, const std::vector<std::string>& by,
+                              const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
+  return groupby(t, by, metrics, specs, [](const std::vector<std::string>& cells, bool header) {
+    std::string line = "| " + join(cells, " | ") + " |\n";
+    if (header) {
+      line += "|";
+      for (std::size_t i = 0; i < cells.size(); ++i) line += "---|";
+      line += "\n";
+    }
+    return line;
+  });
+}
+
+std::string format_groupby_csv(const ResultTable& t, const std::vector<std::string>& by,
+                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
+  return groupby(t, by, metrics, specs, [](const std::vector<std::string>& cells, bool) {
+    std::vector<std::string> quoted;
+    for (const auto& c : cells) quoted.push_back(c.find_first_of(", ") != std::string::npos ? "\"" + c + "\"" : c);
+    return join(quoted, ",") + "\n";
+  });
+}
+
+std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::string>& metrics,
+                                  const std::map<std::string, double>& specs, std::uint64_t seed) {
+  std::string out =
+      "| metric | runs | no value | mean [95% CI] | p5 [95% CI] | p50 [95% CI] | p95 [95% CI] | spec | P(miss) [95% CI] |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
+  auto ci = [](const Interval& i) { return num(i.estimate) + " [" + num(i.lower) + ", " + num(i.upper) + "]"; };
+  for (const auto& m : metrics) {
+    const auto v = column_values(t, m);
+    const Summary s = calc_summary(v);
+    std::string line = "| " + m + " | " + std::to_string(v.size()) + " | " + std::to_string(s.missing) + " | " +
+                       ci(calc_bootstrap_mean(v, 1000, 0.95, seed)) + " | ";
+    for (double p : {5.0, 50.0, 95.0}) line += ci(calc_bootstrap_percentile(v, p, 1000, 0.95, seed)) + " | ";
+    auto spec = specs.find(m);
+    if (spec != specs.end()) {
+      const Interval miss = calc_miss_probability(v, spec->second, 0.95);
+      line += "<= " + num(spec->second) + " | " + num(miss.estimate, "%.3f") + " [" + num(miss.lower, "%.3f") + ", " +
+              num(miss.upper, "%.3f") + "] |";
+    } else {
+      line += " | |";
+    }
+    out += line + "\n";
+  }
+  return out;
+}
+
+std::map<std::string, SobolIndices> calc_sobol_for(const ResultTable& t, const std::vector<std::string>& metrics,
+                                                   int nparams, std::uint64_t seed) {
+  std::map<std::string, SobolIndices> out;
+  for (const auto& m : metrics) out[m] = calc_sobol_indices(column_values(t, m), nparams, 1000, seed);
+  return out;
+}
+
+std::string format_sobol_md(const std::map<std::string, SobolIndices>& idx, const std::vector<std::string>& params) {
+  std::string out = "| metric | parameter | first order S_i (± 95 %) | total S_Ti (± 95 %) |\n|---|---|---|---|\n";
+  for (const auto& [m, s] : idx)
+    for (std::size_t i = 0; i < params.size(); ++i)
+      out += "| " + m + " | " + params[i] + " | " + num(s.first[i], "%.3f") + " ± " + num(s.first_ci[i], "%.3f") +
+             " | " + num(s.total[i], "%.3f") + " ± " + num(s.total_ci[i], "%.3f") + " |\n";
+  return out;
+}
+
+std::map<std::string, MorrisIndices> calc_morris_for(const ResultTable& t, const std::vector<std::string>& metrics,
+                                                     const std::vector<std::vector<double>>& x_unit) {
+  std::map<std::string, MorrisIndices> out;
+  const int d = x_unit.empty() ? 0 : static_cast<int>(x_unit[0].size());
+  for (const auto& m : metrics) out[m] = calc_morris_indices(x_unit, column_values(t, m), d);
+  return out;
+}
+
+std::string format_morris_md(const std::map<std::string, MorrisIndices>& idx, const std::vector<std::string>& params) {
+  std::string out = "| metric | parameter | mu* | mu | sigma |\n|---|---|---|---|---|\n";
+  for (const auto& [m, s] : idx)
+    for (std::size_t i = 0; i < params.size(); ++i)
+      out += "| " + m + " | " + params[i] + " | " + num(s.mu_star[i]) + " | " + num(s.mu[i]) + " | " + num(s.sigma[i]) + " |\n";
+  return out;
+}
+
+}  // namespace ff
