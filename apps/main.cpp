@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   ff::add_simulate_verb(app);
   ff::add_run_verb(app);
   ff::add_merge_verb(app);
+  ff::add_table_verb(app);
+  ff::add_plot_verb(app);
+  ff::add_animate_verb(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

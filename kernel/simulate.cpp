@@ -46,7 +46,7 @@ void record(const BatchModel& bm, const BatchState& s, const double* ref, const 
 
 }  // namespace
 
-BatchRun simulate(const BatchModel& bm) {
+BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe) {
   const int W = bm.W;
   const double T = bm.control_period;
   const long nsamples = std::lround(bm.duration / T) + 1;
@@ -74,6 +74,7 @@ BatchRun simulate(const BatchModel& bm) {
     if (k == 0) reset_controller(bm, s, ref.data());
     compute_control(bm, s, ref.data(), ref_f.data());
     record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), ws, run.traces);
+    if (observe) observe(s);
     if (k + 1 == nsamples) break;
     // Plant: integrate to the next sample with the torque held.
     if (cvode) {

@@ -2,6 +2,7 @@
 // between samples with the torque held (fixed-step RK4 or CVODE).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,8 @@ struct BatchRun {
 };
 
 // Runs every lane of the batch to bm.duration with the integrator the models ask for.
-BatchRun simulate(const BatchModel& bm);
+// `observe`, when given, sees the state at every controller sample (after the controller acted).
+BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe = nullptr);
 
 // Writes one trace as CSV (columns t, ref, ref_filtered, hub_torque, hub_angle, hub_rate,
 // tip_deflection, tip_angle), atomically.

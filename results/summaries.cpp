@@ -122,7 +122,8 @@ std::string format_groupby_csv(const ResultTable& t, const std::vector<std::stri
                                const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
   return groupby(t, by, metrics, specs, [](const std::vector<std::string>& cells, bool) {
     std::vector<std::string> quoted;
-    for (const auto& c : cells) quoted.push_back(c.find_first_of(", ") != std::string::npos ? "\"" + c + "\"" : c);
+    for (const auto& c : cells)  // no number: an empty cell
+      quoted.push_back(c == "-" ? std::string() : c.find_first_of(", ") != std::string::npos ? "\"" + c + "\"" : c);
     return join(quoted, ",") + "\n";
   });
 }

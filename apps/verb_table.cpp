@@ -1,0 +1,72 @@
+// flexfarm table DIR: settling-time and overshoot tables of a finished study, grouped by any
+// parameters (count, missing, mean, min, p5, p50, p95, max, and the probability of missing a spec).
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "apps/verbs.hpp"
+#include "results/summaries.hpp"
+#include "results/table.hpp"
+
+namespace ff {
+
+namespace {
+std::vector<std::string> split_list(const std::vector<std::string>& items) {
+  std::vector<std::string> out;
+  for (const auto& item : items) {
+    std::stringstream ss(item);
+    std::string part;
+    while (std::getline(ss, part, ','))
+      if (!part.empty()) out.push_back(part);
+  }
+  return out;
+}
+}  // namespace
+
+void add_table_verb(CLI::App& app) {
+  auto* cmd = app.add_subcommand("table", "Summarise a study's results.csv grouped by parameters: count, mean, "
+                                          "min, percentiles, max, and the probability of missing a spec");
+  struct Args {
+    std::string input, format = "md";
+    std::vector<std::string> by, metrics, specs;
+  };
+  auto args = std::make_shared<Args>();
+  cmd->add_option("results", args->input, "a study's output directory or its results.csv")->required()->check(CLI::ExistingPath);
+  cmd->add_option("--by", args->by, "parameters to group by, comma separated (e.g. payload.mass,segments); none = all rows");
+  cmd->add_option("--metric", args->metrics, "metrics to summarise, comma separated")
+      ->default_str("m1_tip_settling_s,m1_tip_overshoot_pct");
+  cmd->add_option("--spec", args->specs, "METRIC=LIMIT: report P(metric > limit or not settled), e.g. m1_tip_settling_s=3");
+  cmd->add_option("--format", args->format, "md or csv")->check(CLI::IsMember({"md", "csv"}))->capture_default_str();
+  cmd->callback([args] {
+    std::string path = args->input;
+    if (std::filesystem::is_directory(path)) path += "/results.csv";
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open");
+    std::stringstream text;
+    text << in.rdbuf();
+    const ResultTable t = parse_results_csv(text.str(), path);
+    auto metrics = split_list(args->metrics);
+    if (metrics.empty()) metrics = {"m1_tip_settling_s", "m1_tip_overshoot_pct"};
+    std::map<std::string, double> specs;
+    for (const auto& s : split_list(args->specs)) {
+      const auto eq = s.find('=');
+      if (eq == std::string::npos) throw CLI::ValidationError("--spec", "expected METRIC=LIMIT, got '" + s + "'");
+      try {
+        specs[s.substr(0, eq)] = std::stod(s.substr(eq + 1));
+      } catch (const std::exception&) {
+        throw CLI::ValidationError("--spec", "limit of '" + s + "' is not a number");
+      }
+    }
+    try {
+      const auto by = split_list(args->by);
+      std::fputs((args->format == "csv" ? format_groupby_csv(t, by, metrics, specs)
+                                        : format_groupby_md(t, by, metrics, specs)).c_str(), stdout);
+    } catch (const std::invalid_argument& e) {
+      throw CLI::ValidationError("--by/--metric", e.what());
+    }
+  });
+}
+
+}  // namespace ff
