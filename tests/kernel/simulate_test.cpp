@@ -21,6 +21,8 @@ TEST_P(ReferenceTraceTest, MatchesIndependentImplementationWellUnderAMillimetre)
   const auto ref = test::load_reference_trace();
   ModelSpec spec = test::rig_spec(0.5, 17.0);
   spec.simulation.integrator = GetParam();
+  // Tip deflection is 290 mm RMS. Measured: RK4 at 1 ms 0.012 um, CVODE ~0.2 um, SDIRK2 at 1 ms 23 um.
+  const double bound = GetParam() == Integrator::kSdirk2 ? 5e-5 : 1e-6;
   spec.simulation.duration = 19.999;
   const auto run = test::run_one(make_model(spec));
   const Trace& tr = run.traces[0];
@@ -28,14 +30,14 @@ TEST_P(ReferenceTraceTest, MatchesIndependentImplementationWellUnderAMillimetre)
   // Same sample instants, same reference, same torque law.
   EXPECT_LT(max_abs_diff(tr.t, ref.t), 1e-9);
   EXPECT_LT(max_abs_diff(tr.ref, ref.ref), 1e-10);  // the file keeps 10 significant digits
-  // Tip deflection is 290 mm RMS; we agree to a micron (RK4 at 1 ms: 0.012 um measured).
-  EXPECT_LT(max_abs_diff(tr.tip_deflection, ref.tip_deflection), 1e-6);
-  EXPECT_LT(max_abs_diff(tr.hub_angle, ref.hub_angle), 1e-7);
-  EXPECT_LT(max_abs_diff(tr.torque, ref.hub_torque), 1e-2);
+  EXPECT_LT(max_abs_diff(tr.tip_deflection, ref.tip_deflection), bound);
+  EXPECT_LT(max_abs_diff(tr.hub_angle, ref.hub_angle), 0.1 * bound);
+  EXPECT_LT(max_abs_diff(tr.torque, ref.hub_torque), 1e4 * bound);
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, ReferenceTraceTest,
-                         ::testing::Values(Integrator::kRk4, Integrator::kCvodeDense, Integrator::kCvodeKlu),
+                         ::testing::Values(Integrator::kRk4, Integrator::kSdirk2, Integrator::kCvodeDense,
+                                           Integrator::kCvodeKlu),
                          [](const auto& info) { return std::string(integrator_name(info.param)); });
 
 // RK4 (batch kernel) against CVODE BDF (reference) on the seed's move at N = 6 and N = 24.
@@ -58,6 +60,50 @@ TEST_P(IntegratorAgreementTest, CvodeAgreesWithFixedStep) {
 INSTANTIATE_TEST_SUITE_P(Segments, IntegratorAgreementTest,
                          ::testing::Values(std::make_pair(6, 1e-6), std::make_pair(24, 1e-6)),
                          [](const auto& info) { return "N" + std::to_string(info.param.first); });
+
+// SDIRK2 (the batch kernel's stiff-safe integrator, one step per 1 ms sample) against CVODE at large N,
+// where RK4 would need hundreds of substeps. Bound: 0.1 mm of tip deflection (peak ~670 mm).
+class StiffAgreementTest : public ::testing::TestWithParam<int> {};
+
+TEST_P(StiffAgreementTest, Sdirk2AgreesWithCvodeAtOneStepPerSample) {
+  ModelSpec spec = test::rig_spec(0.5, 0.5);  // the move and half a second of ringing: CVODE is slow at N = 48
+  spec.segments = GetParam();
+  spec.simulation.integrator = Integrator::kSdirk2;
+  const Model fast = make_model(spec);
+  EXPECT_EQ(fast.substeps, 1);
+  const auto sd = test::run_one(fast);
+  spec.simulation.integrator = Integrator::kCvodeKlu;
+  const auto bdf = test::run_one(make_model(spec));
+  ASSERT_EQ(sd.status[0], LaneStatus::kOk);
+  ASSERT_EQ(bdf.status[0], LaneStatus::kOk);
+  EXPECT_LT(max_abs_diff(sd.traces[0].tip_deflection, bdf.traces[0].tip_deflection), 1e-4);
+}
+
+INSTANTIATE_TEST_SUITE_P(Segments, StiffAgreementTest, ::testing::Values(24, 48),
+                         [](const auto& info) { return "N" + std::to_string(info.param); });
+
+class LaneTest : public ::testing::TestWithParam<Integrator> {};
+
+TEST_P(LaneTest, BatchLanesMatchSingleRunsBitForBit) {
+  std::vector<Model> models;
+  for (double payload : {200.0, 328.7, 450.0, 260.0, 390.0}) {
+    ModelSpec spec = test::rig_spec(0.5, 2.0);
+    spec.payload_mass = payload;
+    spec.simulation.integrator = GetParam();
+    spec.simulation.substeps = 2;
+    spec.notch.enabled = true;
+    models.push_back(make_model(spec));
+  }
+  const auto batch = simulate(make_batch(models));
+  for (int l = 0; l < 5; ++l) {
+    const auto one = test::run_one(models[l]);
+    EXPECT_EQ(batch.traces[l].tip_deflection, one.traces[0].tip_deflection) << "lane " << l;
+    EXPECT_EQ(batch.traces[l].torque, one.traces[0].torque) << "lane " << l;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(FixedStep, LaneTest, ::testing::Values(Integrator::kRk4, Integrator::kSdirk2),
+                         [](const auto& info) { return std::string(integrator_name(info.param)); });
 
 TEST(Simulate, BatchLanesMatchSingleRunsBitForBit) {
   std::vector<Model> models;
