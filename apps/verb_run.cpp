@@ -62,10 +62,12 @@ void add_run_verb(CLI::App& app) {
   cmd->add_option("--lanes", args->lanes, "variants advanced together by one kernel call")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
-  cmd->add_option("--shard", args->shard,
+  auto* shard = cmd->add_option("--shard", args->shard,
                   "I/N: compute only the variants with eval_id % N == I (a Slurm array task: "
                   "--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT), then `flexfarm merge`");
-  cmd->callback([args] {
+  cmd->callback([args, shard] {
+    const bool sharded = shard->count() > 0;  // an empty --shard "$UNSET" is an error, not "no shard"
+    if (sharded) parse_shard(args->shard);
     const Study study = load_study(args->study);
     const MpiSession& comm = mpi();
     FarmOptions opt;
@@ -74,7 +76,7 @@ void add_run_verb(CLI::App& app) {
     opt.eval.lanes = args->lanes;
     opt.eval.threads = args->threads;
     opt.eval.keep_traces = study.keep_traces;
-    if (!args->shard.empty()) {
+    if (sharded) {
       if (comm.size() > 1) throw CLI::ValidationError("--shard", "use either MPI ranks or --shard, not both");
       opt.part = parse_shard(args->shard);
       opt.tag = "shard-" + std::to_string(opt.part.index) + "-of-" + std::to_string(opt.part.count);
@@ -103,7 +105,7 @@ void add_run_verb(CLI::App& app) {
       if (!error.empty()) throw std::runtime_error(error);
       throw std::runtime_error("another rank failed");
     }
-    if (!args->shard.empty()) {
+    if (sharded) {
       std::printf("shard %s of %s done in %s; when every shard is done: flexfarm merge %s --out %s\n",
                   args->shard.c_str(), study.name.c_str(), args->out.c_str(), args->study.c_str(), args->out.c_str());
       return;

@@ -3,7 +3,9 @@
 // tip-deflection accuracy of both against flexfarm's CVODE reference.
 // The controller is sampled every 1 ms and held in between. MuJoCo's timestep is 1 ms / K with
 // K = ff::calc_auto_substeps (h omega_max <= 1; K = 1 at N = 6, i.e. 1 ms) unless --mujoco-substeps K.
-// Run: mujoco_compare [--segments 6,24,48] [--variants 16] [--reps 7] [--mujoco-substeps K]
+// Larger N needs many substeps (N = 24: 29, N = 48: 496), so --seconds can shorten the simulated
+// window per N (throughput and accuracy then refer to that window).
+// Run: mujoco_compare [--segments 6,24,48 --seconds 20,0.5,0.02] [--variants 16] [--reps 7] [--mujoco-substeps K]
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Dense>
@@ -39,9 +41,11 @@ struct FlexfarmConfig {
 FlexfarmConfig flexfarm_config() { return FlexfarmConfig{}; }
 // =======================================================================================
 
-// The reference motion: 0 -> 0.5 rad in 3 s, held 17 s (20 s, 20000 controller steps).
-ff::ModelSpec rig_spec(int nseg, ff::Integrator integrator, int substeps) {
+// The reference motion: 0 -> 0.5 rad in 3 s, held 17 s (20 s, 20000 controller steps);
+// seconds < 20 simulates only the start of it.
+ff::ModelSpec rig_spec(int nseg, ff::Integrator integrator, int substeps, double seconds) {
   ff::ModelSpec s;
+  s.simulation.duration = seconds;
   s.segments = nseg;
   s.trajectory.moves = {{0.5, 17.0}};
   s.simulation.integrator = integrator;
@@ -181,7 +185,7 @@ bool run_mujoco(const mjModel* mm, mjData* d, const ff::Model& m, int substeps, 
 
 // ---------------------------------------------------------------- timing and statistics
 
-double seconds(const std::function<void()>& f) {
+double time_it(const std::function<void()>& f) {
   const auto t0 = std::chrono::steady_clock::now();
   f();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -228,15 +232,15 @@ struct Row {
 };
 
 // Everything for one segment count. Returns false when the two rigs differ.
-bool run_case(int nseg, int M, int reps, int mj_sub_override, Summary& out) {
+bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Summary& out) {
   const FlexfarmConfig cfg = flexfarm_config();
-  const ff::Model m = ff::make_model(rig_spec(nseg, cfg.integrator, cfg.substeps));
-  const ff::Model mref = ff::make_model(rig_spec(nseg, ff::Integrator::kCvodeDense, 0));
+  const ff::Model m = ff::make_model(rig_spec(nseg, cfg.integrator, cfg.substeps, seconds));
+  const ff::Model mref = ff::make_model(rig_spec(nseg, ff::Integrator::kCvodeDense, 0, seconds));
   const long nsamples = std::lround(m.duration / m.control_period) + 1;
   const double steps = static_cast<double>(nsamples - 1) * M;  // variant-steps per run
   const int mj_sub = mj_sub_override > 0 ? mj_sub_override : ff::calc_auto_substeps(m);
 
-  std::printf("\n=== N = %d segments: M = %d variants x %ld controller steps of %g ms (%.0f s), median of %d ===\n",
+  std::printf("\n=== N = %d segments: M = %d variants x %ld controller steps of %g ms (%g s), median of %d ===\n",
               nseg, M, nsamples - 1, 1e3 * m.control_period, m.duration, reps);
 
   // The MuJoCo rig must be flexfarm's rig.
@@ -304,7 +308,7 @@ bool run_case(int nseg, int M, int reps, int mj_sub_override, Summary& out) {
   }
   for (int rep = 0; rep < reps; ++rep)
     for (auto& row : rows)
-      if (row.stable) row.times.push_back(seconds(row.run));
+      if (row.stable) row.times.push_back(time_it(row.run));
   for (auto& row : rows)
     if (row.stable) row.rate = steps / median(row.times);
   for (const auto& r : runs)
@@ -322,7 +326,7 @@ bool run_case(int nseg, int M, int reps, int mj_sub_override, Summary& out) {
   if (nbatch < 2) std::printf("(only one batch of W lanes: flexfarm's 2-thread row has nothing to share)\n");
 
   const std::vector<double> ref = ff::simulate(ff::make_batch(std::vector<ff::Model>{mref})).traces[0].tip_deflection;
-  std::printf("\n%-34s %14s %14s   (reference: CVODE dense, rtol %g; tip deflection RMS %.1f mm)\n",
+  std::printf("\n%-34s %14s %14s   (reference: CVODE dense, rtol %g; tip deflection RMS %.4g mm)\n",
               "accuracy vs reference", "RMS error mm", "max error mm", mref.spec.simulation.rtol, 1e3 * rms(ref));
   Error err[3];
   const char* names[3] = {"MuJoCo Euler (semi-implicit)", "MuJoCo RK4", ffname.c_str()};
@@ -346,24 +350,26 @@ bool run_case(int nseg, int M, int reps, int mj_sub_override, Summary& out) {
   return true;
 }
 
-std::vector<int> parse_list(const std::string& s) {
-  std::vector<int> out;
+std::vector<double> parse_list(const std::string& s) {
+  std::vector<double> out;
   std::stringstream ss(s);
   std::string tok;
-  while (std::getline(ss, tok, ',')) out.push_back(std::stoi(tok));
+  while (std::getline(ss, tok, ',')) out.push_back(std::stod(tok));
   return out;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<int> segments = {6};
+  std::vector<double> segments = {6}, secs = {20.0};
   int M = 16, reps = 7, mj_sub = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
     if (a == "--segments" && has) {
       segments = parse_list(argv[++i]);
+    } else if (a == "--seconds" && has) {
+      secs = parse_list(argv[++i]);
     } else if (a == "--variants" && has) {
       M = std::atoi(argv[++i]);
     } else if (a == "--reps" && has) {
@@ -371,22 +377,27 @@ int main(int argc, char** argv) {
     } else if (a == "--mujoco-substeps" && has) {
       mj_sub = std::atoi(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: %s [--segments 6,24,48] [--variants 16] [--reps 7] [--mujoco-substeps K]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--segments 6,24,48] [--seconds 20,0.5,0.02] [--variants 16] [--reps 7]"
+                   " [--mujoco-substeps K]\n", argv[0]);
       return 2;
     }
   }
-  if (segments.empty() || M < 1 || reps < 1 || mj_sub < 0) {
+  if (secs.size() == 1) secs.resize(segments.size(), secs[0]);  // one value for every N
+  for (double x : secs)
+    if (!(x > 0)) secs.clear();
+  if (segments.empty() || secs.size() != segments.size() || M < 1 || reps < 1 || mj_sub < 0) {
     std::fprintf(stderr, "bad arguments\n");
     return 2;
   }
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress visible through pipes
   mju_user_warning = quiet_warning;
   std::printf("MuJoCo %s, flexfarm config: %s, substeps %d (0 = auto), W = %d\n", mj_versionString(),
               flexfarm_config().label, flexfarm_config().substeps, flexfarm_config().lanes);
   try {
     std::vector<Summary> sums;
-    for (int n : segments) {
+    for (std::size_t i = 0; i < segments.size(); ++i) {
       Summary s{};
-      if (!run_case(n, M, reps, mj_sub, s)) return 1;
+      if (!run_case(static_cast<int>(segments[i]), secs[i], M, reps, mj_sub, s)) return 1;
       sums.push_back(s);
     }
     // One line for the docs: the first segment count asked for (default N = 6), single thread.

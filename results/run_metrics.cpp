@@ -36,6 +36,12 @@ double settled_for(std::span<const double> t, std::span<const double> y, const M
 
 std::vector<double> calc_run_metrics(const Model& model, const Trace& tr) {
   std::vector<double> out;
+  // A run that stopped being finite has no responses: every metric is "no number".
+  for (const auto* sig : {&tr.tip_angle, &tr.hub_angle, &tr.tip_deflection, &tr.torque})
+    for (double x : *sig)
+      if (!std::isfinite(x))
+        return std::vector<double>(kMoveMetrics.size() * calc_moves(model.spec.trajectory, model.duration).size(),
+                                   std::nan(""));
   // Dwell: one period of the slowest closed-loop resonance.
   const double dwell = model.resonances.empty() ? 0.0 : 2.0 * std::numbers::pi / model.resonances[0];
   for (const auto& mv : calc_moves(model.spec.trajectory, model.duration)) {

@@ -24,7 +24,7 @@ extern const std::vector<std::string> kMoveMetrics;
 // Column names "m1_tip_settling_s", ... for `nmoves` moves.
 std::vector<std::string> calc_metric_columns(int nmoves);
 
-// Values in calc_metric_columns order.
+// Values in calc_metric_columns order; all NaN when the trace is not finite (a diverged run).
 std::vector<double> calc_run_metrics(const Model& model, const Trace& trace);
 
 // "ok", "not_settled" (a tip settling time is NaN), or the lane's failure.

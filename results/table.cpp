@@ -43,7 +43,7 @@ std::string format_results_row(const ResultRow& r) {
   for (const auto* v : {&r.params, &r.values})
     for (double x : *v) {
       out += ',';
-      if (!std::isnan(x)) out += fmt("%.12g", x);
+      if (!std::isnan(x)) out += fmt("%.17g", x);  // round-trips every double: equal tables mean equal bits
     }
   out += '\n';
   return out;

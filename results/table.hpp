@@ -25,7 +25,7 @@ struct ResultTable {
 
 // CSV header: eval_id,seed,label,status,<params>,<columns>.
 std::string format_results_header(const ResultTable& table);
-// One CSV row (with its newline); NaN cells are empty; numbers with 12 significant digits.
+// One CSV row (with its newline); NaN cells are empty; numbers with 17 significant digits (exact).
 std::string format_results_row(const ResultRow& row);
 // Header and every row.
 std::string format_results_csv(const ResultTable& table);

@@ -119,7 +119,15 @@ Distribution parse_distribution(YamlReader r) {
   try {
     validate_distribution(d);
   } catch (const std::invalid_argument& e) {
-    r.fail("type", e.what());
+    // Point at the key the message is about.
+    const std::string what = e.what();
+    std::string key = "type";
+    for (const char* k : {"weights", "values", "sigma", "std", "lower", "upper", "mean", "mu"})
+      if (what.find(k) != std::string::npos && r.has(k)) {
+        key = k;
+        break;
+      }
+    r.fail(key, what);
   }
   return d;
 }

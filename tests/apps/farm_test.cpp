@@ -1,0 +1,617 @@
+// End-to-end tests of the farm: `flexfarm run` and `flexfarm merge` on a small Monte Carlo study
+// (tests/data/studies/mc_small.yaml). The result table must be byte-identical whatever the thread
+// count, lane width, MPI rank count or Slurm sharding, and after a `kill -9` and `--resume`; a
+// diverging variant is recorded and reported by the exit code; bad input writes nothing.
+//
+// Every comparison hashes the files (64-bit FNV-1a, printed with the size in failure messages):
+// results.csv always, and the dump of results.sqlite when the sqlite3 shell is on PATH.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSource = FLEXFARM_SOURCE_DIR;
+const std::string kBinary = FLEXFARM_BINARY;
+const std::string kStudy = kSource + "/tests/data/studies/mc_small.yaml";
+const std::string kModel = kSource + "/configs/fbtb.yaml";
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void write_text(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+// One CSV line into cells ("..." may hold commas).
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> cells(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) cells.emplace_back();
+    else cells.back() += c;
+  }
+  return cells;
+}
+
+// Single-quoted for /bin/sh.
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::uint64_t fnv1a(const std::string& s) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : s) h = (h ^ c) * 0x100000001b3ull;
+  return h;
+}
+
+// "1234 bytes, fnv1a 0123456789abcdef" (or "missing").
+std::string fingerprint(const std::string& bytes) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%zu bytes, fnv1a %016llx", bytes.size(), static_cast<unsigned long long>(fnv1a(bytes)));
+  return buf;
+}
+std::string fingerprint(const fs::path& p) { return fs::exists(p) ? fingerprint(read_text(p)) : std::string("missing"); }
+
+// The first line where two texts differ, for failure messages.
+std::string first_difference(const std::string& a, const std::string& b) {
+  const auto la = split_lines(a), lb = split_lines(b);
+  for (std::size_t i = 0; i < std::max(la.size(), lb.size()); ++i) {
+    const std::string x = i < la.size() ? la[i] : "<none>", y = i < lb.size() ? lb[i] : "<none>";
+    if (x != y) return "first difference at line " + std::to_string(i + 1) + ":\n  expected: " + x + "\n  actual:   " + y;
+  }
+  return "same lines, different bytes";
+}
+
+bool on_path(const std::string& program) {
+  return std::system(("command -v " + program + " > /dev/null 2>&1").c_str()) == 0;
+}
+
+// Number of variants of mc_small.yaml (its `samples:`), so the tests follow the study file.
+int study_size() {
+  std::smatch m;
+  const std::string text = read_text(kStudy);
+  const std::regex re("samples:\\s*([0-9]+)");
+  return std::regex_search(text, m, re) ? std::stoi(m[1]) : -1;
+}
+
+// The complete rows of a journal (DIR/journal-TAG.csv: two header lines, then one row per variant);
+// a last line without its newline is a torn write and does not count.
+struct Journal {
+  std::string complete;  // the text up to its last newline
+  std::vector<int> ids;  // eval_id of each complete row, in file order
+};
+Journal read_journal(const fs::path& p) {
+  Journal j;
+  const std::string text = read_text(p);
+  const auto end = text.rfind('\n');
+  if (end == std::string::npos) return j;
+  j.complete = text.substr(0, end + 1);
+  const auto lines = split_lines(j.complete);
+  for (std::size_t i = 2; i < lines.size(); ++i) j.ids.push_back(std::stoi(lines[i].substr(0, lines[i].find(','))));
+  return j;
+}
+
+// Sum of the `variants` column of a timings file's rows (first_eval_id,variants,seconds).
+int timed_variants(const std::string& rows) {
+  int n = 0;
+  for (const auto& l : split_lines(rows)) {
+    const auto cells = split_csv(l);
+    if (cells.size() == 3 && cells[0] != "first_eval_id") n += std::stoi(cells[1]);
+  }
+  return n;
+}
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+  double seconds = 0;
+  std::vector<std::string> lines() const { return split_lines(output); }
+};
+
+// Runs a shell command in `dir`, its output captured in `log`.
+Result shell(const fs::path& dir, const std::string& command, const fs::path& log) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string cmd = "cd " + quote(dir.string()) + " && " + command + " > " + quote(log.string()) + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.output = read_text(log);
+  return r;
+}
+
+// A finished run's tables: results.csv and the dump of results.sqlite ("" without the sqlite3 shell).
+struct Tables {
+  std::string csv, sqlite;
+};
+Tables read_tables(const fs::path& out) {
+  Tables t;
+  t.csv = read_text(out / "results.csv");
+  if (on_path("sqlite3") && fs::exists(out / "results.sqlite")) {
+    const fs::path dump = out.parent_path() / (out.filename().string() + ".sqlite-dump.txt");
+    shell(out, "sqlite3 -readonly results.sqlite .dump", dump);
+    t.sqlite = read_text(dump);
+    fs::remove(dump);
+  }
+  return t;
+}
+
+// The uninterrupted single-process run every other run must match: `run --threads 1` (default
+// lanes), computed once per test program; its tables are kept in memory.
+struct Reference {
+  Result run;
+  Tables tables;
+};
+fs::path reference_dir() { return fs::temp_directory_path() / ("ff_farm_" + std::to_string(::getpid()) + "_reference"); }
+const Reference& reference() {
+  static const Reference ref = [] {
+    Reference r;
+    const fs::path dir = reference_dir();
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    r.run = shell(dir, quote(kBinary) + " run " + quote(kStudy) + " --out out --threads 1", dir / "output.txt");
+    r.tables = read_tables(dir / "out");
+    std::error_code ec;
+    fs::remove_all(dir, ec);  // kept in memory
+    return r;
+  }();
+  return ref;
+}
+
+class Farm : public ::testing::Test {
+ protected:
+  fs::path dir;  // fresh per test; commands run here
+  int commands = 0;
+
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("ff_farm_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::printf("kept for inspection: %s\n", dir.c_str());
+      return;
+    }
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+
+  // `flexfarm ARGS` (ARGS quoted as needed) in `dir`.
+  Result flexfarm(const std::string& args) {
+    return shell(dir, quote(kBinary) + " " + args, dir / ("log-" + std::to_string(++commands) + ".txt"));
+  }
+  // `flexfarm run mc_small.yaml --out OUT ARGS`.
+  Result run_study(const std::string& out, const std::string& args = "") {
+    return flexfarm("run " + quote(kStudy) + " --out " + out + " " + args);
+  }
+
+  // The reference run, which must have succeeded.
+  static const Reference& ref() {
+    const Reference& r = reference();
+    EXPECT_EQ(r.run.exit_code, 0) << "reference run failed:\n" << r.run.output;
+    EXPECT_FALSE(r.tables.csv.empty()) << "reference run wrote no results.csv:\n" << r.run.output;
+    if (on_path("sqlite3")) {
+      EXPECT_FALSE(r.tables.sqlite.empty()) << "no dump of the reference results.sqlite";
+    }
+    return r;
+  }
+
+  // OUT's results.csv (and sqlite dump) byte-identical to the reference run's.
+  void expect_reference_tables(const std::string& out, const std::string& what) {
+    const Reference& r = ref();
+    const Tables t = read_tables(dir / out);
+    EXPECT_EQ(fingerprint(t.csv), fingerprint(r.tables.csv))
+        << what << ": results.csv differs from the uninterrupted --threads 1 run; " << first_difference(r.tables.csv, t.csv);
+    EXPECT_EQ(fingerprint(t.sqlite), fingerprint(r.tables.sqlite))
+        << what << ": results.sqlite dump differs; " << first_difference(r.tables.sqlite, t.sqlite);
+  }
+
+  // A small study in `dir` (absolute model path): `samples` Monte Carlo variants of the payload mass.
+  void write_small_study(const std::string& name, int seed = 3, int samples = 24,
+                         const std::string& model = kModel) const {
+    write_text(dir / name, "name: small\n"
+                           "seed: " + std::to_string(seed) + "\n"
+                           "model: " + model + "\n"
+                           "set:\n"
+                           "  trajectory.moves: [{target: 0.5, hold: 8.0}]\n"
+                           "  simulation.integrator: sdirk2\n"
+                           "variables:\n"
+                           "  - path: payload.mass\n"
+                           "    distribution: {type: normal, mean: 328.7, std: 40}\n"
+                           "design: {type: monte_carlo, samples: " + std::to_string(samples) + "}\n");
+  }
+};
+
+// ---- determinism -------------------------------------------------------------------------
+
+TEST_F(Farm, ThreadCountAndLaneWidthDoNotChangeResults) {
+  const int n = study_size();
+  ASSERT_GT(n, 100) << kStudy << ": no `samples:` found";
+  const Reference& r = ref();
+  ASSERT_EQ(static_cast<int>(split_lines(r.tables.csv).size()), n + 1) << r.run.output;
+  // Both outcomes occur, so every comparison covers rows with and without settling times.
+  EXPECT_NE(r.tables.csv.find(",ok,"), std::string::npos);
+  EXPECT_NE(r.tables.csv.find(",not_settled,"), std::string::npos);
+  std::printf("reference (--threads 1, %d variants): %.1f s\n", n, r.run.seconds);
+  for (const std::string args : {"--threads 1 --lanes 1", "--threads 2 --lanes 8", "--threads 2 --lanes 3"}) {
+    const std::string out = "out" + std::to_string(commands);
+    const auto res = run_study(out, args);
+    ASSERT_EQ(res.exit_code, 0) << args << ":\n" << res.output;
+    expect_reference_tables(out, args);
+    std::printf("%s: %.1f s\n", args.c_str(), res.seconds);
+  }
+}
+
+// ---- journal and resume ------------------------------------------------------------------
+
+TEST_F(Farm, ResumeAfterKill9IsByteIdentical) {
+  const int n = study_size();
+  ref();
+  const fs::path out = dir / "out";
+  const fs::path journal = out / "journal-main.csv";
+
+  // Run B, started directly (no shell in between) so the pid is flexfarm's own.
+  const std::vector<std::string> argv = {kBinary, "run", kStudy, "--out", out.string(), "--threads", "1"};
+  std::vector<char*> cargv;
+  for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
+  cargv.push_back(nullptr);
+  const std::string log = (dir / "killed.txt").string();
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0) << "fork failed";
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      ::close(fd);
+    }
+    ::execv(cargv[0], cargv.data());
+    ::_exit(127);
+  }
+
+  // Wait until a third of the variants are journalled, then kill -9 it mid-run.
+  const int wanted = n / 3;
+  const auto t0 = std::chrono::steady_clock::now();
+  bool exited = false;
+  int status = 0;
+  std::size_t seen = 0;
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) {
+      exited = true;
+      break;
+    }
+    seen = read_journal(journal).ids.size();
+    if (static_cast<int>(seen) >= wanted) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (!exited) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+  }
+  ASSERT_FALSE(exited) << "the run ended (status " << status << ") before it could be killed; journal rows seen: " << seen
+                       << "; make mc_small.yaml bigger\n"
+                       << read_text(log);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "status " << status;
+  const double killed_after = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  EXPECT_FALSE(fs::exists(out / "results.csv")) << "a killed run must not leave a result table";
+  const Journal before = read_journal(journal);
+  const int done = static_cast<int>(before.ids.size());
+  ASSERT_GE(done, wanted);
+  ASSERT_LT(done, n) << "the run had finished every variant before the kill";
+  const std::string timings_before = read_text(out / "timings-main.csv");
+
+  // Resume with other threads and lanes: only the missing variants are computed.
+  const auto r = run_study("out", "--resume --threads 2 --lanes 5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expect_reference_tables("out", "killed and resumed");
+  for (const auto& e : fs::recursive_directory_iterator(out)) {
+    EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
+  }
+
+  const Journal after = read_journal(journal);
+  EXPECT_EQ(after.complete.rfind(before.complete, 0), 0u) << "the rows journalled before the kill must be kept as they were";
+  EXPECT_EQ(static_cast<int>(after.ids.size()), n) << "journal rows after resume (before: " << done << ")";
+  const std::set<int> unique(after.ids.begin(), after.ids.end());
+  EXPECT_EQ(unique.size(), after.ids.size()) << "a variant was computed twice";
+  EXPECT_EQ(unique.size(), static_cast<std::size_t>(n));
+  if (!unique.empty()) {
+    EXPECT_EQ(*unique.begin(), 0);
+    EXPECT_EQ(*unique.rbegin(), n - 1);
+  }
+  // The resumed run's own timing rows account for exactly the missing variants (when the killed
+  // run's timings file ended on a whole line, the usual case: its rows are flushed one by one).
+  const std::string timings_after = read_text(out / "timings-main.csv");
+  ASSERT_EQ(timings_after.rfind(timings_before, 0), 0u);
+  if (timings_before.empty() || timings_before.back() == '\n') {
+    EXPECT_EQ(timed_variants(timings_after.substr(timings_before.size())), n - done)
+        << "the resumed run computed other than the " << n - done << " missing variants";
+  }
+  std::printf("killed after %.2f s with %d of %d variants journalled; resume: %.1f s\n", killed_after, done, n, r.seconds);
+}
+
+TEST_F(Farm, RunWithoutResumeRefusesAnExistingJournal) {
+  write_small_study("study.yaml");
+  auto r = flexfarm("run study.yaml --out out");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string journal = read_text(dir / "out" / "journal-main.csv");
+  const std::string results = read_text(dir / "out" / "results.csv");
+  ASSERT_FALSE(journal.empty());
+
+  r = flexfarm("run study.yaml --out out");
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("--resume"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("flexfarm: error: "), std::string::npos) << r.output;
+  EXPECT_EQ(fingerprint(dir / "out" / "journal-main.csv"), fingerprint(journal)) << "the journal was touched";
+  EXPECT_EQ(fingerprint(dir / "out" / "results.csv"), fingerprint(results)) << "the results were touched";
+}
+
+TEST_F(Farm, StudyOfAnotherModelRefusesTheJournal) {
+  fs::copy_file(kModel, dir / "model.yaml");
+  const std::string model = read_text(dir / "model.yaml");
+  write_small_study("study.yaml", 3, 24, "model.yaml");
+  const std::string study = read_text(dir / "study.yaml");
+  auto r = flexfarm("run study.yaml --out out");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string journal = read_text(dir / "out" / "journal-main.csv");
+  const std::string timings = read_text(dir / "out" / "timings-main.csv");
+  const std::string results = read_text(dir / "out" / "results.csv");
+
+  const auto refused = [&](const std::string& what) {
+    const auto res = flexfarm("run study.yaml --out out --resume");
+    EXPECT_NE(res.exit_code, 0) << what << ":\n" << res.output;
+    EXPECT_NE(res.output.find("flexfarm: error: "), std::string::npos) << what << ":\n" << res.output;
+    EXPECT_NE(res.output.find("another study"), std::string::npos) << what << ":\n" << res.output;
+    EXPECT_EQ(fingerprint(dir / "out" / "journal-main.csv"), fingerprint(journal)) << what << ": the journal was touched";
+    EXPECT_EQ(fingerprint(dir / "out" / "results.csv"), fingerprint(results)) << what << ": the results were touched";
+  };
+  write_small_study("study.yaml", 4, 24, "model.yaml");  // another seed
+  refused("study with another seed");
+  write_text(dir / "study.yaml", study);
+  write_text(dir / "model.yaml", std::regex_replace(model, std::regex("inertia: 118.6"), "inertia: 120.0"));
+  refused("study whose model changed");
+
+  // Both files as they were: the journal is accepted again, and there is nothing left to compute.
+  write_text(dir / "model.yaml", model);
+  r = flexfarm("run study.yaml --out out --resume");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(fingerprint(dir / "out" / "results.csv"), fingerprint(results));
+  EXPECT_EQ(fingerprint(dir / "out" / "journal-main.csv"), fingerprint(journal));
+  EXPECT_EQ(timed_variants(read_text(dir / "out" / "timings-main.csv")), timed_variants(timings))
+      << "a resume of a finished run computed variants again";
+}
+
+// ---- Slurm shards and MPI ranks ----------------------------------------------------------
+
+TEST_F(Farm, ShardsMergeToTheSameTable) {
+  const int n = study_size();
+  ref();
+  const fs::path out = dir / "out";
+  std::string merge_fail;
+  for (int i = 0; i < 3; ++i) {
+    if (i == 2) {
+      // Two shards of three done: merge names what is missing and writes nothing.
+      const auto m = flexfarm("merge " + quote(kStudy) + " --out out");
+      EXPECT_NE(m.exit_code, 0) << m.output;
+      const int missing = (n - 2 + 2) / 3;  // eval_id % 3 == 2
+      EXPECT_NE(m.output.find(std::to_string(missing) + " of " + std::to_string(n) + " variants"), std::string::npos)
+          << "expected '" << missing << " of " << n << " variants' in:\n" << m.output;
+      EXPECT_FALSE(fs::exists(out / "results.csv"));
+      EXPECT_FALSE(fs::exists(out / "results.sqlite"));
+    }
+    const std::string shard = std::to_string(i) + "/3";
+    const auto r = run_study("out", "--shard " + shard);
+    ASSERT_EQ(r.exit_code, 0) << shard << ":\n" << r.output;
+    EXPECT_FALSE(fs::exists(out / "results.csv")) << "shard " << shard << " wrote the result table";
+    const Journal j = read_journal(out / ("journal-shard-" + std::to_string(i) + "-of-3.csv"));
+    EXPECT_EQ(static_cast<int>(j.ids.size()), (n - i + 2) / 3) << shard;
+    for (int id : j.ids) {
+      EXPECT_EQ(id % 3, i) << "shard " << shard << " computed eval_id " << id;
+    }
+    std::printf("shard %s: %.1f s\n", shard.c_str(), r.seconds);
+  }
+  EXPECT_FALSE(fs::exists(out / "journal-main.csv"));
+  const auto m = flexfarm("merge " + quote(kStudy) + " --out out");
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  expect_reference_tables("out", "three shards merged");
+}
+
+TEST_F(Farm, BadShardsAreRejected) {
+  write_small_study("study.yaml");
+  for (const std::string shard : {"3/3", "x", "1/0", "-1/3", "1/3/3", "/3", "1/"}) {
+    const auto r = flexfarm("run study.yaml --out out --shard " + quote(shard));
+    EXPECT_NE(r.exit_code, 0) << "--shard '" << shard << "':\n" << r.output;
+    EXPECT_NE(r.output.find("--shard"), std::string::npos) << "--shard '" << shard << "':\n" << r.output;
+    EXPECT_FALSE(fs::exists(dir / "out")) << "--shard '" << shard << "' created --out";
+    fs::remove_all(dir / "out");
+  }
+}
+
+// An empty --shard (e.g. `--shard "$TASK"` with TASK unset in a Slurm script) is a bad shard too: taken
+// as "no --shard", every array task would run the whole study into the same journal.
+TEST_F(Farm, EmptyShardIsRejected) {
+  write_small_study("study.yaml");
+  const auto r = flexfarm("run study.yaml --out out --shard ''");
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("--shard"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out")) << "--shard '' created --out";
+}
+
+TEST_F(Farm, MpiTwoRanksMatchOneProcess) {
+  if (!on_path("mpirun"))
+    GTEST_SKIP() << "mpirun is not on PATH: install OpenMPI (Debian openmpi-bin, as scripts/bootstrap does; CI has it)";
+  ref();
+  // As root in a container: OpenMPI refuses root unless told twice (--allow-run-as-root and the two
+  // OMPI_ALLOW_RUN_AS_ROOT* variables; harmless for other users). --oversubscribe: two ranks even on
+  // a one-core runner (OpenMPI counts cores as slots and refuses -np above them). --mca btl
+  // self,vader: shared memory only, no probing of the container's network interfaces; the vader
+  // single-copy mechanism (CMA, process_vm_readv) needs ptrace rights containers often lack, so it
+  // is turned off. `timeout`: a rank stuck in a barrier must not hang the test suite.
+  const std::string mpirun =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout 300 mpirun -np 2 --oversubscribe "
+      "--allow-run-as-root --mca btl self,vader --mca btl_vader_single_copy_mechanism none ";
+  const auto r = shell(dir, mpirun + quote(kBinary) + " run " + quote(kStudy) + " --out out --threads 1", dir / "mpirun.txt");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const int n = study_size();
+  for (int rank = 0; rank < 2; ++rank) {
+    const fs::path p = dir / "out" / ("journal-rank-" + std::to_string(rank) + "-of-2.csv");
+    ASSERT_TRUE(fs::exists(p)) << p << " missing (is flexfarm built with MPI: FLEXFARM_MPI=ON, libopenmpi-dev found?)\n"
+                               << r.output;
+    const Journal j = read_journal(p);
+    EXPECT_EQ(static_cast<int>(j.ids.size()), (n - rank + 1) / 2) << p;
+    for (int id : j.ids) {
+      EXPECT_EQ(id % 2, rank) << "rank " << rank << " computed eval_id " << id;
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "out" / "journal-main.csv")) << "a rank ran the whole study as a single process";
+  expect_reference_tables("out", "mpirun -np 2");
+  std::printf("mpirun -np 2: %.1f s\n", r.seconds);
+}
+
+// ---- failing variants --------------------------------------------------------------------
+
+// Runs a three-run study whose middle run diverges (PD gain 1e12 with one explicit RK4 step per
+// control period) and returns results.csv as rows of cells (header first).
+class FarmDiverging : public Farm {
+ protected:
+  Result result;
+  std::vector<std::vector<std::string>> rows;
+  std::map<std::string, std::size_t> column;
+
+  void SetUp() override {
+    Farm::SetUp();
+    write_text(dir / "study.yaml", "name: diverging\n"
+                                   "model: " + kModel + "\n"
+                                   "set:\n"
+                                   "  trajectory.moves: [{target: 0.5, hold: 8.0}]\n"
+                                   "runs:\n"
+                                   "  - label: stable\n"
+                                   "  - label: diverging\n"
+                                   "    set:\n"
+                                   "      controller.kp: 1.0e12\n"
+                                   "      simulation.integrator: rk4\n"
+                                   "      simulation.substeps: 1\n"
+                                   "  - label: stable after\n"
+                                   "    set:\n"
+                                   "      controller.kd: 3.5e4\n");
+    result = flexfarm("run study.yaml --out out");
+    for (const auto& l : split_lines(read_text(dir / "out" / "results.csv"))) rows.push_back(split_csv(l));
+    if (!rows.empty())
+      for (std::size_t c = 0; c < rows[0].size(); ++c) column[rows[0][c]] = c;
+  }
+  std::string cell(std::size_t row, const std::string& name) const {
+    const auto it = column.find(name);
+    if (it == column.end() || row >= rows.size() || it->second >= rows[row].size()) return "<no such cell>";
+    return rows[row][it->second];
+  }
+};
+
+TEST_F(FarmDiverging, DivergingVariantIsRecordedAndExitCodeSaysSo) {
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  EXPECT_NE(result.output.find("flexfarm: error: 1 variant(s) failed"), std::string::npos) << result.output;
+  ASSERT_EQ(rows.size(), 4u) << "every run has its row, the one after the diverging one too:\n" << result.output;
+  EXPECT_EQ(cell(2, "label"), "diverging");
+  EXPECT_EQ(cell(2, "status"), "nonfinite");
+  for (std::size_t row : {1u, 3u}) {
+    const std::string st = cell(row, "status");
+    EXPECT_TRUE(st == "ok" || st == "not_settled") << "row " << row << " (" << cell(row, "label") << "): " << st;
+  }
+  EXPECT_EQ(static_cast<int>(read_journal(dir / "out" / "journal-main.csv").ids.size()), 3);
+  EXPECT_TRUE(fs::exists(dir / "out" / "results.sqlite"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "table.md"));
+}
+
+// A run whose state became NaN never settled: its settling cells must be empty ("not settled"),
+// not 0 s, which reads as the best possible result and enters every statistic of the column.
+TEST_F(FarmDiverging, DivergedVariantHasNoSettlingTime) {
+  ASSERT_EQ(rows.size(), 4u) << result.output;
+  ASSERT_EQ(cell(2, "status"), "nonfinite");
+  for (const std::string name : {"m1_tip_settling_s", "m1_hub_settling_s"})
+    EXPECT_EQ(cell(2, name), "") << name << " of the diverged run; its row: " << split_lines(read_text(dir / "out" / "results.csv"))[2];
+}
+
+// ---- rejected studies: exit 2, one line naming the file, line and key, nothing written -----
+
+TEST_F(Farm, BadStudyWritesNothing) {
+  const std::string head = "model: " + kModel + "\n";
+  const struct {
+    const char* file;
+    std::string text;
+    const char* prefix;  // of the one output line, after "flexfarm: error: "
+    const char* words;   // also in it
+  } cases[] = {
+      {"unknown_key.yaml",
+       head + "colour: red\nvariables:\n  - path: payload.mass\n    distribution: {type: normal, mean: 300, std: 4}\n"
+              "design: {type: monte_carlo, samples: 4}\n",
+       "unknown_key.yaml:2: colour: ", "unknown key"},
+      {"negative_std.yaml",
+       head + "variables:\n  - path: payload.mass\n    distribution: {type: normal, mean: 328.7, std: -1}\n"
+              "design: {type: monte_carlo, samples: 4}\n",
+       "negative_std.yaml:4: variables[0].distribution", "std"},
+      {"grid_without_levels.yaml",
+       head + "variables:\n  - path: payload.mass\n    nominal: 300\ndesign: {type: grid}\n",
+       "grid_without_levels.yaml:3: variables[0].levels: ", "levels"},
+      {"no_samples.yaml",
+       head + "variables:\n  - path: payload.mass\n    distribution: {type: normal, mean: 328.7, std: 40}\n"
+              "design: {type: monte_carlo, samples: 0}\n",
+       "no_samples.yaml:5: design: ", "samples"},
+      {"negative_mass_drawn.yaml",
+       head + "variables:\n  - path: payload.mass\n    distribution: {type: uniform, lower: -10, upper: -1}\n"
+              "design: {type: monte_carlo, samples: 4}\n",
+       "negative_mass_drawn.yaml:3: variables[0] (payload.mass): ", ">= 0"},
+  };
+  for (const auto& c : cases) {
+    write_text(dir / c.file, c.text);
+    const auto r = flexfarm(std::string("run ") + c.file + " --out out");
+    EXPECT_EQ(r.exit_code, 2) << c.file << ":\n" << r.output;
+    const auto lines = r.lines();
+    ASSERT_EQ(lines.size(), 1u) << c.file << ":\n" << r.output;
+    EXPECT_EQ(lines[0].rfind(std::string("flexfarm: error: ") + c.prefix, 0), 0u) << c.file << ":\n" << r.output;
+    EXPECT_NE(lines[0].find(c.words), std::string::npos) << c.file << ":\n" << r.output;
+    EXPECT_FALSE(fs::exists(dir / "out")) << c.file << " created --out";
+  }
+}
+
+// A distribution error names the offending key (here `std`), as every other study error does.
+TEST_F(Farm, BadDistributionNamesTheOffendingKey) {
+  write_text(dir / "study.yaml", "model: " + kModel +
+                                     "\nvariables:\n  - path: payload.mass\n    distribution: {type: normal, mean: 328.7, std: -1}\n"
+                                     "design: {type: monte_carlo, samples: 4}\n");
+  const auto r = flexfarm("run study.yaml --out out");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.output.rfind("flexfarm: error: study.yaml:4: variables[0].distribution.std: ", 0), 0u) << r.output;
+}
+
+}  // namespace
