@@ -26,9 +26,9 @@ ff::BatchModel rig_batch(int nseg, int W, ff::Integrator integ, int substeps) {
   return ff::make_batch(models);
 }
 
-// args: segments, lanes, substeps (0 = automatic)
-void BM_Rk4ClosedLoop(benchmark::State& state) {
-  const auto bm = rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), ff::Integrator::kRk4,
+// One fixed-step benchmark; args: segments, lanes, substeps (0 = automatic).
+void fixed_step(benchmark::State& state, ff::Integrator integrator) {
+  const auto bm = rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator,
                             static_cast<int>(state.range(2)));
   const double samples = bm.duration / bm.control_period;
   for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
@@ -36,26 +36,35 @@ void BM_Rk4ClosedLoop(benchmark::State& state) {
   state.counters["variant_samples/s"] = benchmark::Counter(samples * bm.W, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["x_realtime/core"] = benchmark::Counter(bm.duration * bm.W, benchmark::Counter::kIsIterationInvariantRate);
 }
+
+void BM_Rk4ClosedLoop(benchmark::State& state) { fixed_step(state, ff::Integrator::kRk4); }
 BENCHMARK(BM_Rk4ClosedLoop)
     ->ArgNames({"N", "W", "sub"})
     ->Args({6, 1, 1})->Args({6, 4, 1})->Args({6, 8, 1})->Args({6, 16, 1})
     ->Args({24, 8, 0})
     ->Unit(benchmark::kMillisecond);
 
-// args: segments, lanes; SDIRK2 at its automatic step (one step per 1 ms sample for these N)
-void BM_Sdirk2ClosedLoop(benchmark::State& state) {
-  const auto bm = rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), ff::Integrator::kSdirk2, 0);
-  const double samples = bm.duration / bm.control_period;
-  for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
-  state.counters["substeps"] = bm.substeps;
-  state.counters["variant_samples/s"] = benchmark::Counter(samples * bm.W, benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["x_realtime/core"] = benchmark::Counter(bm.duration * bm.W, benchmark::Counter::kIsIterationInvariantRate);
-}
+// SDIRK2 at its automatic step: one step per 1 ms sample for all these N.
+void BM_Sdirk2ClosedLoop(benchmark::State& state) { fixed_step(state, ff::Integrator::kSdirk2); }
 BENCHMARK(BM_Sdirk2ClosedLoop)
-    ->ArgNames({"N", "W"})
-    ->Args({6, 1})->Args({6, 4})->Args({6, 8})->Args({6, 16})
-    ->Args({24, 8})->Args({48, 1})->Args({48, 8})->Args({96, 8})
+    ->ArgNames({"N", "W", "sub"})
+    ->Args({6, 1, 0})->Args({6, 4, 0})->Args({6, 8, 0})->Args({6, 16, 0})
+    ->Args({24, 8, 0})->Args({48, 1, 0})->Args({48, 8, 0})->Args({96, 8, 0})
     ->Unit(benchmark::kMillisecond);
+
+// Thread scaling: 8 batches of W = 8 lanes (N = 6, SDIRK2) on T OpenMP threads, one batch per task.
+void BM_Sdirk2Threads(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  const auto bm = rig_batch(6, 8, ff::Integrator::kSdirk2, 0);
+  const int batches = 8;
+  for (auto _ : state) {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int b = 0; b < batches; ++b) benchmark::DoNotOptimize(ff::simulate(bm));
+  }
+  const double samples = bm.duration / bm.control_period * bm.W * batches;
+  state.counters["variant_samples/s"] = benchmark::Counter(samples, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Sdirk2Threads)->ArgNames({"threads"})->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_CvodeClosedLoop(benchmark::State& state) {
   const auto integ = state.range(1) == 0 ? ff::Integrator::kCvodeDense : ff::Integrator::kCvodeKlu;

@@ -33,10 +33,10 @@ namespace {
 // ==================== flexfarm configuration under test: edit HERE ====================
 // Point the benchmark at another integrator, substep count or lane width.
 struct FlexfarmConfig {
-  const char* label = "flexfarm RK4";          // row name in the tables
-  ff::Integrator integrator = ff::Integrator::kRk4;
-  int substeps = 0;                            // per 1 ms control period; 0 = automatic
-  int lanes = 8;                               // W: variants advanced in lock-step per batch
+  const char* label = "flexfarm SDIRK2";       // row name in the tables
+  ff::Integrator integrator = ff::Integrator::kSdirk2;  // the batch kernel's integrator for any N
+  int substeps = 0;                            // per 1 ms control period; 0 = automatic (1 here)
+  int lanes = 8;                               // W: variants advanced in lock-step per batch (M = 16: two batches)
 };
 FlexfarmConfig flexfarm_config() { return FlexfarmConfig{}; }
 // =======================================================================================
