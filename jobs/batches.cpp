@@ -15,11 +15,11 @@ Shape shape_of(const Model& m) {
 }
 }  // namespace
 
-std::vector<Batch> make_batches(const std::vector<Model>& models, const std::vector<int>& todo, int lanes) {
+std::vector<Batch> make_batches(const std::vector<Model>& models, const std::vector<int>& pending, int lanes) {
   if (lanes < 1) throw std::invalid_argument("make_batches: lanes must be >= 1");
   std::vector<Batch> out;
   std::map<Shape, std::size_t> open;  // shape -> its batch still filling
-  for (int i : todo) {
+  for (int i : pending) {
     const Shape s = shape_of(models[i]);
     auto it = open.find(s);
     if (it == open.end() || static_cast<int>(out[it->second].variants.size()) == lanes) {

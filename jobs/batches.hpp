@@ -12,9 +12,9 @@ struct Batch {
   std::vector<int> variants;   // indices into the study's variants, ascending
 };
 
-// Groups `todo` (ascending variant indices) into batches of at most `lanes` variants of one shape.
+// Groups `pending` (ascending variant indices) into batches of at most `lanes` variants of one shape.
 // Batches of one shape follow the order of that shape's first variant; the result does not
 // depend on threads or ranks.
-std::vector<Batch> make_batches(const std::vector<Model>& models, const std::vector<int>& todo, int lanes);
+std::vector<Batch> make_batches(const std::vector<Model>& models, const std::vector<int>& pending, int lanes);
 
 }  // namespace ff

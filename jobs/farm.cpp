@@ -20,13 +20,13 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   // This share, less what the journals already hold.
   const auto done = opt.resume ? read_journals(opt.out, study.hash, header) : std::map<int, std::string>{};
   FarmStatus st;
-  std::vector<int> todo;
+  std::vector<int> pending;
   for (std::size_t i = 0; i < study.variants.size(); ++i) {
     const int id = study.variants[i].eval_id;
     if (id % opt.part.count != opt.part.index) continue;
     ++st.total;
     if (done.count(id)) ++st.already;
-    else todo.push_back(static_cast<int>(i));
+    else pending.push_back(static_cast<int>(i));
   }
 
   JournalWriter journal(opt.out, opt.tag, study.hash, header);
@@ -40,7 +40,7 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   int finished = st.already;
   if (opt.progress) opt.progress(finished, st.total, 0.0);
   try {
-    evaluate_variants(study, todo, opt.eval, [&](BatchResult&& res) {
+    evaluate_variants(study, pending, opt.eval, [&](BatchResult&& res) {
       // Traces first, then the rows: a journalled row always has its trace on disk.
       for (std::size_t k = 0; k < res.traces.size(); ++k) {
         char name[48];

@@ -34,9 +34,9 @@ ResultRow make_result_row(const Study& study, int i, const Trace& trace, LaneSta
   return row;
 }
 
-void evaluate_variants(const Study& study, const std::vector<int>& todo, const EvalOptions& opt,
+void evaluate_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
                        const std::function<void(BatchResult&&)>& done) {
-  const std::vector<Batch> batches = make_batches(study.models, todo, opt.lanes);
+  const std::vector<Batch> batches = make_batches(study.models, pending, opt.lanes);
   const int nb = static_cast<int>(batches.size());
   const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
   // Nothing may leave the parallel region by exception: the first error is kept and rethrown.
@@ -66,14 +66,14 @@ void evaluate_variants(const Study& study, const std::vector<int>& todo, const E
 
 StudyRun run_study(const Study& study, const EvalOptions& opt, const std::function<void(int, int)>& progress) {
   const int n = static_cast<int>(study.variants.size());
-  std::vector<int> todo(n);
-  for (int i = 0; i < n; ++i) todo[i] = i;
+  std::vector<int> pending(n);
+  for (int i = 0; i < n; ++i) pending[i] = i;
   StudyRun out;
   out.table = make_result_table(study);
   out.table.rows.resize(n);
   if (opt.keep_traces) out.traces.resize(n);
   int finished = 0;
-  evaluate_variants(study, todo, opt, [&](BatchResult&& res) {
+  evaluate_variants(study, pending, opt, [&](BatchResult&& res) {
     for (std::size_t k = 0; k < res.rows.size(); ++k) {
       const int id = res.rows[k].eval_id;
       if (opt.keep_traces) out.traces[id] = std::move(res.traces[k]);

@@ -29,9 +29,9 @@ struct BatchResult {
 // The result row of one simulated variant.
 ResultRow make_result_row(const Study& study, int variant, const Trace& trace, LaneStatus status);
 
-// Simulates the variants `todo` (indices into study.variants) in batches on the threads. `done`
+// Simulates the variants `pending` (indices into study.variants) in batches on the threads. `done`
 // is called once per batch, from one thread at a time, in completion order.
-void evaluate_variants(const Study& study, const std::vector<int>& todo, const EvalOptions& opt,
+void evaluate_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
                        const std::function<void(BatchResult&&)>& done);
 
 // The empty result table of a study: its parameter and metric columns.

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/results/test_rng.hpp"
+
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -13,17 +15,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Test design sampler: a plain SplitMix64 stream (Vigna's splitmix64.c), uniforms in [0, 1) from its top 53 bits.
-struct DesignRng {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-};
+// Test design sampler: uniforms from a SplitMix64 stream independent of the code under test.
+using DesignRng = ff::test::TestRng;
 
 // Ishigami & Homma (1990) with a = 7, b = 0.1, on the unit cube: x_i = -pi + 2 pi u_i.
 constexpr double kA = 7.0, kB = 0.1;
