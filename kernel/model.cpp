@@ -143,6 +143,32 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     m.omega_z[0] = res[0];
     m.omega_z[1] = res[1];
   }
+  // Input shaper: designed on the first closed-loop mode unless told otherwise.
+  const std::pair<const char*, ShaperKind> kinds[] = {
+      {"none", ShaperKind::kNone}, {"zv", ShaperKind::kZv}, {"zvd", ShaperKind::kZvd}, {"ei", ShaperKind::kEi}};
+  ShaperKind kind = ShaperKind::kNone;
+  bool known = false;
+  for (const auto& [name, k] : kinds)
+    if (spec.shaper.type == name) {
+      kind = k;
+      known = true;
+    }
+  if (!known) throw ConfigError(source, 0, "shaper.type", "unknown shaper '" + spec.shaper.type + "' (none, zv, zvd, ei)");
+  double w = spec.shaper.frequency, z = spec.shaper.damping;
+  if (kind != ShaperKind::kNone && (w == 0.0 || z < 0.0)) {
+    const Mode* first = nullptr;
+    for (const auto& md : closed_loop)
+      if (md.oscillatory && md.zeta < 0.3 && !first) first = &md;
+    if (!first) throw ConfigError(source, 0, "shaper.frequency", "the closed loop has no resonance to design on; give frequency and damping");
+    if (w == 0.0) w = first->omega_n;
+    if (z < 0.0) z = first->zeta;
+  }
+  try {
+    m.shaper = make_shaper(kind, w, z, spec.shaper.vtol);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(source, 0, "shaper", e.what());
+  }
+
   if (spec.notch.enabled) {
     try {
       make_notch_sections(make_notch_design(m), m.control_period);

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "kernel/shaper.hpp"
+
 namespace ff {
 
 // Beam geometry and material (reference-rig.md, "Beam").
@@ -43,6 +45,14 @@ struct NotchSpec {
   double omega_z[2] = {0.0, 0.0}; // rad/s; 0 = place at the computed closed-loop resonances
 };
 
+// Input shaper on the reference (kernel/shaper.hpp), off by default.
+struct ShaperSpec {
+  std::string type = "none";      // none, zv, zvd, ei
+  double frequency = 0.0;         // design frequency, rad/s; 0 = the first closed-loop resonance
+  double damping = -1.0;          // design damping ratio; < 0 = that resonance's damping
+  double vtol = 0.05;             // EI: residual vibration allowed at the design frequency
+};
+
 // One move of the cubic trajectory r = r0 + (r1 - r0)(3u^2 - 2u^3), u = t/T_m, then a hold.
 struct MoveSpec {
   double target = 0.0;            // rad
@@ -76,6 +86,7 @@ struct ModelSpec {
   double payload_inertia = 118.6; // kg·m^2 about its own centre of mass
   ControllerSpec controller;
   NotchSpec notch;
+  ShaperSpec shaper;
   TrajectorySpec trajectory;
   SimulationSpec simulation;
 };
@@ -105,6 +116,7 @@ struct Model {
   double omega_z[2] = {0.0, 0.0};        // notch zeros in use, rad/s (placed when enabled)
   int substeps = 1;                      // fixed-step substeps per control period
   std::vector<double> resonances;        // closed-loop resonances (oscillatory, zeta < 0.3), ascending, rad/s
+  std::vector<Impulse> shaper;           // input-shaper impulses; one of amplitude 1 at 0 when off
 };
 
 // Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.

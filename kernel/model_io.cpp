@@ -72,6 +72,13 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   notch.optional_array("omega_z", s.notch.omega_z, 2);
   notch.finish();
 
+  auto shaper = top.child("shaper");
+  shaper.optional("type", s.shaper.type);
+  shaper.optional("frequency", s.shaper.frequency);
+  shaper.optional("damping", s.shaper.damping);
+  shaper.optional("vtol", s.shaper.vtol);
+  shaper.finish();
+
   auto traj = top.child("trajectory");
   traj.optional("move_time", s.trajectory.move_time);
   for (auto& mv : traj.sequence("moves")) {

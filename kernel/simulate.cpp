@@ -70,7 +70,7 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
     s.t = k * T;
     s.sample = k;
     // Controller sample: reference, filter, PID; then record the signals of this instant.
-    for (int l = 0; l < W; ++l) ref[l] = calc_reference(bm.models[l].spec.trajectory, s.t);
+    for (int l = 0; l < W; ++l) ref[l] = calc_shaped_reference(bm.models[l].spec.trajectory, bm.models[l].shaper, s.t);
     if (k == 0) reset_controller(bm, s, ref.data());
     compute_control(bm, s, ref.data(), ref_f.data());
     record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), ws, run.traces);

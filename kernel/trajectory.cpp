@@ -19,6 +19,13 @@ double calc_reference(const TrajectorySpec& traj, double t) {
   return r;
 }
 
+double calc_shaped_reference(const TrajectorySpec& traj, const std::vector<Impulse>& shaper, double t) {
+  if (shaper.size() <= 1) return calc_reference(traj, t);
+  double r = 0.0;
+  for (const auto& p : shaper) r += p.amplitude * calc_reference(traj, t - p.time);
+  return r;
+}
+
 std::vector<Move> calc_moves(const TrajectorySpec& traj, double duration) {
   std::vector<Move> out;
   double r = 0.0, t0 = 0.0;

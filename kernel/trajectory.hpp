@@ -7,11 +7,15 @@
 
 #include "kernel/metrics.hpp"
 #include "kernel/model.hpp"
+#include "kernel/shaper.hpp"
 
 namespace ff {
 
-// r(t), rad.
+// r(t), rad (0 before t = 0).
 double calc_reference(const TrajectorySpec& traj, double t);
+
+// The shaped reference sum_i A_i r(t - t_i) (kernel/shaper.hpp), rad.
+double calc_shaped_reference(const TrajectorySpec& traj, const std::vector<Impulse>& shaper, double t);
 
 // One commanded move: when it starts, and the window in which its response is judged.
 struct Move {
