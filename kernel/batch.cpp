@@ -66,6 +66,7 @@ BatchModel make_batch(std::span<const Model> models) {
     bm.kd.push_back(c.kd);
     bm.torque_limit.push_back(c.torque_limit > 0 ? c.torque_limit : std::numeric_limits<double>::infinity());
     bm.load_comp.push_back(c.load_compensation);
+    bm.ff_gain.push_back(c.feedforward);
   }
 
   bm.notch_coef.assign(static_cast<std::size_t>(5) * bm.nsections * W, 0.0);

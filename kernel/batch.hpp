@@ -33,6 +33,7 @@ struct BatchModel {
   std::vector<double> kp, ki, kd;   // (W) PID gains
   std::vector<double> torque_limit; // (W), N·m, +inf when unlimited
   std::vector<double> load_comp;    // (W) root-moment feed-forward gain
+  std::vector<double> ff_gain;      // (W) gain of the model-based feed-forward
   std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
 };
 

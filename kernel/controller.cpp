@@ -13,7 +13,8 @@ void reset_controller(const BatchModel& bm, BatchState& s, const double* r0) {
   }
 }
 
-void compute_control(const BatchModel& bm, BatchState& s, const double* ref, double* ref_filtered) {
+void compute_control(const BatchModel& bm, BatchState& s, const double* ref, const double* ref_ff,
+                     double* ref_filtered) {
   const int W = bm.W;
   // Robust notch filter on the reference (seed eq. 6), or the reference itself.
   if (bm.nsections > 0)
@@ -30,7 +31,8 @@ void compute_control(const BatchModel& bm, BatchState& s, const double* ref, dou
   for (int l = 0; l < W; ++l) {
     const double e = ref_filtered[l] - q[l];
     const double root_moment = k1[l] * q[W + l] + c1[l] * v[W + l];  // torque of the beam on the hub, N·m
-    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * v[l] - bm.load_comp[l] * root_moment;
+    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * v[l] - bm.load_comp[l] * root_moment +
+                       bm.ff_gain[l] * ref_ff[l];
     const double lim = bm.torque_limit[l];
     const double tau = std::clamp(raw, -lim, lim);
     const bool winding = (raw != tau) && (e * raw > 0.0);

@@ -10,11 +10,15 @@ namespace ff {
 // Puts every lane's notch filter at rest at input r0 (before the first sample).
 void reset_controller(const BatchModel& bm, BatchState& s, const double* r0);
 
-// One controller sample for all lanes at s.t. ref (W): commanded hub angle; writes
-// ref_filtered (W) and the held torque s.tau (W):
-//   e = F(r) - theta_h,  tau = sat(kp e + ki integral - kd omega_h - g (k_1 q_1 + c_1 qd_1)).
+// One controller sample for all lanes at s.t. ref (W): commanded hub angle; ref_ff (W): the
+// model-based feed-forward torque at unit gain, J_rigid r'' + kd r' (N·m): the rigid arm's inverse
+// dynamics plus what the derivative on the measured rate takes away when the arm tracks exactly.
+// Writes ref_filtered (W) and the held torque s.tau (W):
+//   e = F(r) - theta_h,
+//   tau = sat(kp e + ki integral - kd omega_h - g (k_1 q_1 + c_1 qd_1) + f ref_ff).
 // The integral is advanced by forward Euler and frozen while the torque saturates in the
 // direction of the error (clamping anti-windup).
-void compute_control(const BatchModel& bm, BatchState& s, const double* ref, double* ref_filtered);
+void compute_control(const BatchModel& bm, BatchState& s, const double* ref, const double* ref_ff,
+                     double* ref_filtered);
 
 }  // namespace ff

@@ -47,6 +47,8 @@ void validate(const ModelSpec& s, const std::string& src) {
   non_negative(s.controller.torque_limit, "controller.torque_limit");
   if (!std::isfinite(s.controller.load_compensation))
     throw ConfigError(src, 0, "controller.load_compensation", "must be a finite number");
+  if (!std::isfinite(s.controller.feedforward))
+    throw ConfigError(src, 0, "controller.feedforward", "must be a finite number");
   if (s.notch.order < 1 || s.notch.order > 8)
     throw ConfigError(src, 0, "notch.order", "must be between 1 and 8, got " + std::to_string(s.notch.order));
   for (int i = 0; i < 2; ++i) {
@@ -125,6 +127,7 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     throw ConfigError(source, 0, "simulation.duration", "needs more than 1e8 controller samples");
 
   // Fixed-step substeps from the fastest linearised eigenvalue; notch zeros at the closed-loop resonances.
+  m.rigid_inertia = calc_mass_matrix(m, Eigen::VectorXd::Zero(n))(0, 0);
   const auto closed_loop = calc_closed_loop_modes(m);
   m.resonances = calc_resonances(closed_loop);
   if (spec.simulation.substeps > 0) {

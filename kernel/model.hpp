@@ -34,6 +34,7 @@ struct ControllerSpec {
   double kd = 3.0e4;              // N·m·s/rad, acts on the measured hub rate
   double torque_limit = 0.0;      // |tau| bound, N·m; 0 = unlimited
   double load_compensation = 0.0; // gain on the measured root bending moment fed forward (seed, "load compensation")
+  double feedforward = 0.0;       // gain f on the model-based feed-forward f (J_rigid r'' + kd r') (1 = full)
 };
 
 // Robust notch filter of seed eq. 6 acting on the reference.
@@ -117,6 +118,7 @@ struct Model {
   int substeps = 1;                      // fixed-step substeps per control period
   std::vector<double> resonances;        // closed-loop resonances (oscillatory, zeta < 0.3), ascending, rad/s
   std::vector<Impulse> shaper;           // input-shaper impulses; one of amplitude 1 at 0 when off
+  double rigid_inertia = 0.0;            // the straight arm's inertia about the hub axis, M_00(q = 0), kg·m^2
 };
 
 // Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.

@@ -62,6 +62,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   ctrl.optional("kd", s.controller.kd);
   ctrl.optional("torque_limit", s.controller.torque_limit);
   ctrl.optional("load_compensation", s.controller.load_compensation);
+  ctrl.optional("feedforward", s.controller.feedforward);
   ctrl.finish();
 
   auto notch = top.child("notch");

@@ -64,15 +64,23 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
                     &tr.tip_angle})
       x->reserve(nsamples);
 
-  std::vector<double> ref(W), ref_f(W), defl(W), tip_angle(W);
+  std::vector<double> ref(W), ref_ff(W), ref_f(W), defl(W), tip_angle(W);
   const double h = T / bm.substeps;
   for (long k = 0; k < nsamples; ++k) {
     s.t = k * T;
     s.sample = k;
     // Controller sample: reference, filter, PID; then record the signals of this instant.
-    for (int l = 0; l < W; ++l) ref[l] = calc_shaped_reference(bm.models[l].spec.trajectory, bm.models[l].shaper, s.t);
+    for (int l = 0; l < W; ++l) {
+      ref[l] = calc_shaped_reference(bm.models[l].spec.trajectory, bm.models[l].shaper, s.t);
+      // Feed-forward torque per unit gain: J_rigid r'' + kd r' (what the PD takes away from exact tracking).
+      const auto& mdl = bm.models[l];
+      ref_ff[l] = bm.ff_gain[l] != 0.0
+                      ? mdl.rigid_inertia * calc_shaped_reference_accel(mdl.spec.trajectory, mdl.shaper, s.t) +
+                            bm.kd[l] * calc_shaped_reference_rate(mdl.spec.trajectory, mdl.shaper, s.t)
+                      : 0.0;
+    }
     if (k == 0) reset_controller(bm, s, ref.data());
-    compute_control(bm, s, ref.data(), ref_f.data());
+    compute_control(bm, s, ref.data(), ref_ff.data(), ref_f.data());
     record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), ws, run.traces);
     if (observe) observe(s);
     if (k + 1 == nsamples) break;

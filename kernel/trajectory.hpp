@@ -17,6 +17,13 @@ double calc_reference(const TrajectorySpec& traj, double t);
 // The shaped reference sum_i A_i r(t - t_i) (kernel/shaper.hpp), rad.
 double calc_shaped_reference(const TrajectorySpec& traj, const std::vector<Impulse>& shaper, double t);
 
+// First and second derivatives of r(t): (6u - 6u^2) (r1 - r0) / T_m, rad/s, and (6 - 12u) (r1 - r0) / T_m^2,
+// rad/s^2, during a move; and of the shaped reference.
+double calc_reference_rate(const TrajectorySpec& traj, double t);
+double calc_reference_accel(const TrajectorySpec& traj, double t);
+double calc_shaped_reference_rate(const TrajectorySpec& traj, const std::vector<Impulse>& shaper, double t);
+double calc_shaped_reference_accel(const TrajectorySpec& traj, const std::vector<Impulse>& shaper, double t);
+
 // One commanded move: when it starts, and the window in which its response is judged.
 struct Move {
   double t_start;     // move begins, s

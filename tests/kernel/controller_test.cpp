@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "tests/kernel/test_support.hpp"
 
 namespace ff {
@@ -17,9 +20,9 @@ struct Loop {
     const double r0 = 0.0;
     reset_controller(bm, s, &r0);
   }
-  double sample(double r) {
+  double sample(double r, double r_accel = 0.0) {
     double rf = 0.0;
-    compute_control(bm, s, &r, &rf);
+    compute_control(bm, s, &r, &r_accel, &rf);
     return s.tau[0];
   }
 };
@@ -71,16 +74,45 @@ TEST(Controller, LoadCompensationOpposesRootBendingMoment) {
   EXPECT_DOUBLE_EQ(loop.sample(0.0), -0.5 * 39.5e3 * 0.01);
 }
 
+TEST(Controller, FeedForwardTorqueEntersWithItsGain) {
+  ModelSpec s = test::rig_spec();
+  s.controller.feedforward = 1.0;
+  Loop loop(s);
+  // tau = kp (r - theta) + f * (feed-forward torque at unit gain).
+  EXPECT_NEAR(loop.sample(0.0, 1234.0), 1234.0, 1e-9);
+  EXPECT_GT(loop.m.rigid_inertia, 6000.0);  // hub 50 + beam ~1085 + payload ~5822 kg m^2
+}
+
+TEST(Controller, FeedForwardMakesANearlyRigidArmTrackItsMove) {
+  // The feed-forward is the rigid arm's inverse dynamics plus kd r': on a (nearly) rigid arm the PD has
+  // almost nothing left to correct, while PD alone lags by kd r'/kp + J r''/kp, ~0.08 rad here.
+  ModelSpec spec = test::rig_spec(0.5, 1.0);
+  spec.joints.stiffness *= 1000.0;
+  spec.simulation.integrator = Integrator::kSdirk2;
+  auto worst_error = [&](double gain) {
+    spec.controller.feedforward = gain;
+    const auto tr = test::run_one(make_model(spec)).traces[0];
+    double worst = 0.0;
+    for (std::size_t k = 0; k < tr.t.size() && tr.t[k] <= 3.0; ++k)
+      worst = std::max(worst, std::fabs(tr.ref[k] - tr.hub_angle[k]));
+    return worst;
+  };
+  const double pd = worst_error(0.0), ff = worst_error(1.0);
+  EXPECT_GT(pd, 0.07);
+  EXPECT_LT(ff, 0.05 * pd);
+}
+
 TEST(Controller, NotchHoldsAConstantReferenceExactly) {
   ModelSpec s = test::rig_spec();
   s.notch.enabled = true;
   Loop loop(s);
   double rf = 0.0, r = 0.0;
-  for (int k = 0; k < 5000; ++k) compute_control(loop.bm, loop.s, &r, &rf);
+  const double acc = 0.0;
+  for (int k = 0; k < 5000; ++k) compute_control(loop.bm, loop.s, &r, &acc, &rf);
   EXPECT_EQ(rf, 0.0);
   // A step in the reference is smoothed: the first filtered sample is a small fraction of it.
   r = 1.0;
-  compute_control(loop.bm, loop.s, &r, &rf);
+  compute_control(loop.bm, loop.s, &r, &acc, &rf);
   EXPECT_GT(rf, 0.0);
   EXPECT_LT(rf, 0.01);
 }

@@ -31,6 +31,20 @@ TEST(Trajectory, CubicStartsAndEndsAtRest) {
   EXPECT_NEAR((calc_reference(t, 1.5 + h) - calc_reference(t, 1.5 - h)) / (2 * h), 1.5 * 0.5 / 3.0, 1e-8);
 }
 
+TEST(Trajectory, AccelerationIsTheSecondDerivative) {
+  const auto t = seed_moves();
+  const double h = 1e-4;
+  for (double x : {0.3, 1.5, 2.9, 5.0, 10.5, 12.2}) {
+    const double fd = (calc_reference(t, x + h) - 2 * calc_reference(t, x) + calc_reference(t, x - h)) / (h * h);
+    EXPECT_NEAR(calc_reference_accel(t, x), fd, 1e-5) << "t = " << x;
+  }
+  EXPECT_DOUBLE_EQ(calc_reference_accel(t, 0.0), 6.0 * 0.5 / 9.0);  // (6 - 12u) A / T^2 at u = 0
+  for (double x : {0.3, 1.5, 2.9, 10.5}) {
+    const double fd = (calc_reference(t, x + h) - calc_reference(t, x - h)) / (2 * h);
+    EXPECT_NEAR(calc_reference_rate(t, x), fd, 1e-8) << "t = " << x;
+  }
+}
+
 TEST(Trajectory, MovesChainWithHolds) {
   const auto t = seed_moves();
   EXPECT_DOUBLE_EQ(calc_reference(t, 8.0), 0.5);                 // holding
