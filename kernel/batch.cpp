@@ -58,6 +58,7 @@ BatchModel make_batch(std::span<const Model> models) {
   bm.seg_length = per_body([](const Model& m, int i) { return m.seg_length[i]; });
   bm.joint_k = per_body([](const Model& m, int i) { return m.joint_k[i]; });
   bm.joint_c = per_body([](const Model& m, int i) { return m.joint_c[i]; });
+  bm.joint_k3 = per_body([](const Model& m, int i) { return m.joint_k3[i]; });
 
   for (const auto& m : models) {
     const auto& c = m.spec.controller;

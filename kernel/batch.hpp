@@ -30,6 +30,7 @@ struct BatchModel {
   std::vector<double> seg_length;   // (N x W), m
   std::vector<double> joint_k;      // (N x W), N·m/rad, row 0 = 0
   std::vector<double> joint_c;      // (N x W), N·m·s/rad, row 0 = 0
+  std::vector<double> joint_k3;     // (N x W), cubic stiffening, N·m/rad^3, row 0 = 0
   std::vector<double> kp, ki, kd;   // (W) PID gains
   std::vector<double> torque_limit; // (W), N·m, +inf when unlimited
   std::vector<double> load_comp;    // (W) root-moment feed-forward gain

@@ -15,7 +15,7 @@ void reset_controller(const BatchModel& bm, BatchState& s, const double* r0);
 // dynamics plus what the derivative on the measured rate takes away when the arm tracks exactly.
 // Writes ref_filtered (W) and the held torque s.tau (W):
 //   e = F(r) - theta_h,
-//   tau = sat(kp e + ki integral - kd omega_h - g (k_1 q_1 + c_1 qd_1) + f ref_ff).
+//   tau = sat(kp e + ki integral - kd omega_h - g (k_1 q_1 + k3_1 q_1^3 + c_1 qd_1) + f ref_ff).
 // The integral is advanced by forward Euler and frozen while the torque saturates in the
 // direction of the error (clamping anti-windup).
 void compute_control(const BatchModel& bm, BatchState& s, const double* ref, const double* ref_ff,

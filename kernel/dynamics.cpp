@@ -17,13 +17,17 @@ void compute_joint_torques(const BatchModel& bm, const double* q, const double* 
   double* tj = ws.tau_joint.data();
   const double* k = bm.joint_k.data();
   const double* c = bm.joint_c.data();
+  const double* k3 = bm.joint_k3.data();
 #pragma omp simd
   for (int l = 0; l < W; ++l) tj[l] = tau_hub[l];
   // Spring-damper torque on the child of each beam joint.
   for (int i = 1; i < N; ++i) {
     const int o = i * W;
 #pragma omp simd
-    for (int l = 0; l < W; ++l) tj[o + l] = -k[o + l] * q[o + l] - c[o + l] * v[o + l];
+    for (int l = 0; l < W; ++l) {
+      const double x = q[o + l];
+      tj[o + l] = -(k[o + l] + k3[o + l] * x * x) * x - c[o + l] * v[o + l];
+    }
   }
 }
 
@@ -216,7 +220,8 @@ double calc_spring_energy(const BatchModel& bm, const double* q, int lane) {
   double V = 0.0;
   for (int i = 1; i < bm.nseg; ++i) {
     const int o = i * bm.W + lane;
-    V += 0.5 * bm.joint_k[o] * q[o] * q[o];
+    const double x2 = q[o] * q[o];
+    V += 0.5 * bm.joint_k[o] * x2 + 0.25 * bm.joint_k3[o] * x2 * x2;
   }
   return V;
 }

@@ -6,7 +6,7 @@
 
 namespace ff {
 
-// Joint torques: tau_0 = hub torque, tau_i = -k_i q_i - c_i v_i (i >= 1). Writes ws.tau_joint.
+// Joint torques: tau_0 = hub torque, tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i (i >= 1). Writes ws.tau_joint.
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            Workspace& ws);
 
@@ -29,7 +29,7 @@ TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane);
 // Tip deflection (m) and tip angle (rad) of every lane at once (W each); uses ws.a0..a2 as scratch.
 void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws);
 
-// Kinetic energy 1/2 v^T M(q) v and spring energy 1/2 sum k_i q_i^2 of one lane, J.
+// Kinetic energy 1/2 v^T M(q) v and spring energy sum (k_i q_i^2 / 2 + k3_i q_i^4 / 4) of one lane, J.
 double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* v, int lane);
 double calc_spring_energy(const BatchModel& bm, const double* q, int lane);
 

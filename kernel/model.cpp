@@ -36,6 +36,7 @@ void validate(const ModelSpec& s, const std::string& src) {
   if (s.segments > 4096) throw ConfigError(src, 0, "segments", "must be <= 4096, got " + std::to_string(s.segments));
   positive(s.joints.stiffness, "joints.stiffness");
   non_negative(s.joints.damping, "joints.damping");
+  non_negative(s.joints.cubic_stiffness, "joints.cubic_stiffness");
   positive(s.joints.reference_cell, "joints.reference_cell");
   non_negative(s.hub_inertia, "hub.inertia");
   non_negative(s.payload_mass, "payload.mass");
@@ -115,7 +116,8 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
   const double scale = spec.joints.reference_cell / m.cell;
   m.joint_k.assign(n, spec.joints.stiffness * scale);
   m.joint_c.assign(n, spec.joints.damping * scale);
-  m.joint_k[0] = m.joint_c[0] = 0.0;
+  m.joint_k3.assign(n, spec.joints.cubic_stiffness * scale);
+  m.joint_k[0] = m.joint_c[0] = m.joint_k3[0] = 0.0;
 
   m.control_period = 1.0 / spec.controller.rate;
   m.duration = spec.simulation.duration;

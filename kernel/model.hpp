@@ -24,6 +24,7 @@ struct JointSpec {
   double stiffness = 39.5e3;      // k at the reference cell length, N·m/rad
   double damping = 90.4;          // c at the reference cell length, N·m·s/rad
   double reference_cell = 0.83312;  // cell length the two values above belong to, m
+  double cubic_stiffness = 0.0;   // k3 of the hardening term k3 q^3 at the reference cell, N·m/rad^3; 0 = linear
 };
 
 // PID on the hub angle, sampled with zero-order hold (reference-rig.md, "Controller").
@@ -111,6 +112,7 @@ struct Model {
   std::vector<BodyInertia> body;         // per body, payload and hub included (N)
   std::vector<double> joint_k;           // spring of joint i (N, entry 0 unused = 0), N·m/rad
   std::vector<double> joint_c;           // damper of joint i (N, entry 0 unused = 0), N·m·s/rad
+  std::vector<double> joint_k3;          // cubic stiffening of joint i (N, entry 0 unused = 0), N·m/rad^3
   double cell = 0.0;                     // l = L/(N-1), m
   double control_period = 0.0;           // 1/rate, s
   double duration = 0.0;                 // s

@@ -44,6 +44,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   joints.required("stiffness", s.joints.stiffness);
   joints.required("damping", s.joints.damping);
   joints.required("reference_cell", s.joints.reference_cell);
+  joints.optional("cubic_stiffness", s.joints.cubic_stiffness);
   joints.finish();
 
   auto hub = top.child("hub", true);

@@ -82,6 +82,57 @@ TEST(Dynamics, EnergyIsConservedWithoutDampingOrControl) {
   EXPECT_LT(worst, 1e-9);
 }
 
+TEST(Dynamics, EnergyIsConservedWithCubicStiffening) {
+  // Hardening joints store k q^2/2 + k3 q^4/4; without damping the total stays constant.
+  ModelSpec spec = test::rig_spec();
+  spec.joints.damping = 0.0;
+  spec.joints.cubic_stiffness = 4.0e6;  // at 0.1 rad: k3 q^2 = 4e4, about k
+  const Model m = make_model(spec);
+  const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
+  BatchState s = make_state(bm);
+  Workspace ws = make_workspace(bm);
+  s.q[1] = 0.1;
+  s.v[0] = 0.5;
+  const double e0 = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+  EXPECT_NEAR(calc_spring_energy(bm, s.q.data(), 0), 0.5 * 39.5e3 * 0.01 + 0.25 * 4.0e6 * 1e-4, 1e-9);
+  double worst = 0.0;
+  for (int k = 0; k < 20000; ++k) {  // 2 s at h = 0.1 ms
+    step_rk4(bm, s, ws, 1e-4);
+    const double e = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+    worst = std::max(worst, std::fabs(e - e0) / e0);
+  }
+  EXPECT_LT(worst, 1e-8);
+}
+
+TEST(Dynamics, HardeningJointsVibrateFasterAtLargerAmplitude) {
+  // Backbone of a hardening (Duffing) spring: the period shortens as the amplitude grows; with
+  // k3 = 0 it does not depend on the amplitude.
+  auto period = [](double k3, double amplitude) {
+    ModelSpec spec = test::rig_spec();
+    spec.segments = 2;  // one joint, hub free, no angular momentum: a single vibration mode
+    spec.joints.damping = 0.0;
+    spec.joints.cubic_stiffness = k3;
+    const Model m = make_model(spec);
+    const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
+    BatchState s = make_state(bm);
+    Workspace ws = make_workspace(bm);
+    s.q[m.nseg - 1] = amplitude;
+    // Time between the first two downward zero crossings of the tip joint angle.
+    double prev = s.q[m.nseg - 1], t = 0.0;
+    std::vector<double> crossings;
+    while (crossings.size() < 3 && t < 10.0) {
+      step_rk4(bm, s, ws, 1e-4);
+      t += 1e-4;
+      const double x = s.q[m.nseg - 1];
+      if (prev > 0.0 && x <= 0.0) crossings.push_back(t - 1e-4 * x / (x - prev));
+      prev = x;
+    }
+    return crossings.size() < 3 ? 0.0 : crossings[2] - crossings[1];
+  };
+  EXPECT_NEAR(period(0.0, 0.001), period(0.0, 0.01), 1e-3 * period(0.0, 0.001));  // linear joints: isochronous
+  EXPECT_LT(period(5.0e6, 0.2), 0.9 * period(5.0e6, 0.001));
+}
+
 TEST(Dynamics, JointDampingDissipatesEnergyMonotonically) {
   const Model m = make_model(test::rig_spec());
   const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
