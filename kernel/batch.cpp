@@ -1,9 +1,11 @@
 #include "kernel/batch.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 
 #include "kernel/notch.hpp"
+#include "kernel/random.hpp"
 
 namespace ff {
 
@@ -29,6 +31,7 @@ NotchDesign make_notch_design(const Model& m) {
 
 BatchModel make_batch(std::span<const Model> models) {
   if (models.empty()) throw std::invalid_argument("make_batch: no models");
+  if (models.size() > static_cast<std::size_t>(kMaxLanes)) throw std::invalid_argument("make_batch: more than kMaxLanes lanes");
   const Model& m0 = models[0];
   BatchModel bm;
   bm.W = static_cast<int>(models.size());
@@ -70,6 +73,17 @@ BatchModel make_batch(std::span<const Model> models) {
     bm.ff_gain.push_back(c.feedforward);
   }
 
+  for (const auto& m : models) {
+    const ChannelSpec* ch[2] = {&m.spec.sensors.hub_angle, &m.spec.sensors.hub_rate};
+    for (int c = 0; c < 2; ++c) {
+      bm.sensor_resolution[c].push_back(ch[c]->resolution);
+      bm.sensor_noise[c].push_back(ch[c]->noise);
+      bm.sensor_delay[c].push_back(ch[c]->delay);
+      bm.sensor_key[c].push_back(calc_variant_seed(m.spec.simulation.seed, static_cast<std::uint64_t>(c)));
+      bm.sensor_history = std::max(bm.sensor_history, ch[c]->delay + 1);
+    }
+  }
+
   bm.notch_coef.assign(static_cast<std::size_t>(5) * bm.nsections * W, 0.0);
   if (bm.nsections > 0)
     for (int l = 0; l < W; ++l)
@@ -87,6 +101,7 @@ BatchState make_state(const BatchModel& bm) {
   s.integral.assign(bm.W, 0.0);
   s.notch_state.assign(static_cast<std::size_t>(2) * bm.nsections * bm.W, 0.0);
   s.status.assign(bm.W, LaneStatus::kOk);
+  for (auto& m : s.measured) m.assign(static_cast<std::size_t>(bm.sensor_history) * bm.W, 0.0);
   return s;
 }
 

@@ -15,6 +15,9 @@ namespace ff {
 enum class LaneStatus : std::uint8_t { kOk = 0, kNonfinite, kSolverFail };
 const char* lane_status_name(LaneStatus s);
 
+// The most lanes one batch may hold.
+inline constexpr int kMaxLanes = 256;
+
 // The parameters of W models of equal shape, gathered lane-innermost. Immutable once made.
 struct BatchModel {
   int W = 0;                        // lanes
@@ -36,6 +39,11 @@ struct BatchModel {
   std::vector<double> load_comp;    // (W) root-moment feed-forward gain
   std::vector<double> ff_gain;      // (W) gain of the model-based feed-forward
   std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
+  // Sensors, per channel (0 hub angle, 1 hub rate) and lane: quantum, noise std, delay, noise key.
+  std::vector<double> sensor_resolution[2], sensor_noise[2];  // (W)
+  std::vector<int> sensor_delay[2];                           // (W), samples
+  std::vector<std::uint64_t> sensor_key[2];                   // (W)
+  int sensor_history = 1;           // ring length: the largest delay + 1
 };
 
 // Gathers models of equal shape (segments, notch order and enablement, rate, substeps, duration)
@@ -54,6 +62,7 @@ struct BatchState {
   std::vector<double> tau;          // (W) torque held on the hub until the next sample, N·m
   std::vector<double> integral;     // (W) integral of the tracking error, rad·s
   std::vector<double> notch_state;  // (2 * nsections x W)
+  std::vector<double> measured[2];  // (sensor_history x W) ring of past measurements per channel
   std::vector<LaneStatus> status;   // (W)
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "kernel/notch.hpp"
+#include "kernel/sensors.hpp"
 
 namespace ff {
 
@@ -25,15 +26,18 @@ void compute_control(const BatchModel& bm, BatchState& s, const double* ref, con
   const double T = bm.control_period;
   const double* q = s.q.data();
   const double* v = s.v.data();
+  // What the controller sees of the hub angle and rate (kernel/sensors.hpp).
+  double sensed_angle[kMaxLanes], sensed_rate[kMaxLanes];
+  compute_measurements(bm, s, sensed_angle, sensed_rate);
   const double* k1 = bm.joint_k.data() + W;  // joint 1: the root of the beam
   const double* c1 = bm.joint_c.data() + W;
   const double* k31 = bm.joint_k3.data() + W;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    const double e = ref_filtered[l] - q[l];
+    const double e = ref_filtered[l] - sensed_angle[l];
     const double q1 = q[W + l];
     const double root_moment = (k1[l] + k31[l] * q1 * q1) * q1 + c1[l] * v[W + l];  // beam on the hub, N·m
-    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * v[l] - bm.load_comp[l] * root_moment +
+    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * sensed_rate[l] - bm.load_comp[l] * root_moment +
                        bm.ff_gain[l] * ref_ff[l];
     const double lim = bm.torque_limit[l];
     const double tau = std::clamp(raw, -lim, lim);

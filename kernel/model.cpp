@@ -73,6 +73,12 @@ void validate(const ModelSpec& s, const std::string& src) {
   if (s.simulation.substeps < 0 || s.simulation.substeps > 100000)
     throw ConfigError(src, 0, "simulation.substeps", "must be between 0 (automatic) and 100000");
   positive(s.simulation.rtol, "simulation.rtol");
+  for (const auto& [ch, key] : {std::pair{&s.sensors.hub_angle, "sensors.hub_angle"}, {&s.sensors.hub_rate, "sensors.hub_rate"}}) {
+    non_negative(ch->resolution, (std::string(key) + ".resolution").c_str());
+    non_negative(ch->noise, (std::string(key) + ".noise").c_str());
+    if (ch->delay < 0 || ch->delay > 10000)
+      throw ConfigError(src, 0, std::string(key) + ".delay", "must be between 0 and 10000 samples");
+  }
   positive(s.simulation.atol, "simulation.atol");
 }
 

@@ -3,6 +3,7 @@
 // Built and validated once by make_model(); never written afterwards.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,19 @@ struct NotchSpec {
   double omega_z[2] = {0.0, 0.0}; // rad/s; 0 = place at the computed closed-loop resonances
 };
 
+// One measured channel: quantised to `resolution`, with Gaussian noise and a delay in samples.
+struct ChannelSpec {
+  double resolution = 0.0;        // quantum, in the channel's unit; 0 = none
+  double noise = 0.0;             // standard deviation, in the channel's unit; 0 = none
+  int delay = 0;                  // controller samples
+};
+
+// What the controller measures (reference-rig.md: the PD uses the hub angle and the hub rate).
+struct SensorSpec {
+  ChannelSpec hub_angle;          // encoder, rad
+  ChannelSpec hub_rate;           // tachometer, rad/s
+};
+
 // Input shaper on the reference (kernel/shaper.hpp), off by default.
 struct ShaperSpec {
   std::string type = "none";      // none, zv, zvd, ei
@@ -76,6 +90,7 @@ struct SimulationSpec {
   int substeps = 0;               // fixed-step substeps per control period; 0 = chosen from the fastest mode
   double rtol = 1e-8;             // CVODE relative tolerance
   double atol = 1e-10;            // CVODE absolute tolerance
+  std::uint64_t seed = 1;         // sensor noise; a study gives each variant its own
 };
 
 // Everything a user writes in a model YAML file.
@@ -89,6 +104,7 @@ struct ModelSpec {
   ControllerSpec controller;
   NotchSpec notch;
   ShaperSpec shaper;
+  SensorSpec sensors;
   TrajectorySpec trajectory;
   SimulationSpec simulation;
 };

@@ -1,5 +1,7 @@
 #include "kernel/model_io.hpp"
 
+#include <cmath>
+
 #include "kernel/errors.hpp"
 #include "kernel/yaml_reader.hpp"
 
@@ -81,6 +83,16 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   shaper.optional("vtol", s.shaper.vtol);
   shaper.finish();
 
+  auto sensors = top.child("sensors");
+  for (const auto& [name, ch] : {std::pair{"hub_angle", &s.sensors.hub_angle}, {"hub_rate", &s.sensors.hub_rate}}) {
+    auto c = sensors.child(name);
+    c.optional("resolution", ch->resolution);
+    c.optional("noise", ch->noise);
+    c.optional("delay", ch->delay);
+    c.finish();
+  }
+  sensors.finish();
+
   auto traj = top.child("trajectory");
   traj.optional("move_time", s.trajectory.move_time);
   for (auto& mv : traj.sequence("moves")) {
@@ -98,6 +110,10 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   sim.optional("substeps", s.simulation.substeps);
   sim.optional("rtol", s.simulation.rtol);
   sim.optional("atol", s.simulation.atol);
+  double seed = 1;
+  sim.optional("seed", seed);
+  if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) sim.fail("seed", "must be a whole number >= 0");
+  s.simulation.seed = static_cast<std::uint64_t>(seed);
   sim.finish();
 
   top.finish();

@@ -15,7 +15,7 @@
 #include <system_error>
 #include <utility>
 
-#include "sweep/random.hpp"
+#include "kernel/random.hpp"
 
 namespace ff {
 

@@ -12,7 +12,7 @@
 #include "kernel/errors.hpp"
 #include "kernel/model_io.hpp"
 #include "kernel/yaml_reader.hpp"
-#include "sweep/random.hpp"
+#include "kernel/random.hpp"
 
 namespace ff {
 
@@ -312,7 +312,9 @@ Study load_study(const std::string& path) {
 Model make_variant_model(const Study& study, const Variant& v) {
   std::vector<Assignment> set = study.set;
   set.insert(set.end(), v.set.begin(), v.set.end());
-  return make_model_with(YAML::Load(study.model_text), study.model_path, set);
+  Model m = make_model_with(YAML::Load(study.model_text), study.model_path, set);
+  m.spec.simulation.seed = v.seed;  // each variant its own sensor noise
+  return m;
 }
 
 }  // namespace ff

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "sweep/random.hpp"
+#include "kernel/random.hpp"
 
 namespace {
 
