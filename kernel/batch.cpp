@@ -74,6 +74,14 @@ BatchModel make_batch(std::span<const Model> models) {
   }
 
   for (const auto& m : models) {
+    const auto& f = m.spec.friction;
+    bm.fric_b.push_back(f.viscous);
+    bm.fric_c.push_back(f.coulomb);
+    bm.fric_s.push_back(f.stiction > 0 ? f.stiction - f.coulomb : 0.0);
+    bm.fric_inv_vs.push_back(1.0 / f.stribeck_velocity);
+    bm.fric_inv_eps.push_back(1.0 / f.smoothing);
+  }
+  for (const auto& m : models) {
     const ChannelSpec* ch[2] = {&m.spec.sensors.hub_angle, &m.spec.sensors.hub_rate};
     for (int c = 0; c < 2; ++c) {
       bm.sensor_resolution[c].push_back(ch[c]->resolution);

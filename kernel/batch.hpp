@@ -39,6 +39,8 @@ struct BatchModel {
   std::vector<double> load_comp;    // (W) root-moment feed-forward gain
   std::vector<double> ff_gain;      // (W) gain of the model-based feed-forward
   std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
+  // Hub friction (W each): viscous b, Coulomb Fc, Stribeck excess Fs - Fc, 1/vs, 1/eps.
+  std::vector<double> fric_b, fric_c, fric_s, fric_inv_vs, fric_inv_eps;
   // Sensors, per channel (0 hub angle, 1 hub rate) and lane: quantum, noise std, delay, noise key.
   std::vector<double> sensor_resolution[2], sensor_noise[2];  // (W)
   std::vector<int> sensor_delay[2];                           // (W), samples

@@ -11,6 +11,13 @@ namespace ff {
 // Parent-to-child transform (Featherstone's plnr(q, [L_parent, 0])):
 //   X = [[1, 0, 0], [s L, c, s], [c L, -s, c]],  c = cos q, s = sin q.
 
+double calc_hub_friction(const BatchModel& bm, int l, double w) {
+  const double b = bm.fric_b[l], fc = bm.fric_c[l], fs = bm.fric_s[l];
+  if (b == 0.0 && fc == 0.0 && fs == 0.0) return 0.0;
+  const double x = w * bm.fric_inv_vs[l];
+  return -(b * w + (fc + fs * std::exp(-x * x)) * std::tanh(w * bm.fric_inv_eps[l]));
+}
+
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            Workspace& ws) {
   const int W = bm.W, N = bm.nseg;
@@ -18,8 +25,7 @@ void compute_joint_torques(const BatchModel& bm, const double* q, const double* 
   const double* k = bm.joint_k.data();
   const double* c = bm.joint_c.data();
   const double* k3 = bm.joint_k3.data();
-#pragma omp simd
-  for (int l = 0; l < W; ++l) tj[l] = tau_hub[l];
+  for (int l = 0; l < W; ++l) tj[l] = tau_hub[l] + calc_hub_friction(bm, l, v[l]);
   // Spring-damper torque on the child of each beam joint.
   for (int i = 1; i < N; ++i) {
     const int o = i * W;

@@ -6,9 +6,13 @@
 
 namespace ff {
 
-// Joint torques: tau_0 = hub torque, tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i (i >= 1). Writes ws.tau_joint.
+// Joint torques: tau_0 = hub torque + hub friction, tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i (i >= 1).
+// Writes ws.tau_joint.
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            Workspace& ws);
+
+// Hub friction torque at hub rate w of lane l (FrictionSpec), N·m; never adds energy: tau_f w <= 0.
+double calc_hub_friction(const BatchModel& bm, int lane, double w);
 
 // Forward dynamics qdd = M(q)^-1 (tau - C(q, v) v) by the articulated-body algorithm
 // (Featherstone, Rigid Body Dynamics Algorithms, 2008, Table 7.1, planar form), O(N) per lane.

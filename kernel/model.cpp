@@ -73,6 +73,13 @@ void validate(const ModelSpec& s, const std::string& src) {
   if (s.simulation.substeps < 0 || s.simulation.substeps > 100000)
     throw ConfigError(src, 0, "simulation.substeps", "must be between 0 (automatic) and 100000");
   positive(s.simulation.rtol, "simulation.rtol");
+  non_negative(s.friction.viscous, "friction.viscous");
+  non_negative(s.friction.coulomb, "friction.coulomb");
+  non_negative(s.friction.stiction, "friction.stiction");
+  if (s.friction.stiction > 0 && s.friction.stiction < s.friction.coulomb)
+    throw ConfigError(src, 0, "friction.stiction", "must be >= friction.coulomb (or 0 for no Stribeck peak)");
+  positive(s.friction.stribeck_velocity, "friction.stribeck_velocity");
+  positive(s.friction.smoothing, "friction.smoothing");
   for (const auto& [ch, key] : {std::pair{&s.sensors.hub_angle, "sensors.hub_angle"}, {&s.sensors.hub_rate, "sensors.hub_rate"}}) {
     non_negative(ch->resolution, (std::string(key) + ".resolution").c_str());
     non_negative(ch->noise, (std::string(key) + ".noise").c_str());

@@ -61,6 +61,16 @@ struct SensorSpec {
   ChannelSpec hub_rate;           // tachometer, rad/s
 };
 
+// Friction at the hub (off by default): viscous, Coulomb and Stribeck, regularised at zero velocity:
+// tau_f = -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) tanh(w/eps)) (Armstrong-Helouvry 1994; tanh smoothing).
+struct FrictionSpec {
+  double viscous = 0.0;           // b, N·m·s/rad
+  double coulomb = 0.0;           // Fc, N·m
+  double stiction = 0.0;          // Fs >= Fc: breakaway torque of the Stribeck peak, N·m; 0 = Fc
+  double stribeck_velocity = 0.01;  // vs, rad/s
+  double smoothing = 1e-3;        // eps, rad/s: the tanh regularisation (small = sharper, stiffer)
+};
+
 // Input shaper on the reference (kernel/shaper.hpp), off by default.
 struct ShaperSpec {
   std::string type = "none";      // none, zv, zvd, ei
@@ -105,6 +115,7 @@ struct ModelSpec {
   NotchSpec notch;
   ShaperSpec shaper;
   SensorSpec sensors;
+  FrictionSpec friction;
   TrajectorySpec trajectory;
   SimulationSpec simulation;
 };

@@ -93,6 +93,14 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   }
   sensors.finish();
 
+  auto fr = top.child("friction");
+  fr.optional("viscous", s.friction.viscous);
+  fr.optional("coulomb", s.friction.coulomb);
+  fr.optional("stiction", s.friction.stiction);
+  fr.optional("stribeck_velocity", s.friction.stribeck_velocity);
+  fr.optional("smoothing", s.friction.smoothing);
+  fr.finish();
+
   auto traj = top.child("trajectory");
   traj.optional("move_time", s.trajectory.move_time);
   for (auto& mv : traj.sequence("moves")) {
