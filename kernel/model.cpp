@@ -41,6 +41,18 @@ void validate(const ModelSpec& s, const std::string& src) {
   non_negative(s.hub_inertia, "hub.inertia");
   non_negative(s.payload_mass, "payload.mass");
   non_negative(s.payload_inertia, "payload.inertia");
+  double last = 0.0;
+  for (std::size_t j = 0; j < s.payload_events.size(); ++j) {
+    const auto& e = s.payload_events[j];
+    const std::string key = "payload.events[" + std::to_string(j) + "]";
+    if (!(e.time >= last) || !std::isfinite(e.time)) throw ConfigError(src, 0, key + ".time", "must be >= 0 and in time order");
+    if (!(e.mass >= 0) || !std::isfinite(e.mass)) throw ConfigError(src, 0, key + ".mass", "must be a finite number >= 0");
+    if (!(e.inertia >= 0) || !std::isfinite(e.inertia)) throw ConfigError(src, 0, key + ".inertia", "must be a finite number >= 0");
+    last = e.time;
+  }
+  if (!s.payload_events.empty() && s.simulation.integrator != Integrator::kRk4 &&
+      s.simulation.integrator != Integrator::kSdirk2)
+    throw ConfigError(src, 0, "payload.events", "need a fixed-step integrator (rk4 or sdirk2)");
   positive(s.controller.rate, "controller.rate");
   non_negative(s.controller.kp, "controller.kp");
   non_negative(s.controller.ki, "controller.ki");
@@ -90,6 +102,12 @@ void validate(const ModelSpec& s, const std::string& src) {
 }
 
 }  // namespace
+
+BodyInertia make_tip_body(const Model& m, double mass, double inertia) {
+  const int i = m.nseg - 1;
+  const double li = m.seg_length[i], mi = m.seg_mass[i];
+  return {mi + mass, mi * 0.5 * li + mass * li, m.seg_inertia[i] + mi * 0.25 * li * li + inertia + mass * li * li};
+}
 
 Model make_model(const ModelSpec& spec, const std::string& source) {
   validate(spec, source);

@@ -79,6 +79,13 @@ struct ShaperSpec {
   double vtol = 0.05;             // EI: residual vibration allowed at the design frequency
 };
 
+// The payload changes at a controller sample (pick or release), joint rates continuous.
+struct PayloadEvent {
+  double time = 0.0;              // s: applied at the first controller sample at or after it
+  double mass = 0.0;              // kg, the new payload mass
+  double inertia = 0.0;           // kg·m^2, the new payload inertia about its centre of mass
+};
+
 // One move of the cubic trajectory r = r0 + (r1 - r0)(3u^2 - 2u^3), u = t/T_m, then a hold.
 struct MoveSpec {
   double target = 0.0;            // rad
@@ -111,6 +118,7 @@ struct ModelSpec {
   double hub_inertia = 50.0;      // kg·m^2, actuator + pinion + base frame
   double payload_mass = 328.7;    // kg, at the tip point
   double payload_inertia = 118.6; // kg·m^2 about its own centre of mass
+  std::vector<PayloadEvent> payload_events;  // in time order
   ControllerSpec controller;
   NotchSpec notch;
   ShaperSpec shaper;
@@ -149,6 +157,9 @@ struct Model {
   std::vector<Impulse> shaper;           // input-shaper impulses; one of amplitude 1 at 0 when off
   double rigid_inertia = 0.0;            // the straight arm's inertia about the hub axis, M_00(q = 0), kg·m^2
 };
+
+// The tip body (last segment with a payload of `mass`, `inertia`) in its joint frame.
+BodyInertia make_tip_body(const Model& m, double mass, double inertia);
 
 // Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.
 Model make_model(const ModelSpec& spec, const std::string& source = "<model>");

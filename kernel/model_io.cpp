@@ -56,6 +56,14 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   auto payload = top.child("payload", true);
   payload.required("mass", s.payload_mass);
   payload.required("inertia", s.payload_inertia);
+  for (auto& ev : payload.sequence("events")) {
+    PayloadEvent e;
+    ev.required("time", e.time);
+    ev.required("mass", e.mass);
+    ev.required("inertia", e.inertia);
+    ev.finish();
+    s.payload_events.push_back(e);
+  }
   payload.finish();
 
   auto ctrl = top.child("controller");

@@ -46,7 +46,31 @@ void record(const BatchModel& bm, const BatchState& s, const double* ref, const 
 
 }  // namespace
 
-BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe) {
+namespace {
+// Payload events (pick, release) due by time t change the tip body of their lane in `live`.
+void apply_payload_events(BatchModel& live, std::vector<std::size_t>& next, double t) {
+  const int W = live.W, tip = (live.nseg - 1) * W;
+  for (int l = 0; l < W; ++l) {
+    const Model& m = live.models[l];
+    while (next[l] < m.spec.payload_events.size() && m.spec.payload_events[next[l]].time <= t + 1e-12) {
+      const auto& e = m.spec.payload_events[next[l]++];
+      const BodyInertia b = make_tip_body(m, e.mass, e.inertia);
+      live.body_mass[tip + l] = b.mass;
+      live.body_first[tip + l] = b.first;
+      live.body_inertia[tip + l] = b.inertia;
+    }
+  }
+}
+}  // namespace
+
+BatchRun simulate(const BatchModel& model, const std::function<void(const BatchState&)>& observe) {
+  // A run with payload events works on its own copy of the batch, changed at those samples.
+  bool events = false;
+  for (const auto& m : model.models) events |= !m.spec.payload_events.empty();
+  BatchModel live_copy;
+  if (events) live_copy = model;
+  std::vector<std::size_t> next_event(model.W, 0);
+  const BatchModel& bm = events ? live_copy : model;
   const int W = bm.W;
   const double T = bm.control_period;
   const long nsamples = std::lround(bm.duration / T) + 1;
@@ -69,6 +93,7 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
   for (long k = 0; k < nsamples; ++k) {
     s.t = k * T;
     s.sample = k;
+    if (events) apply_payload_events(live_copy, next_event, s.t);
     // Controller sample: reference, filter, PID; then record the signals of this instant.
     for (int l = 0; l < W; ++l) {
       ref[l] = calc_shaped_reference(bm.models[l].spec.trajectory, bm.models[l].shaper, s.t);
