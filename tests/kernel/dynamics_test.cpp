@@ -13,6 +13,11 @@
 namespace ff {
 namespace {
 
+// Kinetic plus spring energy of lane 0, J.
+double total_energy(const BatchModel& bm, const BatchState& s) {
+  return calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+}
+
 // qdd of one lane from the ABA for given q, v, hub torque.
 Eigen::VectorXd aba(const Model& m, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double tau) {
   const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
@@ -72,11 +77,11 @@ TEST(Dynamics, EnergyIsConservedWithoutDampingOrControl) {
   Workspace ws = make_workspace(bm);
   s.q[1] = 0.05;  // bent at the root joint, hub free
   s.v[0] = 0.8;   // and spinning: centrifugal and Coriolis terms matter
-  const double e0 = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+  const double e0 = total_energy(bm, s);
   double worst = 0.0;
   for (int k = 0; k < 4000; ++k) {  // 4 s at h = 0.1 ms
     step_rk4(bm, s, ws, 1e-4);
-    const double e = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+    const double e = total_energy(bm, s);
     worst = std::max(worst, std::fabs(e - e0) / e0);
   }
   EXPECT_LT(worst, 1e-9);
@@ -93,12 +98,12 @@ TEST(Dynamics, EnergyIsConservedWithCubicStiffening) {
   Workspace ws = make_workspace(bm);
   s.q[1] = 0.1;
   s.v[0] = 0.5;
-  const double e0 = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+  const double e0 = total_energy(bm, s);
   EXPECT_NEAR(calc_spring_energy(bm, s.q.data(), 0), 0.5 * 39.5e3 * 0.01 + 0.25 * 4.0e6 * 1e-4, 1e-9);
   double worst = 0.0;
   for (int k = 0; k < 20000; ++k) {  // 2 s at h = 0.1 ms
     step_rk4(bm, s, ws, 1e-4);
-    const double e = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+    const double e = total_energy(bm, s);
     worst = std::max(worst, std::fabs(e - e0) / e0);
   }
   EXPECT_LT(worst, 1e-8);
@@ -139,11 +144,11 @@ TEST(Dynamics, JointDampingDissipatesEnergyMonotonically) {
   BatchState s = make_state(bm);
   Workspace ws = make_workspace(bm);
   s.q[2] = 0.05;
-  double e_prev = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+  double e_prev = total_energy(bm, s);
   const double e0 = e_prev;
   for (int k = 0; k < 3000; ++k) {
     step_rk4(bm, s, ws, 1e-3);
-    const double e = calc_kinetic_energy(bm, s.q.data(), s.v.data(), 0) + calc_spring_energy(bm, s.q.data(), 0);
+    const double e = total_energy(bm, s);
     ASSERT_LE(e, e_prev * (1 + 1e-12)) << "step " << k;
     e_prev = e;
   }
