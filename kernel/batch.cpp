@@ -4,6 +4,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "kernel/drive.hpp"
 #include "kernel/notch.hpp"
 #include "kernel/random.hpp"
 
@@ -43,9 +44,14 @@ BatchModel make_batch(std::span<const Model> models) {
   for (const auto& m : models) {
     const int ns = m.spec.notch.enabled ? 2 * m.spec.notch.order + 1 : 0;
     if (m.nseg != bm.nseg || ns != bm.nsections || m.substeps != bm.substeps ||
-        m.control_period != bm.control_period || m.duration != bm.duration)
-      throw std::invalid_argument("make_batch: models differ in shape (segments, notch order, rate, substeps or duration)");
+        m.control_period != bm.control_period || m.duration != bm.duration ||
+        m.spec.hydraulics.enabled != m0.spec.hydraulics.enabled || m.spec.drive.enabled != m0.spec.drive.enabled ||
+        m.spec.friction.model != m0.spec.friction.model)
+      throw std::invalid_argument(
+          "make_batch: models differ in shape (segments, notch order, rate, substeps, duration or hub drive parts)");
   }
+  bm.layout = make_drive_layout(m0.spec);
+  for (const auto& m : models) bm.drive.push_back(make_lane_drive(m));
   bm.models.assign(models.begin(), models.end());
 
   const int W = bm.W, N = bm.nseg;
@@ -70,6 +76,7 @@ BatchModel make_batch(std::span<const Model> models) {
     bm.kd.push_back(c.kd);
     bm.torque_limit.push_back(c.torque_limit > 0 ? c.torque_limit : std::numeric_limits<double>::infinity());
     bm.load_comp.push_back(c.load_compensation);
+    bm.load_pressure.push_back(c.load_signal == "pressure" ? 1 : 0);
     bm.ff_gain.push_back(c.feedforward);
   }
 
@@ -105,6 +112,8 @@ BatchState make_state(const BatchModel& bm) {
   const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
   s.q.assign(nw, 0.0);
   s.v.assign(nw, 0.0);
+  s.z.assign(static_cast<std::size_t>(bm.layout.nz) * bm.W, 0.0);
+  init_drive_state(bm, s.z.data());
   s.tau.assign(bm.W, 0.0);
   s.integral.assign(bm.W, 0.0);
   s.notch_state.assign(static_cast<std::size_t>(2) * bm.nsections * bm.W, 0.0);
@@ -120,10 +129,15 @@ Workspace make_workspace(const BatchModel& bm) {
                   &ws.i12, &ws.i22, &ws.p0, &ws.p1, &ws.p2, &ws.d, &ws.u, &ws.a0, &ws.a1, &ws.a2, &ws.armature,
                   &ws.q1, &ws.v1, &ws.tau_joint, &ws.a_prev})
     x->assign(nw, 0.0);
+  const std::size_t nzw = static_cast<std::size_t>(bm.layout.nz) * bm.W;
   for (int k = 0; k < 4; ++k) {
     ws.kq[k].assign(nw, 0.0);
     ws.kv[k].assign(nw, 0.0);
+    ws.kz[k].assign(nzw, 0.0);
   }
+  for (auto* x : {&ws.z1, &ws.zdot, &ws.zpert, &ws.znew}) x->assign(nzw, 0.0);
+  ws.zjac.assign(nzw * bm.layout.nz, 0.0);
+  ws.tau_hub.assign(bm.W, 0.0);
   return ws;
 }
 

@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "kernel/drive.hpp"
 #include "kernel/model.hpp"
 #include "kernel/notch.hpp"
 
@@ -36,7 +37,8 @@ struct BatchModel {
   std::vector<double> joint_k3;     // (N x W), cubic stiffening, N·m/rad^3, row 0 = 0
   std::vector<double> kp, ki, kd;   // (W) PID gains
   std::vector<double> torque_limit; // (W), N·m, +inf when unlimited
-  std::vector<double> load_comp;    // (W) root-moment feed-forward gain
+  std::vector<double> load_comp;    // (W) load-compensation gain
+  std::vector<char> load_pressure;  // (W) 1: load signal n D (p_a - p_b) from the pressures, 0: root bending moment
   std::vector<double> ff_gain;      // (W) gain of the model-based feed-forward
   std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
   // Hub friction (W each): viscous b, Coulomb Fc, Stribeck excess Fs - Fc, 1/vs, 1/eps.
@@ -46,9 +48,12 @@ struct BatchModel {
   std::vector<int> sensor_delay[2];                           // (W), samples
   std::vector<std::uint64_t> sensor_key[2];                   // (W)
   int sensor_history = 1;           // ring length: the largest delay + 1
+  DriveLayout layout;               // rows of the hub drive's states in BatchState::z
+  std::vector<LaneDrive> drive;     // (W) the hub drive's constants (kernel/drive.hpp)
 };
 
-// Gathers models of equal shape (segments, notch order and enablement, rate, substeps, duration)
+// Gathers models of equal shape (segments, notch order and enablement, rate, substeps, duration,
+// hub drive parts)
 // into lanes. Throws std::invalid_argument when shapes differ.
 BatchModel make_batch(std::span<const Model> models);
 
@@ -61,7 +66,8 @@ struct BatchState {
   long sample = 0;                  // controller samples taken
   std::vector<double> q;            // (N x W) q0 hub angle, qi relative joint angles, rad
   std::vector<double> v;            // (N x W) rates, rad/s
-  std::vector<double> tau;          // (W) torque held on the hub until the next sample, N·m
+  std::vector<double> z;            // (nz x W) hub drive states (kernel/drive.hpp)
+  std::vector<double> tau;          // (W) torque demand held until the next sample, N·m
   std::vector<double> integral;     // (W) integral of the tracking error, rad·s
   std::vector<double> notch_state;  // (2 * nsections x W)
   std::vector<double> measured[2];  // (sensor_history x W) ring of past measurements per channel
@@ -87,6 +93,10 @@ struct Workspace {
   // fixed-step integrator stages, (N x W) each
   std::vector<double> q1, v1, kq[4], kv[4];
   std::vector<double> tau_joint;                      // (N x W) joint torques
+  std::vector<double> tau_hub;                        // (W) hub drive torque, friction included
+  // hub drive states in the integrators, (nz x W) each
+  std::vector<double> z1, kz[4], zdot, zpert, znew;
+  std::vector<double> zjac;                           // (W x nz x nz) Newton matrices of the drive's implicit stages
 };
 
 Workspace make_workspace(const BatchModel& bm);

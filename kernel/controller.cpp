@@ -32,12 +32,21 @@ void compute_control(const BatchModel& bm, BatchState& s, const double* ref, con
   const double* k1 = bm.joint_k.data() + W;  // joint 1: the root of the beam
   const double* c1 = bm.joint_c.data() + W;
   const double* k31 = bm.joint_k3.data() + W;
+  // The hydraulic load signal n D (p_a - p_b), N·m (seed: "hydraulic pressure instead of torque").
+  double pressure_torque[kMaxLanes] = {};
+  if (bm.layout.pressure >= 0)
+    for (int l = 0; l < W; ++l) {
+      const LaneDrive& d = bm.drive[l];
+      const double dp = (s.z[bm.layout.pressure * W + l] - s.z[(bm.layout.pressure + 1) * W + l]) * kPressureUnit;
+      pressure_torque[l] = d.n * d.D * dp;
+    }
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     const double e = ref_filtered[l] - sensed_angle[l];
     const double q1 = q[W + l];
     const double root_moment = (k1[l] + k31[l] * q1 * q1) * q1 + c1[l] * v[W + l];  // beam on the hub, N·m
-    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * sensed_rate[l] - bm.load_comp[l] * root_moment +
+    const double load = bm.load_pressure[l] ? pressure_torque[l] : root_moment;
+    const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * sensed_rate[l] - bm.load_comp[l] * load +
                        bm.ff_gain[l] * ref_ff[l];
     const double lim = bm.torque_limit[l];
     const double tau = std::clamp(raw, -lim, lim);

@@ -1,7 +1,8 @@
 // CVODE (SUNDIALS 6) as the reference integrator of the batch kernel.
 //
-// Each lane is an independent ODE y = [q (N); v (N)], ydot = [v; qdd(q, v, tau_held)], with qdd
-// from the articulated-body algorithm on a one-lane copy of the batch model. Each lane owns its
+// Each lane is an independent ODE y = [q (N); v (N); z (nz)], ydot = [v; qdd; zdot](q, v, z, tau_held),
+// with qdd from the articulated-body algorithm on a one-lane copy of the batch model and z the hub
+// drive's states (kernel/drive.hpp: valve, oil pressures, drive train, LuGre bristles). Each lane owns its
 // SUNContext, vector, matrix, linear solver and CVODE memory, and its own one-lane model and
 // workspace, so lanes share no mutable state and may be advanced on different threads.
 //
@@ -51,9 +52,10 @@ struct Lane {
   BatchModel bm;               // one-lane copy of the lane's model
   Workspace ws;                // its articulated-body scratch
   int n = 0;                   // N
-  double tau = 0.0;            // hub torque held over the current advance
-  std::vector<double> ypert;   // (2N) perturbed state for the finite-difference Jacobian
-  std::vector<double> qdd;     // (N) perturbed accelerations
+  int nz = 0;                  // hub drive states
+  double tau = 0.0;            // hub torque demand held over the current advance
+  std::vector<double> ypert;   // (2N + nz) perturbed state for the finite-difference Jacobian
+  std::vector<double> fpert;   // (N + nz) perturbed accelerations and drive rates
   long fd_rhs_evals = 0;       // right-hand-side evaluations made by our own Jacobian
   CvodeStats totals;           // accumulated over all advances (CVODE resets its counters on ReInit)
 
@@ -83,25 +85,26 @@ int rhs(sunrealtype /*t*/, N_Vector y, N_Vector ydot, void* user_data) {
   const double* yd = N_VGetArrayPointer(y);
   double* fd = N_VGetArrayPointer(ydot);
   std::copy(yd + n, yd + 2 * n, fd);
-  compute_acceleration(L.bm, yd, yd + n, &L.tau, fd + n, L.ws);
-  for (int i = 0; i < 2 * n; ++i)
+  compute_acceleration(L.bm, yd, yd + n, yd + 2 * n, &L.tau, fd + n, fd + 2 * n, L.ws);
+  for (int i = 0; i < 2 * n + L.nz; ++i)
     if (!std::isfinite(fd[i])) return 1;
   return 0;
 }
 
-// CSC pattern of J = [[0, I], [dqdd/dq, dqdd/dv]] with the diagonal stored in every column:
-// column j < N holds rows {j} + {N..2N-1}; column N + i holds rows {i} + {N..2N-1}.
+// CSC pattern of J = [[0, I, 0], [dqdd/dq, dqdd/dv, dqdd/dz], [dzdot/dq, dzdot/dv, dzdot/dz]] with the
+// diagonal stored in every column: column j < N holds rows {j} + {N..2N+nz-1}; column N + i holds
+// rows {i} + {N..2N+nz-1}; column 2N + i holds rows {N..2N+nz-1}.
 // Written on every call, because CVODE zeroes the matrix (SUNMatZero clears the pattern too).
-void write_pattern(SUNMatrix A, int n) {
+void write_pattern(SUNMatrix A, int n, int nz) {
   sunindextype* colptrs = SUNSparseMatrix_IndexPointers(A);
   sunindextype* rowvals = SUNSparseMatrix_IndexValues(A);
   sunindextype p = 0;
-  for (int j = 0; j < 2 * n; ++j) {
+  for (int j = 0; j < 2 * n + nz; ++j) {
     colptrs[j] = p;
-    rowvals[p++] = j < n ? j : j - n;  // diagonal (q columns) or identity entry (v columns)
-    for (int i = 0; i < n; ++i) rowvals[p++] = n + i;
+    if (j < 2 * n) rowvals[p++] = j < n ? j : j - n;  // diagonal (q columns) or identity entry (v columns)
+    for (int i = 0; i < n + nz; ++i) rowvals[p++] = n + i;
   }
-  colptrs[2 * n] = p;
+  colptrs[2 * n + nz] = p;
 }
 
 // Forward-difference Jacobian for the KLU path. The top block is exact (0 and I); each column
@@ -111,29 +114,30 @@ void write_pattern(SUNMatrix A, int n) {
 int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_data, N_Vector /*tmp1*/,
             N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
   Lane& L = *static_cast<Lane*>(user_data);
-  const int n = L.n;
+  const int n = L.n, nz = L.nz;
   const double* yd = N_VGetArrayPointer(y);
-  const double* f_qdd = N_VGetArrayPointer(fy) + n;
+  const double* f_low = N_VGetArrayPointer(fy) + n;  // [qdd; zdot]
   double* data = SUNSparseMatrix_Data(A);
-  write_pattern(A, n);
+  write_pattern(A, n, nz);
   static const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
 
-  std::copy(yd, yd + 2 * n, L.ypert.begin());
+  std::copy(yd, yd + 2 * n + nz, L.ypert.begin());
   double* yp = L.ypert.data();
+  double* fp = L.fpert.data();
   sunindextype p = 0;
-  for (int j = 0; j < 2 * n; ++j) {
-    // Top entry of this column: 0 on the diagonal of the q block, 1 in the identity block.
-    data[p++] = j < n ? 0.0 : 1.0;
-    // Bottom entries: (qdd(y + delta e_j) - qdd(y)) / delta, with delta exactly representable.
+  for (int j = 0; j < 2 * n + nz; ++j) {
+    // Top entry of a q or v column: 0 on the diagonal of the q block, 1 in the identity block.
+    if (j < 2 * n) data[p++] = j < n ? 0.0 : 1.0;
+    // Lower entries: ([qdd; zdot](y + delta e_j) - [qdd; zdot](y)) / delta, delta exactly representable.
     const double yj = yd[j];
     const double delta = (yj + srur * std::max(std::abs(yj), 1.0)) - yj;
     yp[j] = yj + delta;
-    compute_acceleration(L.bm, yp, yp + n, &L.tau, L.qdd.data(), L.ws);
+    compute_acceleration(L.bm, yp, yp + n, yp + 2 * n, &L.tau, fp, fp + n, L.ws);
     ++L.fd_rhs_evals;
     yp[j] = yj;
     const double r = 1.0 / delta;
-    for (int i = 0; i < n; ++i) {
-      const double d = (L.qdd[i] - f_qdd[i]) * r;
+    for (int i = 0; i < n + nz; ++i) {
+      const double d = (fp[i] - f_low[i]) * r;
       if (!std::isfinite(d)) return 1;  // recoverable: CVODE cuts the step and retries
       data[p++] = d;
     }
@@ -153,14 +157,15 @@ std::unique_ptr<Lane> make_lane(const BatchModel& bm, int l, Integrator kind) {
   auto L = std::make_unique<Lane>();
   L->bm = make_batch(std::span<const Model>(&bm.models[l], 1));
   L->ws = make_workspace(L->bm);
-  const int n = bm.nseg;
+  const int n = bm.nseg, nz = bm.layout.nz, ny = 2 * n + nz;
   L->n = n;
-  L->ypert.assign(2 * n, 0.0);
-  L->qdd.assign(n, 0.0);
+  L->nz = nz;
+  L->ypert.assign(ny, 0.0);
+  L->fpert.assign(n + nz, 0.0);
   const auto& sim = bm.models[l].spec.simulation;
 
   if (SUNContext_Create(nullptr, &L->ctx) != 0) fail("SUNContext_Create", l);
-  L->y = N_VNew_Serial(2 * n, L->ctx);
+  L->y = N_VNew_Serial(ny, L->ctx);
   if (!L->y) fail("N_VNew_Serial", l);
   N_VConst(0.0, L->y);
 
@@ -174,8 +179,8 @@ std::unique_ptr<Lane> make_lane(const BatchModel& bm, int l, Integrator kind) {
 
   if (kind == Integrator::kCvodeKlu) {
     // Sparse CSC matrix with room for the pattern above; our own Jacobian fills it.
-    const sunindextype nnz = 2 * static_cast<sunindextype>(n) * n + 2 * n;
-    L->A = SUNSparseMatrix(2 * n, 2 * n, nnz, CSC_MAT, L->ctx);
+    const sunindextype nnz = static_cast<sunindextype>(2 * n) * (1 + n + nz) + static_cast<sunindextype>(nz) * (n + nz);
+    L->A = SUNSparseMatrix(ny, ny, nnz, CSC_MAT, L->ctx);
     if (!L->A) fail("SUNSparseMatrix", l);
     L->ls = SUNLinSol_KLU(L->y, L->A, L->ctx);
     if (!L->ls) fail("SUNLinSol_KLU", l);
@@ -183,7 +188,7 @@ std::unique_ptr<Lane> make_lane(const BatchModel& bm, int l, Integrator kind) {
     if (CVodeSetJacFn(L->mem, jac_klu) != CV_SUCCESS) fail("CVodeSetJacFn", l);
   } else {
     // Dense matrix; no Jacobian function, so CVODE uses its difference-quotient Jacobian.
-    L->A = SUNDenseMatrix(2 * n, 2 * n, L->ctx);
+    L->A = SUNDenseMatrix(ny, ny, L->ctx);
     if (!L->A) fail("SUNDenseMatrix", l);
     L->ls = SUNLinSol_Dense(L->y, L->A, L->ctx);
     if (!L->ls) fail("SUNLinSol_Dense", l);
@@ -233,6 +238,7 @@ void CvodeBatch::advance(BatchState& s, double dt) {
       y[i] = s.q[i * W + l];
       y[n + i] = s.v[i * W + l];
     }
+    for (int i = 0; i < L.nz; ++i) y[2 * n + i] = s.z[i * W + l];
     L.tau = s.tau[l];
     // Restart the BDF history at the torque jump and integrate exactly to the next sample.
     int flag = CVodeReInit(L.mem, t0, L.y);
@@ -249,6 +255,7 @@ void CvodeBatch::advance(BatchState& s, double dt) {
       s.q[i * W + l] = y[i];
       s.v[i * W + l] = y[n + i];
     }
+    for (int i = 0; i < L.nz; ++i) s.z[i * W + l] = y[2 * n + i];
   }
 }
 

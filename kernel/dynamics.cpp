@@ -1,7 +1,9 @@
 #include "kernel/dynamics.hpp"
 
+#include <algorithm>
 #include <cmath>
 
+#include "kernel/drive.hpp"
 #include "kernel/fastmath.hpp"
 
 namespace ff {
@@ -25,7 +27,7 @@ void compute_joint_torques(const BatchModel& bm, const double* q, const double* 
   const double* k = bm.joint_k.data();
   const double* c = bm.joint_c.data();
   const double* k3 = bm.joint_k3.data();
-  for (int l = 0; l < W; ++l) tj[l] = tau_hub[l] + calc_hub_friction(bm, l, v[l]);
+  std::copy(tau_hub, tau_hub + W, tj);
   // Spring-damper torque on the child of each beam joint.
   for (int i = 1; i < N; ++i) {
     const int o = i * W;
@@ -153,9 +155,10 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   }
 }
 
-void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
-                          double* qdd, Workspace& ws) {
-  compute_joint_torques(bm, q, v, tau_hub, ws);
+void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* z,
+                          const double* tau_cmd, double* qdd, double* zdot, Workspace& ws) {
+  compute_hub_drive(bm, q, v, z, tau_cmd, ws.tau_hub.data(), zdot);
+  compute_joint_torques(bm, q, v, ws.tau_hub.data(), ws);
   compute_forward_dynamics(bm, q, v, qdd, ws);
 }
 

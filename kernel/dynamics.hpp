@@ -6,8 +6,8 @@
 
 namespace ff {
 
-// Joint torques: tau_0 = hub torque + hub friction, tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i (i >= 1).
-// Writes ws.tau_joint.
+// Joint torques: tau_0 = the hub drive's torque (friction included, W), tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i
+// (i >= 1). Writes ws.tau_joint.
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            Workspace& ws);
 
@@ -19,9 +19,10 @@ double calc_hub_friction(const BatchModel& bm, int lane, double w);
 // Reads ws.tau_joint and ws.armature; q, v, qdd are (N x W).
 void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, double* qdd, Workspace& ws);
 
-// Everything at once: joint torques from the hub torque, then qdd.
-void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
-                          double* qdd, Workspace& ws);
+// Everything at once: the hub drive (torque on the hub and its state rates zdot, nz x W) from the
+// held demand tau_cmd (W), the joint torques, then qdd. zdot may be null when there are no drive states.
+void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* z,
+                          const double* tau_cmd, double* qdd, double* zdot, Workspace& ws);
 
 // Tip deflection (m) and tip angle (rad) of one lane (reference-rig.md, "Signals").
 struct TipKinematics {

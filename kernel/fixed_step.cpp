@@ -1,5 +1,10 @@
 #include "kernel/fixed_step.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
 
 namespace ff {
@@ -10,27 +15,99 @@ void axpy(std::size_t n, const double* y, double a, const double* k, double* y1)
 #pragma omp simd
   for (std::size_t j = 0; j < n; ++j) y1[j] = y[j] + a * k[j];
 }
+
+// Solves A x = b in place (b becomes x) for a small dense n x n A (row-major), Gaussian
+// elimination with partial pivoting.
+void solve_small(int n, double* A, double* b) {
+  for (int c = 0; c < n; ++c) {
+    int piv = c;
+    for (int r = c + 1; r < n; ++r)
+      if (std::abs(A[r * n + c]) > std::abs(A[piv * n + c])) piv = r;
+    if (piv != c) {
+      for (int k = 0; k < n; ++k) std::swap(A[c * n + k], A[piv * n + k]);
+      std::swap(b[c], b[piv]);
+    }
+    const double d = A[c * n + c];
+    for (int r = c + 1; r < n; ++r) {
+      const double f = A[r * n + c] / d;
+      for (int k = c; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
+      b[r] -= f * b[c];
+    }
+  }
+  for (int r = n - 1; r >= 0; --r) {
+    double x = b[r];
+    for (int k = r + 1; k < n; ++k) x -= A[r * n + k] * b[k];
+    b[r] = x / A[r * n + r];
+  }
+}
+
+// The hub drive's part of an SDIRK stage: solves Z = zpre + gh f(q, v, Z) for every lane by
+// simplified Newton (Jacobian df/dZ by forward differences at zpre, four iterations), with the
+// chain held at (q, v). Writes Z (nz x W); uses ws.zdot and ws.zpert.
+void solve_drive_stage(const BatchModel& bm, const double* q, const double* v, const double* tau_cmd,
+                       const double* zpre, double gh, double* Z, Workspace& ws) {
+  const int W = bm.W, nz = bm.layout.nz;
+  const std::size_t nzw = static_cast<std::size_t>(nz) * W;
+  constexpr int kMax = 8;  // the most drive states: 4 hydraulic + 2 shaft + 1 bristle
+  static const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
+  double* f0 = ws.zdot.data();
+  double* zp = ws.zpert.data();
+  double* fp = ws.znew.data();
+  // Iteration matrices I - gh df/dZ of every lane, (nz x nz) each.
+  double* jac = ws.zjac.data();
+  compute_hub_drive(bm, q, v, zpre, tau_cmd, ws.tau_hub.data(), f0);
+  std::copy(zpre, zpre + nzw, zp);
+  for (int j = 0; j < nz; ++j) {
+    double delta[kMaxLanes];
+    for (int l = 0; l < W; ++l) {
+      const double zj = zpre[j * W + l];
+      delta[l] = (zj + srur * std::max(std::abs(zj), 1.0)) - zj;
+      zp[j * W + l] = zj + delta[l];
+    }
+    compute_hub_drive(bm, q, v, zp, tau_cmd, ws.tau_hub.data(), fp);
+    for (int l = 0; l < W; ++l) {
+      zp[j * W + l] = zpre[j * W + l];
+      for (int i = 0; i < nz; ++i)
+        jac[(l * nz + i) * nz + j] = (i == j ? 1.0 : 0.0) - gh * (fp[i * W + l] - f0[i * W + l]) / delta[l];
+    }
+  }
+  std::copy(zpre, zpre + nzw, Z);
+  for (int it = 0; it < 4; ++it) {
+    compute_hub_drive(bm, q, v, Z, tau_cmd, ws.tau_hub.data(), fp);
+    for (int l = 0; l < W; ++l) {
+      double A[kMax * kMax], r[kMax];
+      std::copy(jac + l * nz * nz, jac + (l + 1) * nz * nz, A);
+      for (int i = 0; i < nz; ++i) r[i] = -(Z[i * W + l] - zpre[i * W + l] - gh * fp[i * W + l]);
+      solve_small(nz, A, r);
+      for (int i = 0; i < nz; ++i) Z[i * W + l] += r[i];
+    }
+  }
+}
 }  // namespace
 
 void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
-  const std::size_t n = s.q.size();
+  const std::size_t n = s.q.size(), nz = s.z.size();
   double* q = s.q.data();
   double* v = s.v.data();
-  double *q1 = ws.q1.data(), *v1 = ws.v1.data();
+  double* z = s.z.data();
+  double *q1 = ws.q1.data(), *v1 = ws.v1.data(), *z1 = ws.z1.data();
   const double* tau = s.tau.data();
-  // Stage derivatives: kq[i] = velocity, kv[i] = acceleration (Butcher tableau of RK4).
+  // Stage derivatives: kq[i] = velocity, kv[i] = acceleration, kz[i] = drive state rate (Butcher tableau of RK4).
   const double c[4] = {0.0, 0.5 * h, 0.5 * h, h};
   for (int st = 0; st < 4; ++st) {
     const double* qs = q;
     const double* vs = v;
+    const double* zs = z;
     if (st > 0) {
       axpy(n, q, c[st], ws.kq[st - 1].data(), q1);
       axpy(n, v, c[st], ws.kv[st - 1].data(), v1);
+      axpy(nz, z, c[st], ws.kz[st - 1].data(), z1);
       qs = q1;
       vs = v1;
+      zs = z1;
     }
     std::copy(vs, vs + n, ws.kq[st].data());
-    compute_acceleration(bm, qs, vs, tau, ws.kv[st].data(), ws);
+    compute_acceleration(bm, qs, vs, zs, tau, ws.kv[st].data(), ws.kz[st].data(), ws);
   }
   // y += h/6 (k1 + 2 k2 + 2 k3 + k4)
   const double w6 = h / 6.0;
@@ -41,6 +118,8 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
     q[j] += w6 * (kq0[j] + 2.0 * kq1[j] + 2.0 * kq2[j] + kq3[j]);
     v[j] += w6 * (kv0[j] + 2.0 * kv1[j] + 2.0 * kv2[j] + kv3[j]);
   }
+  const double *kz0 = ws.kz[0].data(), *kz1 = ws.kz[1].data(), *kz2 = ws.kz[2].data(), *kz3 = ws.kz[3].data();
+  for (std::size_t j = 0; j < nz; ++j) z[j] += w6 * (kz0[j] + 2.0 * kz1[j] + 2.0 * kz2[j] + kz3[j]);
 }
 
 void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
@@ -68,7 +147,12 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
     qk[j] = qs[j];
     vk[j] = v[j] + gh * a_prev[j];
   }
-  compute_joint_torques(bm, qs, vs, s.tau.data(), ws);
+  // The hub drive's stage (implicit, with the chain at the spring state), then its torque on the hub.
+  const bool drive = bm.layout.nz > 0;
+  double *z = s.z.data(), *Z1 = ws.z1.data(), *Z2 = ws.kz[0].data(), *zpre = ws.kz[1].data();
+  if (drive) solve_drive_stage(bm, qs, vs, s.tau.data(), z, gh, Z1, ws);
+  compute_hub_drive(bm, qs, vs, Z1, s.tau.data(), ws.tau_hub.data(), nullptr);
+  compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws);
   compute_forward_dynamics(bm, qk, vk, A1, ws);
   // Stage 2 (t + h): Q2 = q + (1-g) h V1 + gh V2, V2 = v + (1-g) h A1 + gh A2.
   const double b1 = (1.0 - g) * h;
@@ -83,7 +167,15 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
     qk[j] = qs[j];
     vk[j] = vpre[j] + gh * A1[j];
   }
-  compute_joint_torques(bm, qs, vs, s.tau.data(), ws);
+  // Drive: Z2 = z + (1-g) h F1 + gh f(Z2), with F1 = (Z1 - z) / gh from the first stage.
+  if (drive) {
+    const std::size_t nz = s.z.size();
+    for (std::size_t j = 0; j < nz; ++j) zpre[j] = z[j] + b1 * (Z1[j] - z[j]) / gh;
+    solve_drive_stage(bm, qs, vs, s.tau.data(), zpre, gh, Z2, ws);
+    std::copy(Z2, Z2 + nz, z);
+  }
+  compute_hub_drive(bm, qs, vs, z, s.tau.data(), ws.tau_hub.data(), nullptr);
+  compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws);
   compute_forward_dynamics(bm, qk, vk, A2, ws);
   // The second stage is the new state (stiffly accurate).
 #pragma omp simd

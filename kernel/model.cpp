@@ -1,9 +1,11 @@
 #include "kernel/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "kernel/errors.hpp"
 #include "kernel/batch.hpp"
+#include "kernel/drive.hpp"
 #include "kernel/modes.hpp"
 #include "kernel/notch.hpp"
 
@@ -99,6 +101,47 @@ void validate(const ModelSpec& s, const std::string& src) {
       throw ConfigError(src, 0, std::string(key) + ".delay", "must be between 0 and 10000 samples");
   }
   positive(s.simulation.atol, "simulation.atol");
+  if (s.friction.model != "static" && s.friction.model != "lugre")
+    throw ConfigError(src, 0, "friction.model", "unknown model '" + s.friction.model + "' (static, lugre)");
+  if (s.friction.model == "lugre") {
+    positive(s.friction.coulomb, "friction.coulomb");
+    positive(s.friction.bristle_stiffness, "friction.bristle_stiffness");
+    non_negative(s.friction.bristle_damping, "friction.bristle_damping");
+  }
+  if (s.controller.load_signal != "moment" && s.controller.load_signal != "pressure")
+    throw ConfigError(src, 0, "controller.load_signal", "unknown signal '" + s.controller.load_signal + "' (moment, pressure)");
+  if (s.controller.load_signal == "pressure" && !s.hydraulics.enabled)
+    throw ConfigError(src, 0, "controller.load_signal", "'pressure' needs hydraulics.enabled: true");
+  const auto& h = s.hydraulics;
+  if (h.enabled) {
+    positive(h.displacement, "hydraulics.displacement");
+    positive(h.chamber_volume, "hydraulics.chamber_volume");
+    positive(h.bulk_modulus, "hydraulics.bulk_modulus");
+    positive(h.supply_pressure, "hydraulics.supply_pressure");
+    non_negative(h.tank_pressure, "hydraulics.tank_pressure");
+    if (!(h.tank_pressure < h.supply_pressure))
+      throw ConfigError(src, 0, "hydraulics.tank_pressure", "must be below hydraulics.supply_pressure");
+    non_negative(h.relief_pressure, "hydraulics.relief_pressure");
+    if (h.relief_pressure > 0 && !(h.relief_pressure > h.tank_pressure))
+      throw ConfigError(src, 0, "hydraulics.relief_pressure", "must be above hydraulics.tank_pressure (or 0 for 1.1 p_s)");
+    positive(h.rated_flow, "hydraulics.rated_flow");
+    positive(h.rated_drop, "hydraulics.rated_drop");
+    positive(h.laminar_drop, "hydraulics.laminar_drop");
+    non_negative(h.leakage, "hydraulics.leakage");
+    positive(h.valve_frequency, "hydraulics.valve_frequency");
+    positive(h.valve_damping, "hydraulics.valve_damping");
+    non_negative(h.pressure_gain, "hydraulics.pressure_gain");
+  }
+  const auto& d = s.drive;
+  if (d.enabled) {
+    positive(d.inertia, "drive.inertia");
+    positive(d.ratio, "drive.ratio");
+    if (!(d.efficiency > 0 && d.efficiency <= 1)) throw ConfigError(src, 0, "drive.efficiency", "must be in (0, 1]");
+    positive(d.stiffness, "drive.stiffness");
+    non_negative(d.cubic_stiffness, "drive.cubic_stiffness");
+    non_negative(d.damping, "drive.damping");
+    non_negative(d.backlash, "drive.backlash");
+  }
 }
 
 }  // namespace
@@ -169,6 +212,9 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     auto modes = calc_clamped_modes(m);
     modes.insert(modes.end(), closed_loop.begin(), closed_loop.end());
     m.substeps = calc_auto_substeps(modes, m.control_period, spec.simulation.integrator);
+    // The hub drive's own rates (hydraulics, drive train, LuGre): h rate <= 1.
+    const double rate = calc_drive_rate(m);
+    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(rate * m.control_period)));
   }
   m.omega_z[0] = spec.notch.omega_z[0];
   m.omega_z[1] = spec.notch.omega_z[1];

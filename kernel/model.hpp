@@ -37,6 +37,7 @@ struct ControllerSpec {
   double torque_limit = 0.0;      // |tau| bound, N·m; 0 = unlimited
   double load_compensation = 0.0; // gain on the measured root bending moment fed forward (seed, "load compensation")
   double feedforward = 0.0;       // gain f on the model-based feed-forward f (J_rigid r'' + kd r') (1 = full)
+  std::string load_signal = "moment";  // load compensation from the root bending "moment" or the hydraulic "pressure" (n D dp)
 };
 
 // Robust notch filter of seed eq. 6 acting on the reference.
@@ -69,6 +70,46 @@ struct FrictionSpec {
   double stiction = 0.0;          // Fs >= Fc: breakaway torque of the Stribeck peak, N·m; 0 = Fc
   double stribeck_velocity = 0.01;  // vs, rad/s
   double smoothing = 1e-3;        // eps, rad/s: the tanh regularisation (small = sharper, stiffer)
+  // "static": the map above. "lugre": the LuGre bristle model (Canudas de Wit et al. 1995) with a state z:
+  //   dz/dt = w - sigma0 |w| z / g(w),  g(w) = Fc + (Fs - Fc) exp(-(w/vs)^2),  tau_f = -(sigma0 z + sigma1 dz/dt + b w).
+  std::string model = "static";
+  double bristle_stiffness = 1.0e5;  // sigma0, N·m/rad
+  double bristle_damping = 300.0;    // sigma1, N·m·s/rad
+};
+
+// Hydraulic rotary actuator (rack and pinion) behind a servo valve; off by default, when the
+// controller's torque acts on the hub directly. The valve amplifier closes a torque loop on the
+// chamber pressures: spool command u = sat(K (tau_cmd - D (p_a - p_b)) / (D p_s), -1, 1).
+struct HydraulicSpec {
+  bool enabled = false;
+  double displacement = 2.5e-3;   // D = piston area x pinion radius, m^3/rad (torque D dp, flow D w)
+  double chamber_volume = 4.5e-3; // V0, each chamber with the rack centred (lines included), m^3
+  double bulk_modulus = 1.4e9;    // beta, Pa
+  double supply_pressure = 21e6;  // p_s, Pa
+  double tank_pressure = 0.2e6;   // p_t, Pa
+  double relief_pressure = 0.0;   // p_r, Pa: relief valves open above it; 0 = 1.1 p_s
+  double rated_flow = 1.6e-3;     // Q_r through one land at full opening and the rated drop, m^3/s
+  double rated_drop = 3.5e6;      // that drop, Pa
+  double laminar_drop = 0.1e6;    // below this drop the orifice flow turns linear (smooth zero crossing), Pa
+  double leakage = 1.0e-12;       // cross-port leakage a -> b, m^3/(s·Pa)
+  double valve_frequency = 200.0; // spool natural frequency, Hz
+  double valve_damping = 0.7;     // spool damping ratio
+  double pressure_gain = 5.0;     // K of the torque loop; 0 = valve held closed
+};
+
+// Drive train between the actuator and the hub; off by default (actuator rigidly on the hub).
+// Actuator shaft angle theta_a, output twist d = theta_a / n - theta_h, free play +-b:
+//   tau_s = k e + k3 e^3 + c dd/dt in contact (e = d -+ b beyond the play, 0 inside), never pulling.
+// The hub gets tau_s; the shaft feels tau_s / (n eta) when driving the load, tau_s eta / n when driven.
+struct DriveSpec {
+  bool enabled = false;
+  double inertia = 5.0;           // J_a, actuator-side inertia (rotor, pinion, gears) on the shaft, kg·m^2
+  double ratio = 1.0;             // n = shaft angle / output angle
+  double efficiency = 1.0;        // eta in (0, 1]
+  double stiffness = 2.0e6;       // k, output side, N·m/rad
+  double cubic_stiffness = 0.0;   // k3, hardening, N·m/rad^3
+  double damping = 2.0e3;         // c, N·m·s/rad
+  double backlash = 0.0;          // total free play 2b at the output, rad
 };
 
 // Input shaper on the reference (kernel/shaper.hpp), off by default.
@@ -124,6 +165,8 @@ struct ModelSpec {
   ShaperSpec shaper;
   SensorSpec sensors;
   FrictionSpec friction;
+  HydraulicSpec hydraulics;
+  DriveSpec drive;
   TrajectorySpec trajectory;
   SimulationSpec simulation;
 };

@@ -74,6 +74,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   ctrl.optional("torque_limit", s.controller.torque_limit);
   ctrl.optional("load_compensation", s.controller.load_compensation);
   ctrl.optional("feedforward", s.controller.feedforward);
+  ctrl.optional("load_signal", s.controller.load_signal);
   ctrl.finish();
 
   auto notch = top.child("notch");
@@ -107,7 +108,40 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   fr.optional("stiction", s.friction.stiction);
   fr.optional("stribeck_velocity", s.friction.stribeck_velocity);
   fr.optional("smoothing", s.friction.smoothing);
+  fr.optional("model", s.friction.model);
+  fr.optional("bristle_stiffness", s.friction.bristle_stiffness);
+  fr.optional("bristle_damping", s.friction.bristle_damping);
   fr.finish();
+
+  auto hy = top.child("hydraulics");
+  auto& h = s.hydraulics;
+  hy.optional("enabled", h.enabled);
+  hy.optional("displacement", h.displacement);
+  hy.optional("chamber_volume", h.chamber_volume);
+  hy.optional("bulk_modulus", h.bulk_modulus);
+  hy.optional("supply_pressure", h.supply_pressure);
+  hy.optional("tank_pressure", h.tank_pressure);
+  hy.optional("relief_pressure", h.relief_pressure);
+  hy.optional("rated_flow", h.rated_flow);
+  hy.optional("rated_drop", h.rated_drop);
+  hy.optional("laminar_drop", h.laminar_drop);
+  hy.optional("leakage", h.leakage);
+  hy.optional("valve_frequency", h.valve_frequency);
+  hy.optional("valve_damping", h.valve_damping);
+  hy.optional("pressure_gain", h.pressure_gain);
+  hy.finish();
+
+  auto dr = top.child("drive");
+  auto& d = s.drive;
+  dr.optional("enabled", d.enabled);
+  dr.optional("inertia", d.inertia);
+  dr.optional("ratio", d.ratio);
+  dr.optional("efficiency", d.efficiency);
+  dr.optional("stiffness", d.stiffness);
+  dr.optional("cubic_stiffness", d.cubic_stiffness);
+  dr.optional("damping", d.damping);
+  dr.optional("backlash", d.backlash);
+  dr.finish();
 
   auto traj = top.child("trajectory");
   traj.optional("move_time", s.trajectory.move_time);

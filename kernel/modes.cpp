@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "kernel/drive.hpp"
+
 namespace ff {
 
 double Mode::frequency_hz() const { return omega_n / (2.0 * std::numbers::pi); }
@@ -91,6 +93,10 @@ std::vector<Mode> calc_closed_loop_modes(const Model& m) {
   damp(0, 0) += c.kd;
   stiff(0, 1) += c.load_compensation * m.joint_k[1];
   damp(0, 1) += c.load_compensation * m.joint_c[1];
+  // A hydraulic actuator's torque loop, well below its bandwidth, is a torque source in series with
+  // a damper: tau = tau_cmd - b_h w, b_h = D^2 p_s / (K K_q) (kernel/drive.hpp).
+  const auto& h = m.spec.hydraulics;
+  if (h.enabled && h.pressure_gain > 0) damp(0, 0) += calc_hydraulic_damping(h);
   return eigen_modes(state_matrix(mass, stiff, damp, c.ki));
 }
 

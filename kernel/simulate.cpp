@@ -7,6 +7,7 @@
 
 #include "kernel/controller.hpp"
 #include "kernel/cvode.hpp"
+#include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
 #include "kernel/files.hpp"
 #include "kernel/fixed_step.hpp"
@@ -28,15 +29,35 @@ void mark_nonfinite(const BatchModel& bm, BatchState& s) {
   }
 }
 
+// The extra channels a batch's traces carry, in order.
+std::vector<std::string> extra_channels(const BatchModel& bm) {
+  std::vector<std::string> names;
+  if (bm.layout.pressure >= 0 || bm.layout.shaft >= 0) names.push_back("torque_demand");
+  if (bm.layout.pressure >= 0) {
+    names.push_back("pressure_a");
+    names.push_back("pressure_b");
+  }
+  return names;
+}
+
 void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f, double* defl,
             double* tip_angle, Workspace& ws, std::vector<Trace>& out) {
   compute_tip(bm, s.q.data(), defl, tip_angle, ws);
-  for (int l = 0; l < bm.W; ++l) {
+  double* torque = ws.tau_hub.data();
+  compute_actuator_torque(bm, s.q.data(), s.v.data(), s.z.data(), s.tau.data(), torque);
+  const int W = bm.W, pr = bm.layout.pressure;
+  for (int l = 0; l < W; ++l) {
     Trace& tr = out[l];
     tr.t.push_back(s.t);
     tr.ref.push_back(ref[l]);
     tr.ref_filtered.push_back(ref_f[l]);
-    tr.torque.push_back(s.tau[l]);
+    tr.torque.push_back(torque[l]);
+    std::size_t c = 0;
+    if (pr >= 0 || bm.layout.shaft >= 0) tr.extra[c++].second.push_back(s.tau[l]);
+    if (pr >= 0) {
+      tr.extra[c++].second.push_back(s.z[pr * W + l] * kPressureUnit);
+      tr.extra[c++].second.push_back(s.z[(pr + 1) * W + l] * kPressureUnit);
+    }
     tr.hub_angle.push_back(s.q[l]);
     tr.hub_rate.push_back(s.v[l]);
     tr.tip_deflection.push_back(defl[l]);
@@ -83,10 +104,16 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
 
   BatchRun run;
   run.traces.resize(W);
-  for (auto& tr : run.traces)
+  const auto extra = extra_channels(bm);
+  for (auto& tr : run.traces) {
     for (auto* x : {&tr.t, &tr.ref, &tr.ref_filtered, &tr.torque, &tr.hub_angle, &tr.hub_rate, &tr.tip_deflection,
                     &tr.tip_angle})
       x->reserve(nsamples);
+    for (const auto& name : extra) {
+      tr.extra.emplace_back(name, std::vector<double>());
+      tr.extra.back().second.reserve(nsamples);
+    }
+  }
 
   std::vector<double> ref(W), ref_ff(W), ref_f(W), defl(W), tip_angle(W);
   const double h = T / bm.substeps;
@@ -124,13 +151,20 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
 }
 
 void write_trace_csv(const Trace& tr, const std::string& path) {
-  std::string text = "t,ref,ref_filtered,hub_torque,hub_angle,hub_rate,tip_deflection,tip_angle\n";
+  std::string text = "t,ref,ref_filtered,hub_torque,hub_angle,hub_rate,tip_deflection,tip_angle";
+  for (const auto& [name, values] : tr.extra) text += "," + name;
+  text += "\n";
   char buf[512];
   for (std::size_t k = 0; k < tr.t.size(); ++k) {
-    std::snprintf(buf, sizeof buf, "%.6f,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", tr.t[k], tr.ref[k],
+    std::snprintf(buf, sizeof buf, "%.6f,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g", tr.t[k], tr.ref[k],
                   tr.ref_filtered[k], tr.torque[k], tr.hub_angle[k], tr.hub_rate[k], tr.tip_deflection[k],
                   tr.tip_angle[k]);
     text += buf;
+    for (const auto& [name, values] : tr.extra) {
+      std::snprintf(buf, sizeof buf, ",%.10g", values[k]);
+      text += buf;
+    }
+    text += "\n";
   }
   write_file_atomic(path, text);
 }

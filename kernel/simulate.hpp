@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kernel/batch.hpp"
@@ -16,11 +17,13 @@ struct Trace {
   std::vector<double> t;               // s
   std::vector<double> ref;             // commanded hub angle r, rad
   std::vector<double> ref_filtered;    // r after the notch filter, rad
-  std::vector<double> torque;          // hub torque of this sample, N·m
+  std::vector<double> torque;          // the actuator's torque on the hub (the demand, with an ideal actuator), N·m
   std::vector<double> hub_angle;       // rad
   std::vector<double> hub_rate;        // rad/s
   std::vector<double> tip_deflection;  // m
   std::vector<double> tip_angle;       // rad
+  // Further channels the model has, by name (SI units): torque_demand, pressure_a, pressure_b (Pa) ...
+  std::vector<std::pair<std::string, std::vector<double>>> extra;
 };
 
 struct BatchRun {
@@ -33,7 +36,7 @@ struct BatchRun {
 BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe = nullptr);
 
 // Writes one trace as CSV (columns t, ref, ref_filtered, hub_torque, hub_angle, hub_rate,
-// tip_deflection, tip_angle), atomically.
+// tip_deflection, tip_angle, then the extra channels), atomically.
 void write_trace_csv(const Trace& tr, const std::string& path);
 // Reads a trace written by write_trace_csv. Throws std::runtime_error naming the path and line.
 Trace read_trace_csv(const std::string& path);

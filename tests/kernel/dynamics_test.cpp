@@ -23,7 +23,7 @@ Eigen::VectorXd aba(const Model& m, const Eigen::VectorXd& q, const Eigen::Vecto
   const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
   Workspace ws = make_workspace(bm);
   Eigen::VectorXd qdd(m.nseg);
-  compute_acceleration(bm, q.data(), v.data(), &tau, qdd.data(), ws);
+  compute_acceleration(bm, q.data(), v.data(), nullptr, &tau, qdd.data(), nullptr, ws);
   return qdd;
 }
 

@@ -1,0 +1,195 @@
+#include "kernel/drive.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/dynamics.hpp"
+
+namespace ff {
+
+DriveLayout make_drive_layout(const ModelSpec& spec) {
+  DriveLayout d;
+  if (spec.hydraulics.enabled) {
+    d.spool = d.nz;
+    d.pressure = d.nz + 2;
+    d.nz += 4;
+  }
+  if (spec.drive.enabled) {
+    d.shaft = d.nz;
+    d.nz += 2;
+  }
+  if (spec.friction.model == "lugre") d.bristle = d.nz++;
+  return d;
+}
+
+LaneDrive make_lane_drive(const Model& m) {
+  const auto& h = m.spec.hydraulics;
+  const auto& d = m.spec.drive;
+  const auto& f = m.spec.friction;
+  LaneDrive p;
+  p.lugre = f.model == "lugre";
+  p.sigma0 = f.bristle_stiffness;
+  p.sigma1 = f.bristle_damping;
+  if (h.enabled) {
+    p.D = h.displacement;
+    p.V0 = h.chamber_volume;
+    p.beta = h.bulk_modulus;
+    p.ps = h.supply_pressure;
+    p.pt = h.tank_pressure;
+    p.pr = h.relief_pressure > 0 ? h.relief_pressure : 1.1 * h.supply_pressure;
+    p.dp_lam = h.laminar_drop;
+    // Q = kv x root(dp): rated flow at full opening and the rated drop.
+    p.kv = h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop);
+    // Relief valves pass the rated flow 10 % above their cracking pressure.
+    p.kr = h.rated_flow / (0.1 * p.pr);
+    p.leak = h.leakage;
+    p.wv = 2.0 * M_PI * h.valve_frequency;
+    p.zv = h.valve_damping;
+    p.gain = h.pressure_gain;
+  }
+  if (d.enabled) {
+    p.ja = d.inertia;
+    p.n = d.ratio;
+    p.eta = d.efficiency;
+    p.k = d.stiffness;
+    p.k3 = d.cubic_stiffness;
+    p.c = d.damping;
+    p.b = 0.5 * d.backlash;
+  }
+  return p;
+}
+
+double calc_orifice_root(double dp, double dp_lam) { return dp / std::sqrt(std::sqrt(dp * dp + dp_lam * dp_lam)); }
+
+double calc_transmission_torque(const LaneDrive& p, double d, double dd) {
+  if (p.b == 0.0) return (p.k + p.k3 * d * d) * d + p.c * dd;
+  // Free play: no torque inside +-b; in contact the gear teeth push, never pull.
+  const double e = d > p.b ? d - p.b : (d < -p.b ? d + p.b : 0.0);
+  if (e == 0.0) return 0.0;
+  const double t = (p.k + p.k3 * e * e) * e + p.c * dd;
+  return e > 0.0 ? std::max(t, 0.0) : std::min(t, 0.0);
+}
+
+double calc_hydraulic_damping(const HydraulicSpec& h) {
+  const double kv = h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop);
+  const double kq = kv * calc_orifice_root(0.5 * (h.supply_pressure - h.tank_pressure), h.laminar_drop);
+  return h.displacement * h.displacement * h.supply_pressure / (h.pressure_gain * kq);
+}
+
+double calc_hydraulic_frequency(const HydraulicSpec& h, double inertia) {
+  return std::sqrt(4.0 * h.bulk_modulus * h.displacement * h.displacement / (2.0 * h.chamber_volume * inertia));
+}
+
+double calc_drive_rate(const Model& m) {
+  const LaneDrive p = make_lane_drive(m);
+  const DriveLayout L = make_drive_layout(m.spec);
+  const double j0 = m.body[0].inertia;  // the hub's own inertia: what a stiff drive shakes first
+  double coupled = 0.0, own = 0.0;
+  if (L.pressure >= 0) {
+    const double jp = L.shaft >= 0 ? p.ja : j0;
+    coupled = std::max(coupled, std::sqrt(2.0 * p.beta * p.D * p.D / (p.V0 * jp)));  // oil spring on the pinion
+    const double kq = p.kv * std::sqrt(0.5 * p.ps);                                   // flow gain at full supply, m^3/s
+    own = std::max({own, p.wv, 2.0 * p.beta * kq * p.gain / (p.V0 * p.ps), p.beta * p.kr / p.V0});
+  }
+  if (L.shaft >= 0) {
+    const double inv = 1.0 / (p.ja * p.n * p.n) + 1.0 / j0;  // shaft reflected to the output, and the hub
+    coupled = std::max({coupled, std::sqrt(p.k * inv), p.c * inv});
+  }
+  if (L.bristle >= 0) {
+    coupled = std::max({coupled, std::sqrt(p.sigma0 / j0), p.sigma1 / j0});
+    own = std::max(own, p.sigma0 / m.spec.friction.coulomb);  // bristle relaxation at 1 rad/s
+  }
+  return std::max(coupled, own);
+}
+
+void init_drive_state(const BatchModel& bm, double* z) {
+  const int W = bm.W;
+  const DriveLayout& L = bm.layout;
+  std::fill(z, z + static_cast<std::size_t>(L.nz) * W, 0.0);
+  if (L.pressure >= 0)
+    for (int l = 0; l < W; ++l) {
+      const LaneDrive& p = bm.drive[l];
+      z[L.pressure * W + l] = z[(L.pressure + 1) * W + l] = 0.5 * (p.ps + p.pt) / kPressureUnit;
+    }
+}
+
+namespace {
+
+// One lane of compute_hub_drive / compute_actuator_torque. Writes zdot only when given.
+double lane_drive(const BatchModel& bm, int l, const double* q, const double* v, const double* z, double tau_cmd,
+                  double* zdot, double* tau_act) {
+  const int W = bm.W;
+  const DriveLayout& L = bm.layout;
+  const LaneDrive& p = bm.drive[l];
+  auto Z = [&](int row) { return z[row * W + l]; };
+  auto set = [&](int row, double x) {
+    if (zdot) zdot[row * W + l] = x;
+  };
+  const double th_h = q[l], w_h = v[l];
+  // The pinion (or motor rotor) turns with the hub, or with the drive train's shaft.
+  const double th_p = L.shaft >= 0 ? Z(L.shaft) : th_h;
+  const double w_p = L.shaft >= 0 ? Z(L.shaft + 1) : w_h;
+  const double demand = tau_cmd / p.n;  // at the shaft, N·m
+  double tau_p = demand;                // what the actuator puts on its shaft, N·m
+
+  if (L.pressure >= 0) {
+    const double pa = Z(L.pressure) * kPressureUnit, pb = Z(L.pressure + 1) * kPressureUnit;
+    tau_p = p.D * (pa - pb);
+    // Servo valve: second-order spool driven by the torque loop's command, travel limited to +-1.
+    const double u = std::clamp(p.gain * (demand - tau_p) / (p.D * p.ps), -1.0, 1.0);
+    const double xv = Z(L.spool), xvd = Z(L.spool + 1);
+    set(L.spool, xvd);
+    set(L.spool + 1, p.wv * p.wv * (u - xv) - 2.0 * p.zv * p.wv * xvd);
+    // Orifice flows of the four lands (critically lapped), Q = kv x root(dp), m^3/s.
+    const double x = std::clamp(xv, -1.0, 1.0), xp = std::max(x, 0.0), xm = std::max(-x, 0.0);
+    const double qa = p.kv * (xp * calc_orifice_root(p.ps - pa, p.dp_lam) - xm * calc_orifice_root(pa - p.pt, p.dp_lam));
+    const double qb = p.kv * (xm * calc_orifice_root(p.ps - pb, p.dp_lam) - xp * calc_orifice_root(pb - p.pt, p.dp_lam));
+    const double ql = p.leak * (pa - pb);  // cross-port leakage a -> b
+    // Relief to tank above p_r, anti-cavitation from tank below p_t.
+    const double ra = p.kr * (std::max(p.pt - pa, 0.0) - std::max(pa - p.pr, 0.0));
+    const double rb = p.kr * (std::max(p.pt - pb, 0.0) - std::max(pb - p.pr, 0.0));
+    // Chamber continuity with compressibility: dp/dt = beta / V (Q_in - dV/dt), V = V0 +- D theta_p.
+    const double va = std::max(p.V0 + p.D * th_p, 0.05 * p.V0), vb = std::max(p.V0 - p.D * th_p, 0.05 * p.V0);
+    set(L.pressure, p.beta / va * (qa - ql + ra - p.D * w_p) / kPressureUnit);
+    set(L.pressure + 1, p.beta / vb * (qb + ql + rb + p.D * w_p) / kPressureUnit);
+  }
+
+  double tau_hub = tau_p;
+  if (L.shaft >= 0) {
+    // Gear n, free play and compliance between shaft and hub; efficiency loses power in either direction.
+    const double ts = calc_transmission_torque(p, th_p / p.n - th_h, w_p / p.n - w_h);
+    const double driving = 0.5 * (1.0 + std::tanh(ts * w_p / p.n));  // 1 when the shaft powers the load (1 W scale)
+    const double reaction = ts / p.n * (driving / p.eta + (1.0 - driving) * p.eta);
+    set(L.shaft, w_p);
+    set(L.shaft + 1, (tau_p - reaction) / p.ja);
+    tau_hub = ts;
+  }
+  if (tau_act) *tau_act = tau_hub;
+
+  // Friction at the hub: the LuGre bristles or the static map.
+  if (L.bristle >= 0) {
+    const double fc = bm.fric_c[l], x = w_h * bm.fric_inv_vs[l];
+    const double g = fc + bm.fric_s[l] * std::exp(-x * x);
+    const double zb = Z(L.bristle);
+    const double zd = w_h - p.sigma0 * std::abs(w_h) * zb / g;
+    set(L.bristle, zd);
+    tau_hub -= p.sigma0 * zb + p.sigma1 * zd + bm.fric_b[l] * w_h;
+  } else {
+    tau_hub += calc_hub_friction(bm, l, w_h);
+  }
+  return tau_hub;
+}
+
+}  // namespace
+
+void compute_hub_drive(const BatchModel& bm, const double* q, const double* v, const double* z, const double* tau_cmd,
+                       double* tau_hub, double* zdot) {
+  for (int l = 0; l < bm.W; ++l) tau_hub[l] = lane_drive(bm, l, q, v, z, tau_cmd[l], zdot, nullptr);
+}
+
+void compute_actuator_torque(const BatchModel& bm, const double* q, const double* v, const double* z,
+                             const double* tau_cmd, double* tau_act) {
+  for (int l = 0; l < bm.W; ++l) lane_drive(bm, l, q, v, z, tau_cmd[l], nullptr, &tau_act[l]);
+}
+
+}  // namespace ff

@@ -1,0 +1,79 @@
+// The hub drive: what turns the controller's torque demand into torque on the hub, and the
+// friction there. Each part is optional (a YAML block, off by default) and, when on, owns states
+// in BatchState::z (rows given by DriveLayout, lane innermost like q and v):
+//   - hydraulic rotary actuator: servo-valve spool x_v (normalised) and rate, chamber pressures
+//     p_a, p_b (stored in MPa so that every state is of order one);
+//   - drive train: actuator shaft angle theta_a and rate (gear, backlash, compliance to the hub);
+//   - LuGre friction at the hub: bristle deflection z (rad).
+// Without any of them the hub torque is the demand plus the static friction map, as before.
+#pragma once
+
+#include "kernel/model.hpp"
+
+namespace ff {
+
+struct BatchModel;
+
+inline constexpr double kPressureUnit = 1.0e6;  // Pa per stored pressure unit (MPa)
+
+// Rows of BatchState::z of each part; -1 when the part is off.
+struct DriveLayout {
+  int spool = -1;     // x_v, then dx_v/dt (1/s)
+  int pressure = -1;  // p_a, then p_b (MPa)
+  int shaft = -1;     // theta_a (rad), then omega_a (rad/s)
+  int bristle = -1;   // LuGre z (rad)
+  int nz = 0;         // rows in all
+};
+
+DriveLayout make_drive_layout(const ModelSpec& spec);
+
+// Per-lane constants of the drive, derived once from the model (SI units).
+struct LaneDrive {
+  bool lugre = false;
+  // hydraulics
+  double D = 0, V0 = 0, beta = 0, ps = 0, pt = 0, pr = 0, kv = 0, dp_lam = 0, leak = 0, kr = 0;
+  double wv = 0, zv = 0, gain = 0;
+  // drive train
+  double ja = 0, n = 1, eta = 1, k = 0, k3 = 0, c = 0, b = 0;
+  // LuGre (b, Fc, Fs, vs shared with the static map in BatchModel)
+  double sigma0 = 0, sigma1 = 0;
+};
+
+LaneDrive make_lane_drive(const Model& m);
+
+// The drive at rest with the hub at angle zero: spool centred, both chambers at the mean of
+// supply and tank pressure, shaft aligned with the hub, bristles relaxed. Writes z (nz x W).
+void init_drive_state(const BatchModel& bm, double* z);
+
+// For every lane: the torque on the hub joint, friction included (W), and the drive's state
+// rates zdot (nz x W), from the chain state (q, v), the drive state z and the held demand tau_cmd (W).
+void compute_hub_drive(const BatchModel& bm, const double* q, const double* v, const double* z, const double* tau_cmd,
+                       double* tau_hub, double* zdot);
+
+// The torque the actuator puts on the hub now, as a measurement would see it (W): D (p_a - p_b)
+// (times n, through the gear) or the drive train's transmitted torque; the demand without either.
+void compute_actuator_torque(const BatchModel& bm, const double* q, const double* v, const double* z,
+                             const double* tau_cmd, double* tau_act);
+
+// Signed orifice root with a laminar core: dp / (dp^2 + dp_lam^2)^(1/4), Pa^(1/2). Odd, smooth,
+// sqrt|dp| sign(dp) for |dp| >> dp_lam and linear through zero.
+double calc_orifice_root(double dp, double dp_lam);
+
+// Transmitted torque of the drive train at output twist d (rad) and twist rate dd (rad/s), N·m.
+double calc_transmission_torque(const LaneDrive& p, double d, double dd);
+
+// The fastest rate (1/s) of the drive's dynamics a fixed step must resolve (h rate <= 1): the
+// spool, the torque loop, relief valves, the oil spring and drive train on the hub's own inertia,
+// the LuGre bristles. Used to choose substeps; 0 without drive parts.
+double calc_drive_rate(const Model& m);
+
+// The damping the hydraulic torque loop adds at the hub below its bandwidth: the flow D w the hub
+// draws needs a spool opening D w / K_q, which the loop buys with a torque error D^2 p_s w / (K K_q);
+// K_q = kv sqrt(p_s / 2) is the flow gain at half supply drop per land. N·m·s/rad.
+double calc_hydraulic_damping(const HydraulicSpec& h);
+
+// The hydraulic natural frequency sqrt(4 beta D^2 / (V_t J)) with V_t = 2 V0 and J the inertia
+// on the pinion (kg·m^2), rad/s (Merritt, Hydraulic Control Systems, 1967, eq. 5-82).
+double calc_hydraulic_frequency(const HydraulicSpec& h, double inertia);
+
+}  // namespace ff
