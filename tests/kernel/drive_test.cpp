@@ -1,0 +1,307 @@
+// The hub drive (kernel/drive.cpp): hydraulic rotary actuator, drive train with backlash, LuGre
+// friction. Each checked against an analytic limit or an invariant.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "kernel/cvode.hpp"
+#include "kernel/drive.hpp"
+#include "kernel/dynamics.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/fixed_step.hpp"
+#include "kernel/model_io.hpp"
+#include "tests/kernel/test_support.hpp"
+
+namespace ff {
+namespace {
+
+BatchModel one_lane(const Model& m) { return make_batch(std::span<const Model>(&m, 1)); }
+
+// The reference rig with a stiff beam (joint springs x100): the arm turns as one body.
+ModelSpec stiff_arm() {
+  ModelSpec s = test::rig_spec();
+  s.joints.stiffness *= 100.0;
+  return s;
+}
+
+// RMS of the difference of two equally sampled signals.
+double rms_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) sum += (a[k] - b[k]) * (a[k] - b[k]);
+  return std::sqrt(sum / a.size());
+}
+
+TEST(Hydraulics, OrificeFlowIsOddLinearThroughZeroAndTurbulentFarFromIt) {
+  const double lam = 1e5;
+  for (double dp : {1e3, 1e5, 3e6})
+    EXPECT_DOUBLE_EQ(calc_orifice_root(-dp, lam), -calc_orifice_root(dp, lam));
+  EXPECT_EQ(calc_orifice_root(0.0, lam), 0.0);
+  // Laminar core: slope 1 / sqrt(dp_lam) at zero; turbulent: sqrt(dp) far from it.
+  EXPECT_NEAR(calc_orifice_root(1.0, lam), 1.0 / std::sqrt(lam), 1e-9);
+  EXPECT_NEAR(calc_orifice_root(1e8, lam) / std::sqrt(1e8), 1.0, 1e-6);
+  // Monotonic: flow always runs from high to low pressure.
+  double last = -1e300;
+  for (double dp = -2e6; dp <= 2e6; dp += 1e3) {
+    const double r = calc_orifice_root(dp, lam);
+    EXPECT_GT(r, last);
+    last = r;
+  }
+}
+
+TEST(Hydraulics, SmallMotionFrequencyIsTheOilSpringOnTheArm) {
+  // Valve held closed (K = 0), no leakage: the arm on two oil columns oscillates at
+  // omega_h = sqrt(4 beta D^2 / (V_t J)) (Merritt 1967) with J the rigid arm's inertia, about the
+  // angle where the oil spring k_h = 4 beta D^2 / V_t balances the initial pressure step.
+  ModelSpec s = stiff_arm();
+  s.segments = 2;
+  s.joints.stiffness *= 1e3;  // the beam as one rigid body (its mode far above omega_h)
+  s.hydraulics.enabled = true;
+  s.hydraulics.pressure_gain = 0.0;
+  s.hydraulics.leakage = 0.0;
+  s.simulation.integrator = Integrator::kCvodeDense;
+  const Model m = make_model(s);
+  const BatchModel bm = one_lane(m);
+  BatchState st = make_state(bm);
+  const double dp = 0.1e6;  // Pa, on chamber a
+  st.z[bm.layout.pressure] += dp / kPressureUnit;
+  const auto& h = s.hydraulics;
+  const double k_h = 4.0 * h.bulk_modulus * h.displacement * h.displacement / (2.0 * h.chamber_volume);
+  const double centre = h.displacement * dp / k_h;  // rad
+  CvodeBatch cv(bm, Integrator::kCvodeDense);
+  std::vector<double> crossings;  // times the hub angle passes the centre, interpolated
+  double x_prev = -centre;
+  for (int k = 0; k < 1500; ++k) {
+    cv.advance(st, 1e-3);
+    st.t += 1e-3;
+    const double x = st.q[0] - centre;
+    if ((x > 0) != (x_prev > 0)) crossings.push_back(st.t - 1e-3 * x / (x - x_prev));
+    x_prev = x;
+  }
+  ASSERT_EQ(st.status[0], LaneStatus::kOk);
+  ASSERT_GE(crossings.size(), 6u);
+  const double period = 2.0 * (crossings.back() - crossings.front()) / (crossings.size() - 1);
+  const double expected = calc_hydraulic_frequency(h, m.rigid_inertia);
+  EXPECT_NEAR(2.0 * M_PI / period, expected, 2e-3 * expected);
+}
+
+// Tip deflection of the first 6 s of a 0.5 rad move on the hydraulic rig (kd 2e4) with `set`.
+std::vector<double> hydraulic_tip(bool hydraulic, double valve_hz, double gain, Integrator integrator = Integrator::kRk4) {
+  ModelSpec s = test::rig_spec(0.5, 3.0);
+  s.controller.kd = 2.0e4;
+  s.hydraulics.enabled = hydraulic;
+  s.hydraulics.valve_frequency = valve_hz;
+  s.hydraulics.pressure_gain = gain;
+  s.simulation.integrator = integrator;
+  return test::run_one(make_model(s)).traces[0].tip_deflection;
+}
+
+TEST(Hydraulics, ActuatorTendsToTheIdealTorqueSourceAsValveAndLoopGetFast) {
+  // The torque loop's lag and its damping D^2 p_s / (K K_q) vanish as K and the valve grow.
+  const auto ideal = hydraulic_tip(false, 200, 5);
+  const double slow = rms_diff(hydraulic_tip(true, 200, 5), ideal);
+  const double fast = rms_diff(hydraulic_tip(true, 2000, 50), ideal);
+  const double faster = rms_diff(hydraulic_tip(true, 20000, 500), ideal);
+  EXPECT_GT(slow, 0.02);  // m: the default actuator visibly changes the response
+  EXPECT_LT(fast, 0.2 * slow);
+  EXPECT_LT(faster, 0.2 * fast);
+}
+
+TEST(Hydraulics, FixedStepIntegratorsAgreeWithCvodeOnTheStiffOil) {
+  const auto cvode = hydraulic_tip(true, 200, 5, Integrator::kCvodeDense);
+  EXPECT_LT(rms_diff(hydraulic_tip(true, 200, 5, Integrator::kRk4), cvode), 1e-5);     // m
+  EXPECT_LT(rms_diff(hydraulic_tip(true, 200, 5, Integrator::kSdirk2), cvode), 1e-4);  // m
+}
+
+// The highest chamber pressure while a demand beyond the stall torque pushes an arm that can hardly move.
+double peak_pressure(double relief) {
+  ModelSpec s = stiff_arm();
+  s.payload_mass = 1e6;
+  s.hydraulics.enabled = true;
+  s.hydraulics.relief_pressure = relief;
+  const Model m = make_model(s);
+  const BatchModel bm = one_lane(m);
+  BatchState st = make_state(bm);
+  Workspace ws = make_workspace(bm);
+  st.tau[0] = 1.0e5;  // N m, twice the stall torque D (p_s - p_t)
+  double peak = 0.0;
+  for (int k = 0; k < 5000; ++k) {
+    step_sdirk2(bm, st, ws, 1e-4);
+    peak = std::max(peak, st.z[bm.layout.pressure] * kPressureUnit);
+  }
+  return peak;
+}
+
+TEST(Hydraulics, ReliefValveCapsTheChamberPressure) {
+  const double ps = HydraulicSpec{}.supply_pressure;
+  EXPECT_GT(peak_pressure(0.0), 0.95 * ps);  // relief at 1.1 p_s: the supply is the limit
+  const double capped = peak_pressure(12e6);
+  // Stalled, the valve's inflow kv root(p_s - p) leaves through the relief, k_r (p - p_r): p settles
+  // where the two meet, above p_r by the valve flow over the relief gain (rated flow at 1.1 p_r).
+  const HydraulicSpec h;
+  const double kv = h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop), kr = h.rated_flow / (0.1 * 12e6);
+  double p = 12e6;
+  for (int i = 0; i < 50; ++i) p = 12e6 + kv * calc_orifice_root(ps - p, h.laminar_drop) / kr;
+  EXPECT_GT(capped, 12e6);
+  EXPECT_LT(capped, 1.05 * p);  // the peak of the first transient
+}
+
+TEST(DriveTrain, TransmitsNothingInsideTheFreePlayAndNeverPulls) {
+  LaneDrive p;
+  p.k = 1e6;
+  p.c = 1e3;
+  p.b = 0.01;
+  EXPECT_EQ(calc_transmission_torque(p, 0.009, 5.0), 0.0);
+  EXPECT_EQ(calc_transmission_torque(p, -0.009, -5.0), 0.0);
+  EXPECT_NEAR(calc_transmission_torque(p, 0.011, 0.0), 1e6 * 0.001, 1e-6);
+  EXPECT_EQ(calc_transmission_torque(p, 0.011, -10.0), 0.0);  // separating teeth do not pull
+  EXPECT_NEAR(calc_transmission_torque(p, -0.012, 0.0), -1e6 * 0.002, 1e-6);
+}
+
+// Drive train on the stiff arm: steps RK4 at 0.1 ms with the shaft torque demand `demand(t)`;
+// calls `sample(st)` every millisecond.
+template <class Demand, class Sample>
+void run_drive(const ModelSpec& s, double seconds, Demand demand, Sample sample) {
+  const Model m = make_model(s);
+  const BatchModel bm = one_lane(m);
+  BatchState st = make_state(bm);
+  Workspace ws = make_workspace(bm);
+  const long n = std::lround(seconds / 1e-4);
+  for (long k = 0; k < n; ++k) {
+    st.t = k * 1e-4;
+    st.tau[0] = demand(st.t);
+    step_rk4(bm, st, ws, 1e-4);
+    if (k % 10 == 9) sample(bm, st);
+  }
+}
+
+TEST(DriveTrain, BacklashLoopIsAsWideAsTheFreePlay) {
+  // A slow sinusoidal torque swings the arm against viscous friction. While the shaft reverses,
+  // the twist theta_a / n - theta_h crosses the whole play: it spans [-b, b] plus the elastic twist
+  // of the teeth in contact (under the impact when the play closes: within 10 % of b).
+  ModelSpec s = stiff_arm();
+  s.drive.enabled = true;
+  s.drive.backlash = 0.02;  // 2b
+  s.drive.stiffness = 1e7;
+  s.friction.viscous = 5e3;
+  const double amplitude = 2000.0;  // N m
+  double lo = 1e9, hi = -1e9, swing = 0.0;
+  run_drive(s, 4.0, [&](double t) { return amplitude * std::sin(2.0 * M_PI * 0.5 * t); },
+            [&](const BatchModel& bm, const BatchState& st) {
+              const double d = st.z[bm.layout.shaft] - st.q[0];
+              lo = std::min(lo, d);
+              hi = std::max(hi, d);
+              swing = std::max(swing, std::abs(st.q[0]));
+            });
+  const double b = 0.01, elastic = 0.1 * b;
+  EXPECT_GT(hi, b);
+  EXPECT_LT(hi, b + elastic);
+  EXPECT_LT(lo, -b);
+  EXPECT_GT(lo, -b - elastic);
+  EXPECT_GT(swing, 5.0 * b);  // the arm really moved
+}
+
+TEST(DriveTrain, GearMultipliesTorqueByRatioTimesEfficiency) {
+  // Steady driving against hub viscous friction: tau_hub = eta n tau_shaft.
+  ModelSpec s = stiff_arm();
+  s.drive.enabled = true;
+  s.drive.ratio = 2.0;
+  s.drive.efficiency = 0.8;
+  s.friction.viscous = 2e4;
+  double tau_hub = 0.0;
+  run_drive(s, 8.0, [](double) { return 2.0 * 1000.0; },  // demand at the hub: shaft gets 1000 N m
+            [&](const BatchModel& bm, const BatchState& st) {
+              compute_actuator_torque(bm, st.q.data(), st.v.data(), st.z.data(), st.tau.data(), &tau_hub);
+            });
+  EXPECT_NEAR(tau_hub, 0.8 * 2.0 * 1000.0, 1.0);
+}
+
+// Chain, shaft and drive-spring energy, J.
+double drive_energy(const BatchModel& bm, const BatchState& st, const DriveSpec& d) {
+  const double th = st.z[bm.layout.shaft], w = st.z[bm.layout.shaft + 1];
+  const double twist = th / d.ratio - st.q[0];
+  return calc_kinetic_energy(bm, st.q.data(), st.v.data(), 0) + calc_spring_energy(bm, st.q.data(), 0) +
+         0.5 * d.inertia * w * w + 0.5 * d.stiffness * twist * twist + 0.25 * d.cubic_stiffness * std::pow(twist, 4);
+}
+
+TEST(DriveTrain, ConservesEnergyWithAllDissipationOff) {
+  ModelSpec s = test::rig_spec();
+  s.joints.damping = 0.0;
+  s.drive.enabled = true;
+  s.drive.ratio = 3.0;
+  s.drive.damping = 0.0;
+  s.drive.cubic_stiffness = 1e9;
+  const Model m = make_model(s);
+  const BatchModel bm = one_lane(m);
+  BatchState st = make_state(bm);
+  Workspace ws = make_workspace(bm);
+  st.z[bm.layout.shaft + 1] = 3.0;  // shaft spinning at 3 rad/s, arm at rest
+  const double e0 = drive_energy(bm, st, s.drive);
+  for (int k = 0; k < 20000; ++k) step_rk4(bm, st, ws, 1e-4);
+  EXPECT_GT(std::abs(st.q[0]), 0.005);  // energy moved into the arm
+  EXPECT_NEAR(drive_energy(bm, st, s.drive), e0, 1e-7 * e0);
+}
+
+TEST(LuGre, SticksBelowAndBreaksAwayAtTheStictionTorque) {
+  ModelSpec s = stiff_arm();
+  s.friction.model = "lugre";
+  s.friction.coulomb = 400.0;
+  s.friction.stiction = 600.0;
+  s.friction.stribeck_velocity = 0.02;
+  const double sigma0 = s.friction.bristle_stiffness;
+  // Torque ramp at 100 N m/s; breakaway = the torque when the hub first exceeds 10 mrad/s.
+  double breakaway = 0.0, max_stick_rate = 0.0, max_stick_angle = 0.0;
+  int sign_changes = 0;
+  double last_rate = 0.0;
+  run_drive(s, 9.0, [](double t) { return 100.0 * t; }, [&](const BatchModel&, const BatchState& st) {
+    const double torque = 100.0 * st.t;
+    if (torque < 0.5 * 600.0) {
+      max_stick_rate = std::max(max_stick_rate, std::abs(st.v[0]));
+      max_stick_angle = std::max(max_stick_angle, std::abs(st.q[0]));
+      if (st.v[0] * last_rate < 0.0) ++sign_changes;
+      last_rate = st.v[0];
+    }
+    if (breakaway == 0.0 && st.v[0] > 0.01) breakaway = torque;
+  });
+  EXPECT_GT(breakaway, 0.9 * 600.0);
+  EXPECT_LT(breakaway, 1.1 * 600.0);
+  EXPECT_LT(max_stick_rate, 5e-3);  // rad/s: presliding creep only, no chatter while stuck
+  EXPECT_LT(max_stick_angle, 3.0 * 600.0 / sigma0);  // presliding: bristle deflection only
+  EXPECT_LE(sign_changes, 2);  // the bristles ring out once, then creep one way
+}
+
+TEST(DriveConfig, BadValuesNameTheirKey) {
+  auto key_of = [](const ModelSpec& s) {
+    try {
+      make_model(s);
+    } catch (const ConfigError& e) {
+      return e.key();
+    }
+    return std::string("(accepted)");
+  };
+  ModelSpec s = test::rig_spec();
+  s.drive.enabled = true;
+  s.drive.efficiency = 1.5;
+  EXPECT_EQ(key_of(s), "drive.efficiency");
+  s = test::rig_spec();
+  s.hydraulics.enabled = true;
+  s.hydraulics.tank_pressure = 30e6;
+  EXPECT_EQ(key_of(s), "hydraulics.tank_pressure");
+  s = test::rig_spec();
+  s.friction.model = "dahl";
+  EXPECT_EQ(key_of(s), "friction.model");
+  s = test::rig_spec();
+  s.controller.load_signal = "pressure";
+  EXPECT_EQ(key_of(s), "controller.load_signal");
+}
+
+TEST(DriveConfig, HydraulicRigFileLoads) {
+  const Model m = load_model(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb_hydraulic.yaml");
+  EXPECT_TRUE(m.spec.hydraulics.enabled);
+  EXPECT_EQ(m.spec.controller.kd, 2.0e4);
+  // Oil spring of the whole arm near 5 Hz.
+  EXPECT_NEAR(calc_hydraulic_frequency(m.spec.hydraulics, m.rigid_inertia) / (2 * M_PI), 3.8, 0.5);
+}
+
+}  // namespace
+}  // namespace ff
