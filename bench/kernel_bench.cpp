@@ -52,6 +52,13 @@ BENCHMARK(BM_Sdirk2ClosedLoop)
     ->Args({24, 8, 0})->Args({48, 1, 0})->Args({48, 8, 0})->Args({96, 8, 0})
     ->Unit(benchmark::kMillisecond);
 
+// Midpoint (one articulated-body pass per step) at its automatic step: 1 per 1 ms sample at N = 6.
+void BM_MidpointClosedLoop(benchmark::State& state) { fixed_step(state, ff::Integrator::kMidpoint); }
+BENCHMARK(BM_MidpointClosedLoop)
+    ->ArgNames({"N", "W", "sub"})
+    ->Args({6, 1, 0})->Args({6, 4, 0})->Args({6, 8, 0})->Args({6, 16, 0})->Args({24, 8, 0})
+    ->Unit(benchmark::kMillisecond);
+
 // Thread scaling: 8 batches of W = 8 lanes (N = 6, SDIRK2) on T OpenMP threads, one batch per task.
 void BM_Sdirk2Threads(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));

@@ -2,7 +2,8 @@
 // (docs/reference-rig.md): throughput in variant-steps per second (1 ms controller steps) and
 // tip-deflection accuracy of both against flexfarm's CVODE reference.
 // The controller is sampled every 1 ms and held in between. MuJoCo's timestep is 1 ms / K with
-// K = ff::calc_auto_substeps (h omega_max <= 1; K = 1 at N = 6, i.e. 1 ms) unless --mujoco-substeps K.
+// K = ff::calc_auto_substeps of the rig with RK4 (h omega_max <= 1; K = 1 at N = 6, i.e. 1 ms) unless
+// --mujoco-substeps K.
 // Larger N needs many substeps (N = 24: 29, N = 48: 496), so --seconds can shorten the simulated
 // window per N (throughput and accuracy then refer to that window).
 // Run: mujoco_compare [--segments 6,24,48 --seconds 20,0.5,0.02] [--variants 16] [--reps 7] [--mujoco-substeps K]
@@ -30,15 +31,19 @@
 
 namespace {
 
-// ==================== flexfarm configuration under test: edit HERE ====================
-// Point the benchmark at another integrator, substep count or lane width.
+// ==================== flexfarm configurations under test: edit HERE ====================
+// Point the benchmark at another integrator, substep count or lane width. The first is "flexfarm"
+// in the summary lines; the others are extra rows.
 struct FlexfarmConfig {
-  const char* label = "flexfarm SDIRK2";       // row name in the tables
-  ff::Integrator integrator = ff::Integrator::kSdirk2;  // the batch kernel's integrator for any N
-  int substeps = 0;                            // per 1 ms control period; 0 = automatic (1 here)
-  int lanes = 8;                               // W: variants advanced in lock-step per batch (M = 16: two batches)
+  const char* label;            // row name in the tables
+  ff::Integrator integrator;
+  int substeps = 0;             // per 1 ms control period; 0 = automatic (1 here at N = 6)
+  int lanes = 8;                // W: variants advanced in lock-step per batch (M = 16: two batches)
 };
-FlexfarmConfig flexfarm_config() { return FlexfarmConfig{}; }
+std::vector<FlexfarmConfig> flexfarm_configs() {
+  return {{"flexfarm midpoint", ff::Integrator::kMidpoint},  // one ABA pass per step (short chains)
+          {"flexfarm SDIRK2", ff::Integrator::kSdirk2}};     // two passes, L-stable (any N)
+}
 // =======================================================================================
 
 // The reference motion: 0 -> 0.5 rad in 3 s, held 17 s (20 s, 20000 controller steps);
@@ -233,12 +238,13 @@ struct Row {
 
 // Everything for one segment count. Returns false when the two rigs differ.
 bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Summary& out) {
-  const FlexfarmConfig cfg = flexfarm_config();
-  const ff::Model m = ff::make_model(rig_spec(nseg, cfg.integrator, cfg.substeps, seconds));
+  const std::vector<FlexfarmConfig> cfgs = flexfarm_configs();
+  // The rig; its RK4 step rule (h omega_n <= 1) sets MuJoCo's substeps.
+  const ff::Model m = ff::make_model(rig_spec(nseg, ff::Integrator::kRk4, 0, seconds));
   const ff::Model mref = ff::make_model(rig_spec(nseg, ff::Integrator::kCvodeDense, 0, seconds));
   const long nsamples = std::lround(m.duration / m.control_period) + 1;
   const double steps = static_cast<double>(nsamples - 1) * M;  // variant-steps per run
-  const int mj_sub = mj_sub_override > 0 ? mj_sub_override : ff::calc_auto_substeps(m);
+  const int mj_sub = mj_sub_override > 0 ? mj_sub_override : m.substeps;
 
   std::printf("\n=== N = %d segments: M = %d variants x %ld controller steps of %g ms (%g s), median of %d ===\n",
               nseg, M, nsamples - 1, 1e3 * m.control_period, m.duration, reps);
@@ -257,15 +263,24 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
     return false;
   }
 
-  // flexfarm: M / W batches of W identical lanes; each thread simulates whole batches.
-  const int W = cfg.lanes;
-  if (M % W != 0) throw std::runtime_error("--variants must be a multiple of the lane width W");
-  const int nbatch = M / W;
-  const ff::BatchModel bm = ff::make_batch(std::vector<ff::Model>(W, m));
-  std::vector<ff::BatchRun> runs(nbatch);
-  auto run_ff = [&](int threads) {
+  // flexfarm: M / W batches of W identical lanes per configuration; each thread simulates whole batches.
+  struct FfSide {
+    std::string name;
+    ff::BatchModel bm;
+    std::vector<ff::BatchRun> runs;
+  };
+  std::vector<FfSide> ffs;
+  for (const auto& cfg : cfgs) {
+    const int W = cfg.lanes;
+    if (M % W != 0) throw std::runtime_error("--variants must be a multiple of the lane width W");
+    const ff::Model mf = ff::make_model(rig_spec(nseg, cfg.integrator, cfg.substeps, seconds));
+    ffs.push_back({std::string(cfg.label) + " W=" + std::to_string(W), ff::make_batch(std::vector<ff::Model>(W, mf)),
+                   std::vector<ff::BatchRun>(M / W)});
+  }
+  auto run_ff = [&](FfSide& sd, int threads) {
+    const int nbatch = static_cast<int>(sd.runs.size());
 #pragma omp parallel for num_threads(threads) schedule(static)
-    for (int bi = 0; bi < nbatch; ++bi) runs[bi] = ff::simulate(bm);
+    for (int bi = 0; bi < nbatch; ++bi) sd.runs[bi] = ff::simulate(sd.bm);
   };
 
   // MuJoCo: one mjData and one trace per variant and integrator; each thread runs whole variants.
@@ -287,7 +302,6 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
     sd.diverged = bad;
   };
 
-  const std::string ffname = std::string(cfg.label) + " W=" + std::to_string(W);
   std::vector<Row> rows;
   auto add = [&](std::string name, int sub, int th, std::function<void()> f) {
     Row r;
@@ -299,7 +313,8 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
   };
   for (int th : {1, 2}) add("MuJoCo Euler (semi-implicit)", mj_sub, th, [&, th] { run_mj(sides[0], th); });
   for (int th : {1, 2}) add("MuJoCo RK4", mj_sub, th, [&, th] { run_mj(sides[1], th); });
-  for (int th : {1, 2}) add(ffname, m.substeps, th, [&, th] { run_ff(th); });
+  for (auto& sd : ffs)
+    for (int th : {1, 2}) add(sd.name, sd.bm.substeps, th, [&, th] { run_ff(sd, th); });
 
   // Warm-up (and divergence check), then the repetitions round-robin so load drift hits every row alike.
   for (std::size_t r = 0; r < rows.size(); ++r) {
@@ -311,9 +326,10 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
       if (row.stable) row.times.push_back(time_it(row.run));
   for (auto& row : rows)
     if (row.stable) row.rate = steps / median(row.times);
-  for (const auto& r : runs)
-    for (auto st : r.status)
-      if (st != ff::LaneStatus::kOk) throw std::runtime_error("a flexfarm lane failed");
+  for (const auto& sd : ffs)
+    for (const auto& r : sd.runs)
+      for (auto st : r.status)
+        if (st != ff::LaneStatus::kOk) throw std::runtime_error("a flexfarm lane failed (" + sd.name + ")");
 
   std::printf("\n%-34s %8s %7s %18s %12s\n", "throughput", "substeps", "threads", "variant-steps/s", "/ MuJoCo Eu");
   for (const auto& r : rows) {
@@ -323,21 +339,24 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
     else
       std::printf("%-34s %8d %7d %18s %12s\n", r.name.c_str(), r.substeps, r.threads, "diverged", "-");
   }
-  if (nbatch < 2) std::printf("(only one batch of W lanes: flexfarm's 2-thread row has nothing to share)\n");
+  for (const auto& sd : ffs)
+    if (sd.runs.size() < 2) std::printf("(%s: only one batch of W lanes, its 2-thread row has nothing to share)\n", sd.name.c_str());
 
   const std::vector<double> ref = ff::simulate(ff::make_batch(std::vector<ff::Model>{mref})).traces[0].tip_deflection;
   std::printf("\n%-34s %14s %14s   (reference: CVODE dense, rtol %g; tip deflection RMS %.4g mm)\n",
               "accuracy vs reference", "RMS error mm", "max error mm", mref.spec.simulation.rtol, 1e3 * rms(ref));
-  Error err[3];
-  const char* names[3] = {"MuJoCo Euler (semi-implicit)", "MuJoCo RK4", ffname.c_str()};
-  for (int i = 0; i < 3; ++i) {
+  // err: MuJoCo Euler, MuJoCo RK4, then each flexfarm configuration.
+  std::vector<Error> err;
+  std::vector<std::string> names = {"MuJoCo Euler (semi-implicit)", "MuJoCo RK4"};
+  for (const auto& sd : ffs) names.push_back(sd.name);
+  for (std::size_t i = 0; i < names.size(); ++i) {
     if (i < 2 && sides[i].diverged) {
-      err[i] = {NAN, NAN};
-      std::printf("%-34s %14s %14s\n", names[i], "diverged", "diverged");
+      err.push_back({NAN, NAN});
+      std::printf("%-34s %14s %14s\n", names[i].c_str(), "diverged", "diverged");
       continue;
     }
-    err[i] = compare(i < 2 ? sides[i].tips[0] : runs[0].traces[0].tip_deflection, ref);
-    std::printf("%-34s %14.4g %14.4g\n", names[i], 1e3 * err[i].rms, 1e3 * err[i].max);
+    err.push_back(compare(i < 2 ? sides[i].tips[0] : ffs[i - 2].runs[0].traces[0].tip_deflection, ref));
+    std::printf("%-34s %14.4g %14.4g\n", names[i].c_str(), 1e3 * err[i].rms, 1e3 * err[i].max);
   }
   for (auto& sd : sides)
     for (auto* d : sd.data) mj_deleteData(d);
@@ -345,8 +364,9 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
   mj_deleteModel(mj_rk4);
 
   out = {rows[4].rate / rows[0].rate, err[2].rms, err[0].rms};
-  std::printf("\nN=%d: flexfarm / MuJoCo(Euler) throughput = %.3g (1 thread), %.3g (2 threads)\n", nseg, out.ratio,
-              rows[5].rate / rows[1].rate);
+  for (std::size_t f = 0; f < ffs.size(); ++f)
+    std::printf("%sN=%d: %s / MuJoCo(Euler) throughput = %.3g (1 thread), %.3g (2 threads)\n", f ? "" : "\n", nseg,
+                ffs[f].name.c_str(), rows[4 + 2 * f].rate / rows[0].rate, rows[5 + 2 * f].rate / rows[1].rate);
   return true;
 }
 
@@ -391,8 +411,10 @@ int main(int argc, char** argv) {
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress visible through pipes
   mju_user_warning = quiet_warning;
-  std::printf("MuJoCo %s, flexfarm config: %s, substeps %d (0 = auto), W = %d\n", mj_versionString(),
-              flexfarm_config().label, flexfarm_config().substeps, flexfarm_config().lanes);
+  std::printf("MuJoCo %s; flexfarm configs:", mj_versionString());
+  for (const auto& c : flexfarm_configs())
+    std::printf(" [%s, substeps %d (0 = auto), W = %d]", c.label, c.substeps, c.lanes);
+  std::printf("\n");
   try {
     std::vector<Summary> sums;
     for (std::size_t i = 0; i < segments.size(); ++i) {

@@ -88,8 +88,8 @@ struct Workspace {
   std::vector<double> d, u;                           // joint-space inertia and force
   std::vector<double> a0, a1, a2;                     // body spatial acceleration
   std::vector<double> armature;                       // extra joint-space inertia (N x W)
-  double armature_step = 0.0;                         // the step `armature` was made for (SDIRK2)
-  std::vector<double> a_prev;                         // last step's acceleration (N x W), SDIRK2 predictor
+  double armature_gh = 0.0;                           // the h gamma `armature` was made for, s
+  std::vector<double> a_prev;                         // last step's acceleration (N x W), implicit predictors
   // fixed-step integrator stages, (N x W) each
   std::vector<double> q1, v1, kq[4], kv[4];
   std::vector<double> tau_joint;                      // (N x W) joint torques

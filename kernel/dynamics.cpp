@@ -39,6 +39,15 @@ void compute_joint_torques(const BatchModel& bm, const double* q, const double* 
   }
 }
 
+namespace {
+// s[j] = sin x[j], c[j] = cos x[j] for j < n, in one flat loop: the polynomials of different
+// entries are independent, so their latency chains overlap.
+void compute_sincos(int n, const double* x, double* s, double* c) {
+#pragma omp simd
+  for (int j = 0; j < n; ++j) calc_sincos(x[j], s[j], c[j]);
+}
+}  // namespace
+
 void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, double* qdd, Workspace& ws) {
   const int W = bm.W, N = bm.nseg;
   const double* bmass = bm.body_mass.data();
@@ -54,8 +63,11 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   double *p0 = ws.p0.data(), *p1 = ws.p1.data(), *p2 = ws.p2.data();
   double *d = ws.d.data(), *u = ws.u.data(), *a0 = ws.a0.data(), *a1 = ws.a1.data(), *a2 = ws.a2.data();
 
-  // Pass 1, root to tip: velocities, velocity-product accelerations, rigid-body inertia and bias force.
-  // Body i given its spatial velocity (w, x, y) and joint rate qd.
+  // Joint transforms of bodies 1..N-1 (body 0's rotation never enters: fixed hub axis, no gravity).
+  compute_sincos((N - 1) * W, q + W, sq + W, cq + W);
+
+  // Pass 1, root to tip: velocities, velocity-product accelerations and rigid-body bias forces.
+  // The rigid inertias I_i = [[J, 0, h], [0, m, 0], [h, 0, m]] are read from the model in pass 2.
   auto body = [=](int o, int l, double w, double x, double y) {
     vw[o + l] = w;
     vx[o + l] = x;
@@ -63,69 +75,76 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
     // c_i = crm(v_i) S qd_i = (0, vy qd, -vx qd)
     cy[o + l] = y * v[o + l];
     cz[o + l] = -x * v[o + l];
-    // I_i = [[J, 0, h], [0, m, 0], [h, 0, m]]; bias p_i = crf(v_i) I_i v_i
-    const double J = binert[o + l], h = bfirst[o + l], m = bmass[o + l];
+    // p_i = crf(v_i) I_i v_i
+    const double h = bfirst[o + l], m = bmass[o + l];
     const double fx = m * x, fy = h * w + m * y;
-    i00[o + l] = J;
-    i01[o + l] = 0.0;
-    i02[o + l] = h;
-    i11[o + l] = m;
-    i12[o + l] = 0.0;
-    i22[o + l] = m;
     p0[o + l] = -y * fx + x * fy;
     p1[o + l] = -w * fy;
     p2[o + l] = w * fx;
   };
-  // Body 0 turns about the fixed hub axis; its own rotation never enters (no gravity).
 #pragma omp simd
   for (int l = 0; l < W; ++l) body(0, l, v[l], 0.0, 0.0);
   for (int i = 1; i < N; ++i) {
     const int o = i * W, op = (i - 1) * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      double c, s;
-      calc_sincos(q[o + l], s, c);
-      cq[o + l] = c;
-      sq[o + l] = s;
+      const double c = cq[o + l], s = sq[o + l];
       const double lp = len[op + l], wp = vw[op + l], xp = vx[op + l], yp = vy[op + l];
       body(o, l, wp + v[o + l], s * lp * wp + c * xp + s * yp, c * lp * wp - s * xp + c * yp);
     }
   }
 
-  // Pass 2, tip to root: articulated inertias and bias forces, projected across each revolute joint.
-  for (int i = N - 1; i >= 1; --i) {
-    const int o = i * W, op = (i - 1) * W;
+  // Pass 2, tip to root: articulated inertias IA (symmetric, i00..i22) and bias forces pA, projected
+  // across each revolute joint. Body i's IA = I_i + X^T Ia X of its child, written when the child is done;
+  // the tip's IA is its rigid inertia.
+  auto project = [=](int o, int op, int l, double U0, double U1, double U2, double I11, double I12, double I22) {
+    // U = IA S, d = S^T U + armature, u = tau - S^T pA
+    const double di = U0 + arm[o + l];
+    const double ui = tau[o + l] - p0[o + l];
+    d[o + l] = di;
+    u[o + l] = ui;
+    // Ia = IA - U U^T / d ;  pa = pA + Ia c + U u / d
+    const double r = 1.0 / di;
+    const double a00 = U0 - U0 * U0 * r, a01 = U1 - U0 * U1 * r, a02 = U2 - U0 * U2 * r;
+    const double a11 = I11 - U1 * U1 * r, a12 = I12 - U1 * U2 * r, a22 = I22 - U2 * U2 * r;
+    const double ccy = cy[o + l], ccz = cz[o + l], ur = ui * r;
+    const double pa0 = p0[o + l] + a01 * ccy + a02 * ccz + U0 * ur;
+    const double pa1 = p1[o + l] + a11 * ccy + a12 * ccz + U1 * ur;
+    const double pa2 = p2[o + l] + a12 * ccy + a22 * ccz + U2 * ur;
+    // Parent: IA = I + X^T Ia X, pA = p + X^T pa
+    const double c = cq[o + l], s = sq[o + l], lp = len[op + l], sl = s * lp, cl = c * lp;
+    const double P0 = a00 + a01 * sl + a02 * cl, P1 = a01 + a11 * sl + a12 * cl, P2 = a02 + a12 * sl + a22 * cl;
+    const double Q0 = a01 * c - a02 * s, Q1 = a11 * c - a12 * s, Q2 = a12 * c - a22 * s;
+    const double R0 = a01 * s + a02 * c, R1 = a11 * s + a12 * c, R2 = a12 * s + a22 * c;
+    const double J = binert[op + l], h = bfirst[op + l], m = bmass[op + l];
+    i00[op + l] = J + (P0 + sl * P1 + cl * P2);
+    i01[op + l] = 0.0 + (Q0 + sl * Q1 + cl * Q2);
+    i02[op + l] = h + (R0 + sl * R1 + cl * R2);
+    i11[op + l] = m + (c * Q1 - s * Q2);
+    i12[op + l] = 0.0 + (c * R1 - s * R2);
+    i22[op + l] = m + (s * R1 + c * R2);
+    p0[op + l] += pa0 + sl * pa1 + cl * pa2;
+    p1[op + l] += c * pa1 - s * pa2;
+    p2[op + l] += s * pa1 + c * pa2;
+  };
+  if (N == 1) {
+#pragma omp simd
+    for (int l = 0; l < W; ++l) i00[l] = binert[l];
+  } else {
+    const int o = (N - 1) * W, op = (N - 2) * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      // U = IA S, d = S^T U + armature, u = tau - S^T pA
-      const double U0 = i00[o + l], U1 = i01[o + l], U2 = i02[o + l];
-      const double di = U0 + arm[o + l];
-      const double ui = tau[o + l] - p0[o + l];
-      d[o + l] = di;
-      u[o + l] = ui;
-      // Ia = IA - U U^T / d ;  pa = pA + Ia c + U u / d
-      const double r = 1.0 / di;
-      const double a00 = U0 - U0 * U0 * r, a01 = U1 - U0 * U1 * r, a02 = U2 - U0 * U2 * r;
-      const double a11 = i11[o + l] - U1 * U1 * r, a12 = i12[o + l] - U1 * U2 * r, a22 = i22[o + l] - U2 * U2 * r;
-      const double ccy = cy[o + l], ccz = cz[o + l], ur = ui * r;
-      const double pa0 = p0[o + l] + a01 * ccy + a02 * ccz + U0 * ur;
-      const double pa1 = p1[o + l] + a11 * ccy + a12 * ccz + U1 * ur;
-      const double pa2 = p2[o + l] + a12 * ccy + a22 * ccz + U2 * ur;
-      // Parent += X^T Ia X and X^T pa
-      const double c = cq[o + l], s = sq[o + l], lp = len[op + l], sl = s * lp, cl = c * lp;
-      const double P0 = a00 + a01 * sl + a02 * cl, P1 = a01 + a11 * sl + a12 * cl, P2 = a02 + a12 * sl + a22 * cl;
-      const double Q0 = a01 * c - a02 * s, Q1 = a11 * c - a12 * s, Q2 = a12 * c - a22 * s;
-      const double R0 = a01 * s + a02 * c, R1 = a11 * s + a12 * c, R2 = a12 * s + a22 * c;
-      i00[op + l] += P0 + sl * P1 + cl * P2;
-      i01[op + l] += Q0 + sl * Q1 + cl * Q2;
-      i02[op + l] += R0 + sl * R1 + cl * R2;
-      i11[op + l] += c * Q1 - s * Q2;
-      i12[op + l] += c * R1 - s * R2;
-      i22[op + l] += s * R1 + c * R2;
-      p0[op + l] += pa0 + sl * pa1 + cl * pa2;
-      p1[op + l] += c * pa1 - s * pa2;
-      p2[op + l] += s * pa1 + c * pa2;
+      const double J = binert[o + l], h = bfirst[o + l], m = bmass[o + l];
+      i00[o + l] = J;  // U of the tip, for pass 3
+      i01[o + l] = 0.0;
+      i02[o + l] = h;
+      project(o, op, l, J, 0.0, h, m, 0.0, m);
     }
+  }
+  for (int i = N - 2; i >= 1; --i) {
+    const int o = i * W, op = (i - 1) * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) project(o, op, l, i00[o + l], i01[o + l], i02[o + l], i11[o + l], i12[o + l], i22[o + l]);
   }
 
   // Pass 3, root to tip: accelerations a_i = X a_parent + c_i, qdd_i = (u_i - U_i^T a_i) / d_i.
@@ -176,12 +195,14 @@ void compute_tip(const BatchModel& bm, const double* q, double* deflection, doub
     deflection[l] = 0.0;
     along[l] = len[l];
   }
+  double* sq = ws.sq.data();
+  double* cq = ws.cq.data();
+  compute_sincos((bm.nseg - 1) * W, q + W, sq + W, cq + W);
   for (int i = 1; i < bm.nseg; ++i) {
     const int o = i * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      double s, c;
-      calc_sincos(q[o + l], s, c);
+      const double s = sq[o + l], c = cq[o + l];
       const double cn = cphi[l] * c - sphi[l] * s, sn = sphi[l] * c + cphi[l] * s;
       cphi[l] = cn;
       sphi[l] = sn;

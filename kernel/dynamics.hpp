@@ -31,7 +31,7 @@ struct TipKinematics {
   double angle;       // theta_h + atan2(deflection, along), rad
 };
 TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane);
-// Tip deflection (m) and tip angle (rad) of every lane at once (W each); uses ws.a0..a2 as scratch.
+// Tip deflection (m) and tip angle (rad) of every lane at once (W each); uses ws.a0..a2, cq, sq as scratch.
 void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws);
 
 // Kinetic energy 1/2 v^T M(q) v and spring energy sum (k_i q_i^2 / 2 + k3_i q_i^4 / 4) of one lane, J.

@@ -128,10 +128,10 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const double g = 1.0 - 0.70710678118654752440;  // gamma
   const double gh = g * h;
   // Joint armature h gamma c + (h gamma)^2 k: the implicit spring-damper terms (row 0: the hub, none).
-  if (ws.armature_step != h) {
+  if (ws.armature_gh != gh) {
     for (std::size_t j = static_cast<std::size_t>(W); j < n; ++j)
       ws.armature[j] = gh * bm.joint_c[j] + gh * gh * bm.joint_k[j];
-    ws.armature_step = h;
+    ws.armature_gh = gh;
   }
   double* q = s.q.data();
   double* v = s.v.data();
@@ -183,6 +183,38 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
     v[j] = vpre[j] + gh * A2[j];
     q[j] = qpre[j] + gh * v[j];
     a_prev[j] = A2[j];
+  }
+}
+
+void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
+  const std::size_t n = s.q.size();
+  const int W = bm.W;
+  const double gh = 0.5 * h;
+  // Joint armature (h/2) c + (h/2)^2 k: the implicit spring-damper terms (row 0: the hub, none).
+  if (ws.armature_gh != gh) {
+    for (std::size_t j = static_cast<std::size_t>(W); j < n; ++j)
+      ws.armature[j] = gh * bm.joint_c[j] + gh * gh * bm.joint_k[j];
+    ws.armature_gh = gh;
+  }
+  double* q = s.q.data();
+  double* v = s.v.data();
+  double* a_prev = ws.a_prev.data();
+  double *qs = ws.kq[0].data(), *vk = ws.kv[0].data(), *A = ws.kv[1].data();
+  // Midpoint t + h/2: V = v + (h/2) A, Q = q + (h/2) V = qs + (h/2)^2 A with qs = q + (h/2) v.
+  // Springs and dampers at (qs, v) plus the armature; M and velocity terms at (qs, v + (h/2) a_prev).
+#pragma omp simd
+  for (std::size_t j = 0; j < n; ++j) {
+    qs[j] = q[j] + gh * v[j];
+    vk[j] = v[j] + gh * a_prev[j];
+  }
+  compute_joint_torques(bm, qs, v, s.tau.data(), ws);
+  compute_forward_dynamics(bm, qs, vk, A, ws);
+  // q += h V, v += h A
+#pragma omp simd
+  for (std::size_t j = 0; j < n; ++j) {
+    q[j] += h * (v[j] + gh * A[j]);
+    v[j] += h * A[j];
+    a_prev[j] = A[j];
   }
 }
 

@@ -15,4 +15,10 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h);
 // taken at a second-order predictor of the stage state, so two ABA passes make a step at any N.
 void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h);
 
+// One step of the implicit midpoint rule, second order, A-stable (not L-stable), linearly implicit:
+// the joint springs and dampers are implicit and linear as in step_sdirk2, the single stage solves
+// (M + diag(h/2 c + (h/2)^2 k)) A = tau - bias at t + h/2, then q += h (v + h/2 A), v += h A.
+// M and the velocity terms at a predictor of the midpoint state: one ABA pass per step.
+void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h);
+
 }  // namespace ff

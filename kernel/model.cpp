@@ -52,9 +52,9 @@ void validate(const ModelSpec& s, const std::string& src) {
     if (!(e.inertia >= 0) || !std::isfinite(e.inertia)) throw ConfigError(src, 0, key + ".inertia", "must be a finite number >= 0");
     last = e.time;
   }
-  if (!s.payload_events.empty() && s.simulation.integrator != Integrator::kRk4 &&
-      s.simulation.integrator != Integrator::kSdirk2)
-    throw ConfigError(src, 0, "payload.events", "need a fixed-step integrator (rk4 or sdirk2)");
+  if (!s.payload_events.empty() && (s.simulation.integrator == Integrator::kCvodeDense ||
+                                    s.simulation.integrator == Integrator::kCvodeKlu))
+    throw ConfigError(src, 0, "payload.events", "need a fixed-step integrator (rk4, sdirk2 or midpoint)");
   positive(s.controller.rate, "controller.rate");
   non_negative(s.controller.kp, "controller.kp");
   non_negative(s.controller.ki, "controller.ki");

@@ -140,7 +140,9 @@ struct TrajectorySpec {
 
 // rk4: classical Runge-Kutta (explicit; fine for small N). sdirk2: L-stable two-stage SDIRK with the
 // joint springs and dampers implicit (any N). cvode_*: BDF reference with a dense or KLU solver.
-enum class Integrator { kRk4, kSdirk2, kCvodeDense, kCvodeKlu };
+// midpoint: linearly implicit midpoint rule, joints implicit as in sdirk2, one articulated-body pass
+// per step (A-stable, not L-stable: short chains such as N = 6 at one step per sample).
+enum class Integrator { kRk4, kSdirk2, kCvodeDense, kCvodeKlu, kMidpoint };
 
 struct SimulationSpec {
   double duration = 0.0;          // s; 0 = end of the last hold

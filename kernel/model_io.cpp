@@ -13,6 +13,7 @@ const char* integrator_name(Integrator i) {
     case Integrator::kSdirk2: return "sdirk2";
     case Integrator::kCvodeDense: return "cvode_dense";
     case Integrator::kCvodeKlu: return "cvode_klu";
+    case Integrator::kMidpoint: return "midpoint";
   }
   return "?";
 }
@@ -22,9 +23,10 @@ namespace {
 Integrator parse_integrator(YamlReader& r) {
   std::string name = "rk4";
   r.optional("integrator", name);
-  for (auto i : {Integrator::kRk4, Integrator::kSdirk2, Integrator::kCvodeDense, Integrator::kCvodeKlu})
+  for (auto i : {Integrator::kRk4, Integrator::kSdirk2, Integrator::kCvodeDense, Integrator::kCvodeKlu,
+                 Integrator::kMidpoint})
     if (name == integrator_name(i)) return i;
-  r.fail("integrator", "unknown integrator '" + name + "' (rk4, sdirk2, cvode_dense, cvode_klu)");
+  r.fail("integrator", "unknown integrator '" + name + "' (rk4, sdirk2, cvode_dense, cvode_klu, midpoint)");
 }
 
 ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lines) {

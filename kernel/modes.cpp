@@ -114,6 +114,9 @@ int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, In
   for (const auto& md : modes) {
     if (integrator == Integrator::kSdirk2) {
       if (md.oscillatory && md.zeta < 0.3) need = std::max(need, md.omega_n / 0.5);
+    } else if (integrator == Integrator::kMidpoint) {
+      const bool light = md.oscillatory && md.zeta < 0.3;
+      need = std::max(need, light ? md.omega_n / 0.5 : md.omega_n / 4.0);
     } else {
       need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
     }

@@ -33,7 +33,9 @@ std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop);
 // Fixed-step substeps per control period, from the modes of the clamped and the closed loop.
 // RK4: h omega_n <= 1 for every oscillatory mode, h |lambda| <= 2.5 for every real pole (RK4 is
 // stable to ~2.78). SDIRK2 (L-stable): accuracy only, h omega_n <= 0.5 for the lightly damped
-// modes (zeta < 0.3); the stiff, heavily damped ones decay whatever h.
+// modes (zeta < 0.3); the stiff, heavily damped ones decay whatever h. Midpoint (A-stable only): the
+// same for the lightly damped modes, and h |lambda| <= 4 for the others, whose numerical amplification
+// (1 - z/2) / (1 + z/2), z = h |lambda|, tends to -1 for large z (at 4: -1/3).
 int calc_auto_substeps(const Model& m);
 int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, Integrator integrator);
 

@@ -141,6 +141,8 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
       cvode->advance(s, T);
     } else if (kind == Integrator::kSdirk2) {
       for (int j = 0; j < bm.substeps; ++j) step_sdirk2(bm, s, ws, h);
+    } else if (kind == Integrator::kMidpoint) {
+      for (int j = 0; j < bm.substeps; ++j) step_midpoint(bm, s, ws, h);
     } else {
       for (int j = 0; j < bm.substeps; ++j) step_rk4(bm, s, ws, h);
     }

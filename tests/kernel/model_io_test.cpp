@@ -401,3 +401,15 @@ TEST(ConfigError, WhatReadsFileLineKeyMessage) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(ModelIo, EveryIntegratorNameParsesBack) {
+  for (auto i : {ff::Integrator::kRk4, ff::Integrator::kSdirk2, ff::Integrator::kCvodeDense, ff::Integrator::kCvodeKlu,
+                 ff::Integrator::kMidpoint}) {
+    const std::string text = with_line(47, std::string("  integrator: ") + ff::integrator_name(i));
+    EXPECT_EQ(ff::parse_model(YAML::Load(text), "m.yaml").spec.simulation.integrator, i) << ff::integrator_name(i);
+  }
+}
+
+}  // namespace

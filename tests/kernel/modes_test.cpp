@@ -120,5 +120,16 @@ TEST(Modes, AutoSubstepsResolveTheFastestMode) {
   EXPECT_GT(n, 1);
 }
 
+TEST(Modes, MidpointTakesOneStepPerSampleAtSixSegments) {
+  Model m6 = rig_with(6);
+  EXPECT_EQ(calc_auto_substeps(calc_clamped_modes(m6), m6.control_period, Integrator::kMidpoint), 1);
+  EXPECT_EQ(calc_auto_substeps(calc_closed_loop_modes(m6), m6.control_period, Integrator::kMidpoint), 1);
+  // At N = 24 the stiff, damped modes need h |lambda| <= 4: more steps than SDIRK2, fewer than RK4.
+  const Model m24 = rig_with(24);
+  const int mid = calc_auto_substeps(calc_clamped_modes(m24), m24.control_period, Integrator::kMidpoint);
+  EXPECT_GT(mid, calc_auto_substeps(calc_clamped_modes(m24), m24.control_period, Integrator::kSdirk2));
+  EXPECT_LT(mid, calc_auto_substeps(calc_clamped_modes(m24), m24.control_period, Integrator::kRk4));
+}
+
 }  // namespace
 }  // namespace ff
