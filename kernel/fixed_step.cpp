@@ -207,7 +207,13 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
     qs[j] = q[j] + gh * v[j];
     vk[j] = v[j] + gh * a_prev[j];
   }
-  compute_joint_torques(bm, qs, v, s.tau.data(), ws);
+  // The hub drive by the implicit midpoint rule: Z = z + (h/2) f(Z), z_new = 2 Z - z.
+  double* z = s.z.data();
+  double* Z = ws.z1.data();
+  if (bm.layout.nz > 0) solve_drive_stage(bm, qs, v, s.tau.data(), z, gh, Z, ws);
+  compute_hub_drive(bm, qs, v, Z, s.tau.data(), ws.tau_hub.data(), nullptr);
+  for (std::size_t j = 0; j < s.z.size(); ++j) z[j] = 2.0 * Z[j] - z[j];
+  compute_joint_torques(bm, qs, v, ws.tau_hub.data(), ws);
   compute_forward_dynamics(bm, qs, vk, A, ws);
   // q += h V, v += h A
 #pragma omp simd

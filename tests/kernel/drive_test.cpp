@@ -111,6 +111,7 @@ TEST(Hydraulics, FixedStepIntegratorsAgreeWithCvodeOnTheStiffOil) {
   const auto cvode = hydraulic_tip(true, 200, 5, Integrator::kCvodeDense);
   EXPECT_LT(rms_diff(hydraulic_tip(true, 200, 5, Integrator::kRk4), cvode), 1e-5);     // m
   EXPECT_LT(rms_diff(hydraulic_tip(true, 200, 5, Integrator::kSdirk2), cvode), 1e-4);  // m
+  EXPECT_LT(rms_diff(hydraulic_tip(true, 200, 5, Integrator::kMidpoint), cvode), 1e-4);  // m
 }
 
 // The highest chamber pressure while a demand beyond the stall torque pushes an arm that can hardly move.
