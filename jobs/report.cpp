@@ -116,6 +116,67 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   return md;
 }
 
+// Studies with `cases:`: each case's metric against the first design variable, one table row and
+// one plotted line per case (mean over any further variables; "-" / a gap where nothing settled).
+std::string report_cases(const Study& study, const ResultTable& t, const std::string& dir) {
+  const std::string x_name = t.params.size() > 1 ? t.params[1] : "case";
+  const auto groups = make_groups({column_values(t, "case"), column_values(t, x_name)});
+  std::vector<double> xs;
+  for (const auto& g : groups)
+    if (std::find(xs.begin(), xs.end(), g.key[1]) == xs.end()) xs.push_back(g.key[1]);
+  std::sort(xs.begin(), xs.end());
+  const std::pair<const char*, const char*> shown[] = {{"m1_tip_settling_s", "tip settling time (s)"},
+                                                        {"m1_tip_overshoot_pct", "tip overshoot (%)"},
+                                                        {"m1_residual_vibration_m", "residual vibration (m)"},
+                                                        {"m1_peak_torque_Nm", "peak torque (N·m)"}};
+  std::string md;
+  for (const auto& [metric, title] : shown) {
+    const auto values = column_values(t, metric);
+    // cell[case][x]: the mean over the group, NaN when any variant of it did not settle
+    std::vector<std::vector<double>> cell(study.case_labels.size(), std::vector<double>(xs.size(), NAN));
+    for (const auto& g : groups) {
+      double sum = 0.0;
+      for (int r : g.rows) sum += values[r];
+      const auto ix = std::find(xs.begin(), xs.end(), g.key[1]) - xs.begin();
+      cell[static_cast<std::size_t>(g.key[0])][ix] = sum / g.rows.size();
+    }
+    md += std::string("## ") + title + " by case and " + x_name + "\n\n| case |";
+    for (double x : xs) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, " %g |", x);
+      md += buf;
+    }
+    md += "\n|---|";
+    for (std::size_t i = 0; i < xs.size(); ++i) md += "---|";
+    md += "\n";
+    LinePlot plot;
+    plot.title = std::string(title) + " against " + x_name;
+    plot.x_label = x_name;
+    plot.y_label = title;
+    for (std::size_t c = 0; c < cell.size(); ++c) {
+      md += "| " + study.case_labels[c] + " |";
+      Series line;
+      line.label = study.case_labels[c];
+      line.dashed = c >= 6;  // the palette repeats
+      for (std::size_t i = 0; i < xs.size(); ++i) {
+        char buf[32];
+        const double a = std::abs(cell[c][i]);
+        std::snprintf(buf, sizeof buf, a >= 100 ? " %.0f |" : (a < 0.1 && a > 0 ? " %.3g |" : " %.2f |"), cell[c][i]);
+        md += std::isnan(cell[c][i]) ? std::string(" - |") : std::string(buf);
+        line.x.push_back(xs[i]);
+        line.y.push_back(cell[c][i]);
+      }
+      md += "\n";
+      plot.series.push_back(line);
+    }
+    md += "\n";
+    std::string file = metric;
+    render_line_plot(plot, dir + "/cases_" + file_safe(file) + ".png");
+  }
+  md += "\"-\": not settled within the run. Plots: cases_<metric>.png.\n";
+  return md;
+}
+
 // Random designs: statistics with confidence intervals, spec misses, distributions.
 std::string report_monte_carlo(const Study& study, const ResultTable& t, const std::string& dir) {
   std::string md = "## Responses (95 % percentile-bootstrap intervals; P(miss): Wilson interval)\n\n";
@@ -198,7 +259,8 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     for (const auto& m : study.models) moves.push_back(describe_moves(m.spec.trajectory));
     md += format_settling_table_md(table, moves);
   } else {
-    switch (study.design.kind) {
+    if (!study.case_labels.empty()) md += report_cases(study, table, dir);
+    else switch (study.design.kind) {
       case DesignKind::kGrid:
       case DesignKind::kCentered: md += report_grid(study, table, dir); break;
       case DesignKind::kSaltelli:

@@ -23,7 +23,13 @@ std::string join(const std::vector<std::string>& cells, const char* sep) {
   return out;
 }
 
-// The rows of each group, and the group's key as text.
+}  // namespace
+
+std::string case_label(const std::string& row_label) { return row_label.substr(0, row_label.find(" | ")); }
+
+namespace {
+
+// The rows of each group, and the group's key as text (a case by its label).
 struct GroupRows {
   std::vector<std::string> key;
   std::vector<int> rows;
@@ -41,7 +47,8 @@ std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::s
   for (const auto& b : by) keys.push_back(column_values(t, b));
   for (const auto& g : make_groups(keys)) {
     GroupRows gr;
-    for (double k : g.key) gr.key.push_back(num(k, "%.6g"));
+    for (std::size_t i = 0; i < by.size(); ++i)
+      gr.key.push_back(by[i] == "case" ? case_label(t.rows[g.rows[0]].label) : num(g.key[i], "%.6g"));
     gr.rows = g.rows;
     out.push_back(gr);
   }

@@ -16,6 +16,9 @@ namespace ff {
 // and the columns there are when it does not exist.
 std::vector<double> column_values(const ResultTable& t, const std::string& name);
 
+// The case of a row of a study with `cases:` (its label up to " | ").
+std::string case_label(const std::string& row_label);
+
 // One line per group of equal `by` values (all rows when `by` is empty) and metric: count,
 // missing (NaN: e.g. not settled), mean, min, p5, p50, p95, max; with a spec for the metric, the
 // probability of missing it (value > limit or NaN) and its 95 % Wilson interval.

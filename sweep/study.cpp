@@ -166,9 +166,38 @@ Variable parse_variable(YamlReader& r, bool& integer) {
   return v;
 }
 
+// Crosses every case (a labelled set of overrides) with every variant of the design: the case's
+// overrides come first, its index is the parameter `case`, its label leads the variant's label.
+void cross_cases(Study& st, YamlReader& top) {
+  auto cases = top.sequence("cases", true);
+  if (cases.empty()) top.fail("cases", "needs at least one case");
+  std::vector<std::pair<std::string, std::vector<Assignment>>> list;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    std::string label = "case " + std::to_string(i);
+    cases[i].optional("label", label);
+    if (label.find(" | ") != std::string::npos) cases[i].fail("label", "must not contain ' | '");
+    list.emplace_back(label, read_assignments(cases[i], "set"));
+    cases[i].finish();
+    st.case_labels.push_back(label);
+  }
+  const std::vector<Variant> design = std::move(st.variants);
+  st.variants.clear();
+  st.params.insert(st.params.begin(), "case");
+  for (std::size_t c = 0; c < list.size(); ++c)
+    for (const auto& d : design) {
+      Variant v = d;
+      v.eval_id = static_cast<int>(st.variants.size());
+      v.label = list[c].first + " | " + d.label;
+      v.params.insert(v.params.begin(), static_cast<double>(c));
+      v.set.insert(v.set.begin(), list[c].second.begin(), list[c].second.end());
+      st.variants.push_back(std::move(v));
+    }
+}
+
 void parse_design(Study& st, YamlReader& top) {
   const bool has_runs = top.has("runs"), has_vars = top.has("variables");
   if (has_runs == has_vars) top.fail("runs", "give either `runs:` (a list of runs) or `variables:` with a `design:`");
+  if (has_runs && top.has("cases")) top.fail("cases", "cases are crossed with `variables:`; a list of `runs:` takes none");
 
   if (has_runs) {
     st.listed = true;
@@ -244,6 +273,7 @@ void parse_design(Study& st, YamlReader& top) {
     }
     st.variants.push_back(std::move(v));
   }
+  if (top.has("cases")) cross_cases(st, top);
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ struct Study {
   DesignSpec design;            // kind, sample counts and seed (ignored for a list of runs)
   bool listed = false;          // runs given one by one (`runs:`) rather than by a design
   std::vector<Variable> variables;
+  std::vector<std::string> case_labels;     // `cases:` crossed with the design (parameter `case` = index)
   std::vector<std::string> params;          // parameter columns: variable paths, or the paths the runs set
   std::vector<Variant> variants;
   std::vector<Model> models;                // (variants), built and checked when the study is loaded

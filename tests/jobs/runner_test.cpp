@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "results/summaries.hpp"
 #include "results/table.hpp"
 
 namespace ff {
@@ -80,6 +81,29 @@ TEST(Runner, ProgressReachesTheVariantCount) {
     ++calls;
   });
   EXPECT_EQ(calls, 4);
+}
+
+// The controller comparison on the hydraulic rig (configs/studies/fbtb_controllers.yaml, docs/controllers.md).
+TEST(Runner, ControllerStudyShowsShapersAndNotchesCalmTheArmAndEiIsTheMostRobust) {
+  const Study study = load_study(kSource + "/configs/studies/fbtb_controllers.yaml");
+  ASSERT_EQ(study.case_labels.size(), 7u);
+  const StudyRun run = run_study(study, EvalOptions{});
+  const auto& t = run.table;
+  const auto residual = column_values(t, "m1_residual_vibration_m");
+  const auto settle = column_values(t, "m1_tip_settling_s");
+  const int levels = 5, nominal = 2;  // payload levels; the middle one is the design point
+  auto at = [&](const std::vector<double>& x, int c, int p) { return x[c * levels + p]; };
+  // Every vibration-aware controller leaves at most half of PD's residual vibration at every payload.
+  for (int c = 1; c <= 5; ++c)
+    for (int p = 0; p < levels; ++p) EXPECT_LT(at(residual, c, p), 0.5 * at(residual, 0, p)) << c << " " << p;
+  // On the design point: the notch n = 1 and ZV settle fastest; PD and feed-forward ring on.
+  EXPECT_LT(at(settle, 1, nominal), 2.0);
+  EXPECT_LT(at(settle, 3, nominal), 2.0);
+  EXPECT_TRUE(std::isnan(at(settle, 0, nominal)));
+  EXPECT_TRUE(std::isnan(at(settle, 6, nominal)));
+  // Robustness: ZV's residual vibration grows 2.5-fold off the design point; EI's settles at every payload.
+  EXPECT_GT(at(residual, 3, 4), 2.0 * at(residual, 3, nominal));
+  for (int p = 0; p < levels; ++p) EXPECT_FALSE(std::isnan(at(settle, 5, p))) << p;
 }
 
 }  // namespace

@@ -121,6 +121,34 @@ TEST_F(StudyFiles, StudyWideSetAppliesToEveryRun) {
   for (const auto& v : st.variants) EXPECT_EQ(ff::make_variant_model(st, v).nseg, 8);
 }
 
+TEST_F(StudyFiles, CasesAreCrossedWithEveryDesignPoint) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\n"
+                                        "cases:\n"
+                                        "  - label: plain\n"
+                                        "  - label: notched\n"
+                                        "    set: {notch.enabled: true}\n"
+                                        "variables:\n"
+                                        "  - path: payload.mass\n"
+                                        "    levels: [200, 300, 400]\n"
+                                        "design: {type: grid}\n");
+  const ff::Study st = ff::load_study(path);
+  ASSERT_EQ(st.variants.size(), 6u);
+  EXPECT_EQ(st.params, (std::vector<std::string>{"case", "payload.mass"}));
+  EXPECT_EQ(st.case_labels, (std::vector<std::string>{"plain", "notched"}));
+  const double masses[] = {200, 300, 400};
+  for (int i = 0; i < 6; ++i) {
+    const auto& v = st.variants[i];
+    EXPECT_EQ(v.eval_id, i);
+    EXPECT_EQ(v.params[0], i / 3);
+    EXPECT_EQ(v.params[1], masses[i % 3]);
+    const auto m = ff::make_variant_model(st, v);
+    EXPECT_EQ(m.spec.notch.enabled, i >= 3);
+    EXPECT_DOUBLE_EQ(m.spec.payload_mass, masses[i % 3]);
+  }
+  EXPECT_EQ(st.variants[4].label, "notched | payload.mass=300");
+}
+
 // ---- bad studies -------------------------------------------------------------------------
 
 TEST_F(StudyFiles, UnknownKeyInARunIsRejectedWithItsLine) {
@@ -248,6 +276,11 @@ TEST_F(StudyFiles, MissingModelKeyIsRejected) {
   EXPECT_EQ(e.file(), path);
   EXPECT_EQ(e.key(), "model");
   EXPECT_NE(e.message().find("missing required value"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, CasesWithARunListAreRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - label: a\ncases:\n  - label: b\n");
+  EXPECT_EQ(load_error(path).key(), "cases");
 }
 
 TEST_F(StudyFiles, EmptyRunListIsRejected) {
