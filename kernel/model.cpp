@@ -32,9 +32,9 @@ void validate(const ModelSpec& s, const std::string& src) {
   positive(s.beam.length, "beam.length");
   positive(s.beam.height, "beam.height");
   positive(s.beam.thickness, "beam.thickness");
-  positive(s.beam.density, "beam.density");
+  non_negative(s.beam.density, "beam.density");
   positive(s.beam.youngs_modulus, "beam.youngs_modulus");
-  if (s.segments < 2) throw ConfigError(src, 0, "segments", "must be >= 2, got " + std::to_string(s.segments));
+  if (s.segments < 1) throw ConfigError(src, 0, "segments", "must be >= 1 (1 = a rigid arm), got " + std::to_string(s.segments));
   if (s.segments > 4096) throw ConfigError(src, 0, "segments", "must be <= 4096, got " + std::to_string(s.segments));
   positive(s.joints.stiffness, "joints.stiffness");
   non_negative(s.joints.damping, "joints.damping");
@@ -161,9 +161,10 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
   const auto& b = spec.beam;
 
   // Segment lengths: joints at the centres of N-1 equal cells; end segments are half cells (reference-rig.md).
-  m.cell = b.length / (n - 1);
+  // N = 1: one rigid segment, the whole beam, and no joints.
+  m.cell = n > 1 ? b.length / (n - 1) : b.length;
   m.seg_length.assign(n, m.cell);
-  m.seg_length.front() = m.seg_length.back() = 0.5 * m.cell;
+  if (n > 1) m.seg_length.front() = m.seg_length.back() = 0.5 * m.cell;
 
   // Segment mass rho h t L_i and centroidal inertia m (L_i^2 + t^2) / 12.
   for (int i = 0; i < n; ++i) {

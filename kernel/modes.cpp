@@ -78,6 +78,7 @@ Eigen::MatrixXd joint_diag(const std::vector<double>& x) {
 
 std::vector<Mode> calc_clamped_modes(const Model& m) {
   const int n = m.nseg - 1;
+  if (n == 0) return {};  // a rigid arm: nothing to clamp
   const Eigen::MatrixXd mass = calc_mass_matrix(m, Eigen::VectorXd::Zero(m.nseg));
   return eigen_modes(state_matrix(mass.bottomRightCorner(n, n), joint_diag(m.joint_k).bottomRightCorner(n, n),
                                   joint_diag(m.joint_c).bottomRightCorner(n, n)));

@@ -217,7 +217,7 @@ TEST_F(Cli, NegativeMassSetIsRejectedNamingTheKey) {
 }
 
 TEST_F(Cli, BadSetPathsAreRejected) {
-  for (const std::string set : {"payload.colour=1", "segments=1", "'trajectory.moves[7].target=1'", "payload.mass"}) {
+  for (const std::string set : {"payload.colour=1", "segments=0", "'trajectory.moves[7].target=1'", "payload.mass"}) {
     const auto r = run("simulate configs/fbtb.yaml --out out --set " + set);
     expect_one_error_line(r, "--set");
     EXPECT_FALSE(fs::exists(work / "out")) << set;

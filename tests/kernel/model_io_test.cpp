@@ -280,7 +280,7 @@ TEST(ModelIo, NegativePayloadMassNamesKeyAndLine) {
 }
 
 TEST(ModelIo, OneSegmentIsTooFew) {
-  expect_rejected(with_line(11, "segments: 1"), 11, "segments", "must be >= 2, got 1");
+  expect_rejected(with_line(11, "segments: 0"), 11, "segments", "must be >= 1 (1 = a rigid arm), got 0");
 }
 
 TEST(ModelIo, ZeroBeamLengthIsRejected) {
