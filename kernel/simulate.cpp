@@ -1,5 +1,6 @@
 #include "kernel/simulate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -84,7 +85,26 @@ void apply_payload_events(BatchModel& live, std::vector<std::size_t>& next, doub
 }
 }  // namespace
 
-BatchRun simulate(const BatchModel& model, const std::function<void(const BatchState&)>& observe) {
+namespace {
+double at_sample(const std::vector<double>& x, long k) { return x[std::min<std::size_t>(k, x.size() - 1)]; }
+
+// A record's signals at sample k: the reference, and the measured hub state every reset_every samples.
+void apply_inputs(const SampleInputs& in, long k, BatchState& s, double* ref, double* ref_ff, int W) {
+  if (!in.ref.empty())
+    for (int l = 0; l < W; ++l) {
+      ref[l] = at_sample(in.ref, k);
+      ref_ff[l] = 0.0;
+    }
+  if (in.reset_every > 0 && k % in.reset_every == 0 && k > 0)
+    for (int l = 0; l < W; ++l) {
+      s.q[l] = at_sample(in.hub_angle, k);
+      s.v[l] = at_sample(in.hub_rate, k);
+    }
+}
+}  // namespace
+
+BatchRun simulate(const BatchModel& model, const std::function<void(const BatchState&)>& observe,
+                  const SampleInputs* inputs) {
   // A run with payload events works on its own copy of the batch, changed at those samples.
   bool events = false;
   for (const auto& m : model.models) events |= !m.spec.payload_events.empty();
@@ -131,8 +151,10 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
                             bm.kd[l] * calc_shaped_reference_rate(mdl.spec.trajectory, mdl.shaper, s.t)
                       : 0.0;
     }
+    if (inputs) apply_inputs(*inputs, k, s, ref.data(), ref_ff.data(), W);
     if (k == 0) reset_controller(bm, s, ref.data());
     compute_control(bm, s, ref.data(), ref_ff.data(), ref_f.data());
+    if (inputs && !inputs->torque.empty()) std::fill(s.tau.begin(), s.tau.end(), at_sample(inputs->torque, k));
     record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), ws, run.traces);
     if (observe) observe(s);
     if (k + 1 == nsamples) break;

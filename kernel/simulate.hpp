@@ -31,9 +31,21 @@ struct BatchRun {
   std::vector<LaneStatus> status;      // (W)
 };
 
+// Signals from outside that replace the model's own, one value per controller sample k (the last
+// value holds beyond the end), the same for every lane: replaying a measurement record.
+struct SampleInputs {
+  std::vector<double> ref;        // the reference r_k (rad) instead of the trajectory; no model feed-forward
+  std::vector<double> torque;     // the hub torque demand (N·m) instead of the controller's: open loop
+  // Every `reset_every` samples (0 = never) the hub angle and rate are set to these measured values
+  // before the controller acts: the model then predicts at most reset_every samples ahead.
+  int reset_every = 0;
+  std::vector<double> hub_angle, hub_rate;
+};
+
 // Runs every lane of the batch to bm.duration with the integrator the models ask for.
 // `observe`, when given, sees the state at every controller sample (after the controller acted).
-BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe = nullptr);
+BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe = nullptr,
+                  const SampleInputs* inputs = nullptr);
 
 // Writes one trace as CSV (columns t, ref, ref_filtered, hub_torque, hub_angle, hub_rate,
 // tip_deflection, tip_angle, then the extra channels), atomically.

@@ -1,0 +1,98 @@
+// Measurement records (validate/record.cpp): bad records get one clear error naming file, line, column.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "kernel/errors.hpp"
+#include "validate/record.hpp"
+
+namespace ff {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Records : public ::testing::Test {
+ protected:
+  fs::path dir = fs::temp_directory_path() / ("ff_record_" + std::to_string(::getpid()));
+  void SetUp() override { fs::create_directories(dir); }
+  void TearDown() override { fs::remove_all(dir); }
+  // A record of n rows: t = k/100, hub_angle = 0.01 k, hub_torque = 1, with `edit` applied to row `row`.
+  std::string write(int n, const std::string& header = "t,hub_angle,hub_torque", int row = -1,
+                    const std::string& edit = "") {
+    const auto path = (dir / "r.csv").string();
+    std::ofstream out(path);
+    out << header << "\n";
+    for (int k = 0; k < n; ++k) {
+      if (k == row) {
+        out << edit << "\n";
+        continue;
+      }
+      out << k / 100.0 << "," << 0.01 * k << ",1\n";
+    }
+    return path;
+  }
+  static ConfigError error_of(const std::string& path, std::vector<std::string> required = {"hub_angle"}) {
+    try {
+      read_record_csv(path, required);
+    } catch (const ConfigError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "accepted";
+    return ConfigError("", 0, "", "");
+  }
+};
+
+TEST_F(Records, GoodRecordReadsEveryColumn) {
+  const Record r = read_record_csv(write(50), {"hub_angle", "hub_torque"});
+  ASSERT_EQ(r.size(), 50u);
+  EXPECT_DOUBLE_EQ(r.t[10], 0.1);
+  EXPECT_DOUBLE_EQ(r.at("hub_angle")[10], 0.1);
+  EXPECT_TRUE(r.has("hub_torque"));
+  EXPECT_DOUBLE_EQ(interpolate(r.t, r.at("hub_angle"), 0.105), 0.105);
+}
+
+TEST_F(Records, MissingColumnIsNamed) {
+  const auto e = error_of(write(50), {"ref"});
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_EQ(e.key(), "ref");
+}
+
+TEST_F(Records, TimeThatDoesNotIncreaseNamesItsLine) {
+  const auto e = error_of(write(50, "t,hub_angle,hub_torque", 5, "0.03,0.05,1"));
+  EXPECT_EQ(e.line(), 7);
+  EXPECT_EQ(e.key(), "t");
+}
+
+TEST_F(Records, NanAndEmptyCellsNameLineAndColumn) {
+  auto e = error_of(write(50, "t,hub_angle,hub_torque", 8, "0.08,nan,1"));
+  EXPECT_EQ(e.line(), 10);
+  EXPECT_EQ(e.key(), "hub_angle");
+  e = error_of(write(50, "t,hub_angle,hub_torque", 8, "0.08,0.08,"));
+  EXPECT_EQ(e.line(), 10);
+  EXPECT_EQ(e.key(), "hub_torque");
+  EXPECT_NE(e.message().find("empty"), std::string::npos);
+}
+
+TEST_F(Records, TooFewSamplesAreRefused) {
+  EXPECT_NE(error_of(write(5)).message().find("only 5 samples"), std::string::npos);
+}
+
+TEST_F(Records, DegreesWhereRadiansAreExpectedAreRefused) {
+  const auto path = (dir / "deg.csv").string();
+  std::ofstream out(path);
+  out << "t,hub_angle\n";
+  for (int k = 0; k < 50; ++k) out << k / 100.0 << "," << 0.5 * k << "\n";  // 0 .. 24.5 "rad"
+  out.close();
+  const auto e = error_of(path);
+  EXPECT_EQ(e.key(), "hub_angle");
+  EXPECT_NE(e.message().find("degrees"), std::string::npos);
+}
+
+TEST_F(Records, RaggedRowIsRefused) {
+  const auto e = error_of(write(50, "t,hub_angle,hub_torque", 3, "0.03,0.03"));
+  EXPECT_EQ(e.line(), 5);
+}
+
+}  // namespace
+}  // namespace ff

@@ -1,0 +1,85 @@
+// Replaying records on models (validate/replay.cpp): a model replayed on its own output is exact.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "kernel/simulate.hpp"
+#include "validate/replay.hpp"
+
+namespace ff {
+namespace {
+
+ModelSpec rig(double payload = 328.7) {
+  ModelSpec s;
+  s.trajectory.moves = {{0.5, 4.0}};
+  s.payload_mass = payload;
+  return s;
+}
+
+// The model's own closed-loop run as a measurement record.
+Record record_of(const Model& m) {
+  const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
+  const Trace tr = simulate(bm).traces[0];
+  Record r;
+  r.t = tr.t;
+  r.columns["ref"] = tr.ref;
+  r.columns["hub_torque"] = tr.torque;
+  r.columns["hub_angle"] = tr.hub_angle;
+  r.columns["hub_rate"] = tr.hub_rate;
+  r.columns["tip_deflection"] = tr.tip_deflection;
+  return r;
+}
+
+TEST(Replay, ClosedLoopReplayOfTheModelsOwnRunIsExact) {
+  const Model m = make_model(rig());
+  const Record r = record_of(m);
+  const auto p = replay(std::span<const Model>(&m, 1), r, ReplayMode::kClosedLoop);
+  ASSERT_TRUE(p[0].ok);
+  for (const auto& c : scored_channels(ReplayMode::kClosedLoop, r))
+    EXPECT_GT(calc_fit(r.at(c), p[0].channels.at(c)).percent, 99.999) << c;
+}
+
+TEST(Replay, OpenLoopReplayOfItsTorqueReproducesTheMotion) {
+  const Model m = make_model(rig());
+  const Record r = record_of(m);
+  const auto p = replay(std::span<const Model>(&m, 1), r, ReplayMode::kOpenLoop);
+  EXPECT_GT(calc_fit(r.at("hub_angle"), p[0].channels.at("hub_angle")).percent, 99.99);
+  EXPECT_GT(calc_fit(r.at("tip_deflection"), p[0].channels.at("tip_deflection")).percent, 99.9);
+}
+
+TEST(Replay, InverseDynamicsRecoversTheTorqueThatMovedTheArm) {
+  const Model m = make_model(rig());
+  const Record r = record_of(m);
+  const auto p = replay(std::span<const Model>(&m, 1), r, ReplayMode::kInverseDynamics);
+  ASSERT_TRUE(p[0].ok);
+  // Zero-order-hold torque against the smooth inverse dynamics of the sampled motion: within 2 %.
+  EXPECT_GT(calc_fit(r.at("hub_torque"), p[0].channels.at("hub_torque")).percent, 98.0);
+}
+
+TEST(Replay, KStepPredictionOfAWrongModelFitsBetterThanItsFreeRun) {
+  const Model truth = make_model(rig(450.0)), wrong = make_model(rig(250.0));
+  const Record r = record_of(truth);
+  const double free_run = calc_fit(r.at("hub_angle"), replay(std::span<const Model>(&wrong, 1), r, ReplayMode::kClosedLoop)[0].channels.at("hub_angle")).percent;
+  const double ahead = calc_fit(r.at("hub_angle"), replay(std::span<const Model>(&wrong, 1), r, ReplayMode::kClosedLoop, 10)[0].channels.at("hub_angle")).percent;
+  EXPECT_LT(free_run, 99.0);
+  EXPECT_GT(ahead, free_run);
+}
+
+TEST(Replay, CandidatesRunAsLanesGiveTheSameAsAlone) {
+  const Model a = make_model(rig(300.0)), b = make_model(rig(350.0));
+  const Record r = record_of(make_model(rig()));
+  const std::vector<Model> both = {a, b};
+  const auto together = replay(both, r, ReplayMode::kClosedLoop);
+  const auto alone = replay(std::span<const Model>(&b, 1), r, ReplayMode::kClosedLoop);
+  EXPECT_EQ(together[1].channels.at("tip_deflection"), alone[0].channels.at("tip_deflection"));
+}
+
+TEST(Fit, PerfectIsHundredAndTheMeanIsZero) {
+  const std::vector<double> y = {1, 2, 3, 4};
+  EXPECT_DOUBLE_EQ(calc_fit(y, y).percent, 100.0);
+  EXPECT_NEAR(calc_fit(y, {2.5, 2.5, 2.5, 2.5}).percent, 0.0, 1e-12);
+  EXPECT_NEAR(calc_fit(y, {1, 2, 3, 5}).rmse, 0.5, 1e-12);
+}
+
+}  // namespace
+}  // namespace ff

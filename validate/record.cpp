@@ -1,0 +1,115 @@
+#include "validate/record.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "kernel/errors.hpp"
+#include "kernel/files.hpp"
+
+namespace ff {
+
+namespace {
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) {
+    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
+    while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
+    cells.push_back(cell);
+  }
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+
+}  // namespace
+
+Record read_record_csv(const std::string& path, const std::vector<std::string>& required) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, 0, "", "cannot open the record");
+  Record r;
+  r.source = path;
+  std::string line;
+  if (!std::getline(in, line)) throw ConfigError(path, 1, "", "the record is empty (expected a header row)");
+  const auto header = split(line);
+  int tcol = -1;
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    if (header[c].empty()) throw ConfigError(path, 1, "", "column " + std::to_string(c + 1) + " has no name");
+    if (header[c] == "t") tcol = static_cast<int>(c);
+  }
+  if (tcol < 0) throw ConfigError(path, 1, "t", "missing column 't' (time, s)");
+  for (const auto& name : required)
+    if (std::find(header.begin(), header.end(), name) == header.end())
+      throw ConfigError(path, 1, name, "missing column '" + name + "', needed here");
+  std::vector<std::vector<double>> cols(header.size());
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line == "\r") continue;
+    const auto cells = split(line);
+    if (cells.size() != header.size())
+      throw ConfigError(path, line_no, "", "expected " + std::to_string(header.size()) + " cells, found " +
+                                               std::to_string(cells.size()));
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      const char* s = cells[c].c_str();
+      char* end = nullptr;
+      const double x = std::strtod(s, &end);
+      if (cells[c].empty()) throw ConfigError(path, line_no, header[c], "empty cell");
+      if (end == s || *end != '\0') throw ConfigError(path, line_no, header[c], "'" + cells[c] + "' is not a number");
+      if (!std::isfinite(x)) throw ConfigError(path, line_no, header[c], "'" + cells[c] + "' is not finite");
+      cols[c].push_back(x);
+    }
+    const auto& t = cols[tcol];
+    if (t.size() > 1 && !(t.back() > t[t.size() - 2]))
+      throw ConfigError(path, line_no, "t", "time does not increase (" + cells[tcol] + " after " +
+                                                std::to_string(t[t.size() - 2]) + ")");
+  }
+  if (cols[tcol].size() < kMinRecordSamples)
+    throw ConfigError(path, line_no, "", "only " + std::to_string(cols[tcol].size()) + " samples; at least " +
+                                             std::to_string(kMinRecordSamples) + " are needed");
+  r.t = std::move(cols[tcol]);
+  for (std::size_t c = 0; c < header.size(); ++c)
+    if (static_cast<int>(c) != tcol) r.columns[header[c]] = std::move(cols[c]);
+  // Angles in radians: a swing beyond 2 pi in a record of an arm that turns less than a turn is degrees.
+  for (const char* name : {"ref", "hub_angle", "tip_angle"}) {
+    if (!r.has(name)) continue;
+    const auto& x = r.at(name);
+    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+    if (*hi - *lo > 2.0 * M_PI)
+      throw ConfigError(path, 0, name,
+                        "swings over " + std::to_string(*hi - *lo) + ": looks like degrees; the record must be in radians");
+  }
+  return r;
+}
+
+void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path) {
+  std::string text = "t";
+  for (const auto& c : order) text += "," + c;
+  text += "\n";
+  char buf[64];
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    std::snprintf(buf, sizeof buf, "%.6f", r.t[k]);
+    text += buf;
+    for (const auto& c : order) {
+      std::snprintf(buf, sizeof buf, ",%.10g", r.at(c)[k]);
+      text += buf;
+    }
+    text += "\n";
+  }
+  write_file_atomic(path, text);
+}
+
+double interpolate(const std::vector<double>& t, const std::vector<double>& y, double x) {
+  if (x <= t.front()) return y.front();
+  if (x >= t.back()) return y.back();
+  const auto it = std::upper_bound(t.begin(), t.end(), x);
+  const std::size_t k = static_cast<std::size_t>(it - t.begin());
+  const double u = (x - t[k - 1]) / (t[k] - t[k - 1]);
+  return y[k - 1] + u * (y[k] - y[k - 1]);
+}
+
+}  // namespace ff

@@ -1,0 +1,37 @@
+// Measurement records (docs/formats.md, "Measurement record"; reference-rig.md): one header row,
+// comma separated, SI units, time strictly increasing. Columns t, ref, hub_torque, hub_angle,
+// tip_deflection, and any others (hub_rate, tip_accel, pressure_a ...).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace ff {
+
+struct Record {
+  std::string source;                                   // the file
+  std::vector<double> t;                                // s, strictly increasing
+  std::map<std::string, std::vector<double>> columns;   // every other column, by its header name
+
+  bool has(const std::string& name) const { return columns.count(name) > 0; }
+  const std::vector<double>& at(const std::string& name) const { return columns.at(name); }
+  std::size_t size() const { return t.size(); }
+};
+
+// The fewest samples a record may have.
+inline constexpr std::size_t kMinRecordSamples = 20;
+
+// Reads a record and checks it: the `required` columns exist; every cell is a finite number;
+// time strictly increases; at least kMinRecordSamples rows; angle columns (ref, hub_angle,
+// tip_angle) that look like degrees (a swing beyond 2 pi) are refused. Throws ConfigError naming
+// the file, the line and the column, with one clear message.
+Record read_record_csv(const std::string& path, const std::vector<std::string>& required);
+
+// Writes a record (columns in the order given, %.10g), atomically.
+void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path);
+
+// Linear interpolation of (t, y) at time x; clamped to the ends.
+double interpolate(const std::vector<double>& t, const std::vector<double>& y, double x);
+
+}  // namespace ff
