@@ -1,0 +1,146 @@
+// flexfarm diagnose / calibrate / record: find the physical effect a model lacks, add it, and make
+// records with a hidden effect to test that this works (docs/validation.md).
+#include <cstdio>
+#include <filesystem>
+
+#include "apps/verbs.hpp"
+#include "kernel/files.hpp"
+#include "kernel/model_io.hpp"
+#include "validate/diagnose.hpp"
+#include "validate/ledger.hpp"
+#include "validate/synthetic.hpp"
+
+namespace ff {
+
+namespace {
+
+std::vector<std::string> split_list(const std::vector<std::string>& items) {
+  std::vector<std::string> out;
+  for (const auto& s : items) {
+    std::size_t a = 0;
+    while (a <= s.size()) {
+      const auto b = std::min(s.find(',', a), s.size());
+      if (b > a) out.push_back(s.substr(a, b - a));
+      a = b + 1;
+    }
+  }
+  return out;
+}
+
+ReplayMode mode_of(const std::string& name) {
+  try {
+    return parse_replay_mode(name);
+  } catch (const std::invalid_argument& e) {
+    throw ExitError(std::string("--mode: ") + e.what(), 2);
+  }
+}
+
+}  // namespace
+
+void add_diagnose_verb(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "diagnose", "Try every candidate effect on a model against a measurement record: fit each by nonlinear "
+                  "least squares, rank them by delta BIC and say which one is missing (or none)");
+  struct Args {
+    std::string model, data, json, mode = "closed-loop";
+    std::vector<std::string> sets, effects;
+    int iterations = 25, samples = 1500;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("--model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--data", a->data, "measurement record CSV (docs/formats.md)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--json", a->json, "write the ranking here as JSON")->required();
+  cmd->add_option("--mode", a->mode, "closed-loop (ref drives the model's controller), open-loop (hub_torque "
+                                     "drives the plant) or inverse-dynamics")->capture_default_str();
+  cmd->add_option("--effects", a->effects, "only these effects, comma separated (default: every one that applies)");
+  cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
+  cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect")->capture_default_str();
+  cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
+  cmd->callback([a] {
+    DiagnoseOptions opt;
+    opt.mode = mode_of(a->mode);
+    opt.only = split_list(a->effects);
+    opt.max_iterations = a->iterations;
+    opt.max_samples = a->samples;
+    const ModelSource src = load_model_source(a->model, a->sets);
+    const Record r = read_record_csv(a->data, replay_inputs(opt.mode));
+    std::fprintf(stderr, "diagnosing %s against %s (%s, %zu samples)...\n", a->model.c_str(), a->data.c_str(),
+                 a->mode.c_str(), r.size());
+    const Diagnosis d = diagnose(src, r, opt);
+    write_file_atomic(a->json, format_diagnosis_json(d));
+    std::printf("%swrote %s\n", format_diagnosis_text(d).c_str(), a->json.c_str());
+  });
+}
+
+void add_calibrate_verb(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "calibrate", "Add one effect to a model with its parameters fitted to a record; write the new model YAML "
+                   "and record both versions and their fit in a model ledger (SQLite) with a plot of the error");
+  struct Args {
+    std::string model, data, add, out, ledger, mode = "closed-loop";
+    std::vector<std::string> sets;
+    int iterations = 25, samples = 1500;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("--model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--data", a->data, "measurement record CSV")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--add", a->add, "the effect to add (see `flexfarm diagnose`)")->required();
+  cmd->add_option("--out", a->out, "the new model YAML")->required();
+  cmd->add_option("--ledger", a->ledger, "model ledger (default: ledger.sqlite beside --out)");
+  cmd->add_option("--mode", a->mode, "closed-loop, open-loop or inverse-dynamics")->capture_default_str();
+  cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
+  cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations")->capture_default_str();
+  cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
+  cmd->callback([a] {
+    DiagnoseOptions opt;
+    opt.mode = mode_of(a->mode);
+    opt.max_iterations = a->iterations;
+    opt.max_samples = a->samples;
+    bool known = false;
+    for (const auto& n : effect_names()) known |= n == a->add;
+    if (!known) throw ExitError("--add: unknown effect '" + a->add + "'", 2);
+    const ModelSource src = load_model_source(a->model, a->sets);
+    const Record r = read_record_csv(a->data, replay_inputs(opt.mode));
+    const EffectFit f = fit_effect(src, r, opt, a->add);
+    if (!f.ok) throw ExitError("the fit of " + a->add + " failed: " + f.note, 3);
+    const std::string yaml = format_calibrated_model(src, f, a->data);
+    const std::string ledger = a->ledger.empty()
+                                   ? (std::filesystem::path(a->out).parent_path() / "ledger.sqlite").string()
+                                   : a->ledger;
+    write_file_atomic(a->out, yaml);
+    const Model before = build_model(src), after = load_model(a->out);
+    const auto versions = record_calibration(ledger, a->model, before, a->out, after, f, r, opt.mode);
+    std::printf("added %s to %s -> %s (delta BIC %.1f)\n", a->add.c_str(), a->model.c_str(), a->out.c_str(),
+                f.delta_bic);
+    for (const auto& [p, v] : f.params) std::printf("  %s = %.6g\n", p.c_str(), v);
+    std::printf("%s", versions.c_str());
+  });
+}
+
+void add_record_verb(CLI::App& app) {
+  auto* cmd = app.add_subcommand("record", "Make a measurement record from a model (a truth model, e.g. with an "
+                                           "effect hidden by --set): its closed-loop run with noise on every channel");
+  struct Args {
+    std::string model, out;
+    std::vector<std::string> sets;
+    double noise = 0.01;
+    std::uint64_t seed = 1;
+    int decimate = 1;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", a->out, "record CSV to write")->required();
+  cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
+  cmd->add_option("--noise", a->noise, "noise standard deviation per channel, as a fraction of the channel's")
+      ->capture_default_str();
+  cmd->add_option("--seed", a->seed, "noise seed")->capture_default_str();
+  cmd->add_option("--decimate", a->decimate, "keep every n-th controller sample")->capture_default_str();
+  cmd->callback([a] {
+    const Model m = load_model_with(a->model, a->sets);
+    const Record r = make_synthetic_record(m, a->noise, a->seed, a->decimate);
+    write_record_csv(r, {"ref", "hub_torque", "hub_angle", "hub_rate", "tip_deflection"}, a->out);
+    std::printf("wrote %s: %zu samples\n", a->out.c_str(), r.size());
+  });
+}
+
+}  // namespace ff

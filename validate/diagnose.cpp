@@ -1,0 +1,372 @@
+#include "validate/diagnose.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "kernel/errors.hpp"
+#include "kernel/yaml_reader.hpp"
+
+namespace ff {
+
+ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets) {
+  ModelSource src;
+  src.doc = load_yaml_file(path);
+  src.path = path;
+  for (const auto& s : sets) src.set.push_back(parse_assignment(s));
+  build_model(src);  // a bad model or override fails here, before any fitting
+  return src;
+}
+
+Model build_model(const ModelSource& src, const std::vector<Assignment>& extra) {
+  std::vector<Assignment> all = src.set;
+  all.insert(all.end(), extra.begin(), extra.end());
+  return make_model_with(YAML::Clone(src.doc), src.path, all);
+}
+
+namespace {
+
+Assignment assign(const std::string& path, const YAML::Node& value) {
+  Assignment a;
+  a.path = path;
+  a.value = value;
+  a.source = "diagnose";
+  a.key = path;
+  return a;
+}
+
+// A path's value node: whole numbers stay integers (delays, segment counts).
+YAML::Node number_node(const std::string& path, double x) {
+  if (path == "segments" || path.find(".delay") != std::string::npos) return YAML::Node(static_cast<int>(std::lround(x)));
+  return YAML::Node(x);
+}
+
+// The record's scored channels, decimated and normalised: residual = (y - yhat) / sd(y).
+struct Scorer {
+  const ModelSource* src = nullptr;
+  const Record* rec = nullptr;
+  ReplayMode mode = ReplayMode::kClosedLoop;
+  std::vector<std::string> channels;
+  std::vector<std::size_t> index;  // decimated sample indices
+  std::vector<double> scale;       // 1 / sd per channel
+
+  int size() const { return static_cast<int>(channels.size() * index.size()); }
+
+  // Residuals of each model (empty vector for a failed lane).
+  std::vector<std::vector<double>> residuals(const std::vector<Model>& models) const {
+    std::vector<Prediction> p;
+    bool same_shape = true;
+    for (const auto& m : models) same_shape &= m.nseg == models[0].nseg;
+    if (same_shape) {
+      p = replay(models, *rec, mode);
+    } else {
+      for (const auto& m : models) p.push_back(replay(std::span<const Model>(&m, 1), *rec, mode)[0]);
+    }
+    std::vector<std::vector<double>> out(models.size());
+    for (std::size_t i = 0; i < models.size(); ++i) {
+      if (!p[i].ok) continue;
+      auto& r = out[i];
+      for (std::size_t c = 0; c < channels.size(); ++c) {
+        const auto& y = rec->at(channels[c]);
+        const auto& yh = p[i].channels.at(channels[c]);
+        for (std::size_t k : index) r.push_back((y[k] - yh[k]) * scale[c]);
+      }
+      for (double x : r)
+        if (!std::isfinite(x)) {
+          r.clear();
+          break;
+        }
+    }
+    return out;
+  }
+
+  std::map<std::string, double> fit_percent(const Model& m) const {
+    std::map<std::string, double> out;
+    const auto p = replay(std::span<const Model>(&m, 1), *rec, mode)[0];
+    for (const auto& c : channels) out[c] = p.ok ? calc_fit(rec->at(c), p.channels.at(c)).percent : -INFINITY;
+    return out;
+  }
+};
+
+double sum_squares(const std::vector<double>& r) {
+  double s = 0.0;
+  for (double x : r) s += x * x;
+  return s;
+}
+
+// The effect's model for log-parameters theta (and the grid value, if any).
+std::vector<Assignment> effect_assignments(const Effect& e, const double* theta, double grid_value) {
+  std::vector<Assignment> a;
+  for (const auto& [path, value] : e.set) a.push_back(assign(path, YAML::Load(value)));
+  if (!e.grid_path.empty()) a.push_back(assign(e.grid_path, number_node(e.grid_path, grid_value)));
+  for (std::size_t i = 0; i < e.params.size(); ++i) a.push_back(assign(e.params[i].path, YAML::Node(std::exp(theta[i]))));
+  return a;
+}
+
+// Ceres cost: the normalised residuals of the model with the effect at log-parameters theta. The
+// forward-difference Jacobian's columns run as lanes of the same batch as the point itself.
+class ReplayCost : public ceres::CostFunction {
+ public:
+  ReplayCost(const Scorer& sc, const Effect& e, double grid_value) : sc_(sc), e_(e), grid_(grid_value) {
+    set_num_residuals(sc.size());
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(e.params.size()));
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const int p = static_cast<int>(e_.params.size());
+    std::vector<double> theta(parameters[0], parameters[0] + p);
+    const double step = 1e-5;
+    std::vector<Model> models;
+    try {
+      models.push_back(build_model(*sc_.src, effect_assignments(e_, theta.data(), grid_)));
+      if (jacobians && jacobians[0])
+        for (int j = 0; j < p; ++j) {
+          auto t = theta;
+          t[j] += step;
+          models.push_back(build_model(*sc_.src, effect_assignments(e_, t.data(), grid_)));
+        }
+    } catch (const std::exception&) {
+      return false;  // outside the model's valid range: Ceres shortens the step
+    }
+    const auto r = sc_.residuals(models);
+    for (const auto& ri : r)
+      if (ri.empty()) return false;
+    std::copy(r[0].begin(), r[0].end(), residuals);
+    if (jacobians && jacobians[0]) {
+      const int n = num_residuals();
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < p; ++j) jacobians[0][i * p + j] = (r[j + 1][i] - r[0][i]) / step;
+    }
+    return true;
+  }
+
+ private:
+  const Scorer& sc_;
+  const Effect& e_;
+  double grid_;
+};
+
+// Least-squares fit of one effect: the grid (if any) first, then the continuous parameters.
+EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int max_iterations) {
+  EffectFit f;
+  f.effect = e.name;
+  f.physics = e.physics;
+  f.switches = e.set;
+  double grid_value = 0.0;
+  std::vector<double> theta;
+  for (const auto& p : e.params) theta.push_back(std::log(p.initial));
+  try {
+    if (!e.grid_path.empty()) {
+      std::vector<Model> models;
+      for (double g : e.grid) models.push_back(build_model(*sc.src, effect_assignments(e, theta.data(), g)));
+      const auto r = sc.residuals(models);
+      double best = INFINITY;
+      for (std::size_t i = 0; i < r.size(); ++i)
+        if (!r[i].empty() && sum_squares(r[i]) < best) {
+          best = sum_squares(r[i]);
+          grid_value = e.grid[i];
+        }
+      if (!std::isfinite(best)) throw std::runtime_error("every grid value failed");
+      f.params[e.grid_path] = grid_value;
+      f.stderr_[e.grid_path] = NAN;
+      f.rss = best;
+    }
+    if (!e.params.empty()) {
+      ceres::Problem problem;
+      auto* cost = new ReplayCost(sc, e, grid_value);
+      problem.AddResidualBlock(cost, nullptr, theta.data());
+      ceres::Solver::Options o;
+      o.linear_solver_type = ceres::DENSE_QR;
+      o.max_num_iterations = max_iterations;
+      o.num_threads = 1;
+      o.logging_type = ceres::SILENT;
+      o.function_tolerance = 1e-8;
+      ceres::Solver::Summary summary;
+      ceres::Solve(o, &problem, &summary);
+      // Standard errors from the Jacobian at the optimum: cov = s^2 (J^T J)^-1, s^2 = RSS / (n - k).
+      const int p = static_cast<int>(theta.size());
+      std::vector<double> res(sc.size()), jac(static_cast<std::size_t>(sc.size()) * p);
+      const double* params[] = {theta.data()};
+      double* jacs[] = {jac.data()};
+      if (!cost->Evaluate(params, res.data(), jacs)) throw std::runtime_error("the fitted model failed to run");
+      f.rss = sum_squares(res);
+      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jac.data(), sc.size(), p);
+      const Eigen::MatrixXd cov = (J.transpose() * J).inverse() * (f.rss / std::max(1, n - p));
+      for (int j = 0; j < p; ++j) {
+        const double value = std::exp(theta[j]);
+        f.params[e.params[j].path] = value;
+        f.stderr_[e.params[j].path] = cov(j, j) >= 0 ? value * std::sqrt(cov(j, j)) : NAN;
+      }
+    }
+    f.k = static_cast<int>(e.params.size()) + (e.grid_path.empty() ? 0 : 1);
+    f.delta_bic = n * std::log(f.rss / base_rss) + f.k * std::log(static_cast<double>(n));
+    f.significant = f.delta_bic < kSignificantDeltaBic;
+    f.fit_percent = sc.fit_percent(build_model(*sc.src, f.assignments()));
+    f.ok = true;
+  } catch (const std::exception& ex) {
+    f.ok = false;
+    f.note = ex.what();
+  }
+  return f;
+}
+
+Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
+  Scorer sc;
+  sc.src = &src;
+  sc.rec = &r;
+  sc.mode = opt.mode;
+  sc.channels = scored_channels(opt.mode, r);
+  const std::size_t stride = std::max<std::size_t>(1, r.size() / std::max(1, opt.max_samples));
+  for (std::size_t k = 0; k < r.size(); k += stride) sc.index.push_back(k);
+  for (const auto& c : sc.channels) {
+    const auto& y = r.at(c);
+    double mean = 0.0, var = 0.0;
+    for (double x : y) mean += x;
+    mean /= y.size();
+    for (double x : y) var += (x - mean) * (x - mean);
+    const double sd = std::sqrt(var / y.size());
+    sc.scale.push_back(sd > 0 ? 1.0 / sd : 1.0);
+  }
+  return sc;
+}
+
+EffectScales make_scales(const Model& base, const Record& r, ReplayMode mode) {
+  EffectScales s;
+  const auto p = replay(std::span<const Model>(&base, 1), r, mode)[0];
+  const auto& tau = mode == ReplayMode::kClosedLoop || !r.has("hub_torque") ? p.channels.at("hub_torque") : r.at("hub_torque");
+  const auto& w = p.channels.count("hub_rate") ? p.channels.at("hub_rate") : std::vector<double>{1.0};
+  auto rms = [](const std::vector<double>& x) {
+    double s2 = 0.0;
+    for (double v : x) s2 += v * v;
+    return std::sqrt(s2 / x.size());
+  };
+  s.torque_rms = rms(tau);
+  s.rate_rms = r.has("hub_rate") ? rms(r.at("hub_rate")) : rms(w);
+  for (double x : tau) s.torque_max = std::max(s.torque_max, std::abs(x));
+  return s;
+}
+
+}  // namespace
+
+std::vector<Assignment> EffectFit::assignments() const {
+  std::vector<Assignment> a;
+  for (const auto& [path, value] : switches) a.push_back(assign(path, YAML::Load(value)));
+  for (const auto& [path, value] : params) a.push_back(assign(path, number_node(path, value)));
+  return a;
+}
+
+EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& name) {
+  DiagnoseOptions o = opt;
+  o.only = {name};
+  const Diagnosis d = diagnose(src, r, o);
+  if (d.ranking.empty()) throw std::invalid_argument("effect '" + name + "' does not apply in " + replay_mode_name(opt.mode) + " mode");
+  return d.ranking[0];
+}
+
+Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
+  for (const auto& c : replay_inputs(opt.mode))
+    if (!r.has(c)) throw ConfigError(r.source, 1, c, std::string("missing column '") + c + "', needed in " + replay_mode_name(opt.mode) + " mode");
+  const Model base = build_model(src);
+  Diagnosis d;
+  d.mode = opt.mode;
+  const Scorer sc = make_scorer(src, r, opt);
+  d.channels = sc.channels;
+  d.n = sc.size();
+  const auto r0 = sc.residuals({base});
+  if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
+  d.base_rss = sum_squares(r0[0]);
+  d.base_fit = sc.fit_percent(base);
+  auto effects = make_candidate_effects(base, opt.mode, make_scales(base, r, opt.mode));
+  for (const auto& name : opt.only) {
+    bool known = false;
+    for (const auto& n : effect_names()) known |= n == name;
+    if (!known) throw std::invalid_argument("unknown effect '" + name + "'");
+  }
+  if (!opt.only.empty())
+    effects.erase(std::remove_if(effects.begin(), effects.end(),
+                                 [&](const Effect& e) {
+                                   return std::find(opt.only.begin(), opt.only.end(), e.name) == opt.only.end();
+                                 }),
+                  effects.end());
+  d.ranking.resize(effects.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    d.ranking[i] = fit_one(sc, effects[i], d.base_rss, d.n, opt.max_iterations);
+  }
+  std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
+    if (a.ok != b.ok) return a.ok;
+    return a.delta_bic < b.delta_bic;
+  });
+  if (!d.ranking.empty() && d.ranking[0].ok && d.ranking[0].significant) d.verdict = d.ranking[0].effect;
+  return d;
+}
+
+}  // namespace ff
+
+namespace ff {
+
+namespace {
+std::string json_number(double x) {
+  if (!std::isfinite(x)) return "null";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", x);
+  return buf;
+}
+std::string json_map(const std::map<std::string, double>& m) {
+  std::string out = "{";
+  for (const auto& [k, v] : m) out += (out.size() > 1 ? ", " : "") + ("\"" + k + "\": " + json_number(v));
+  return out + "}";
+}
+}  // namespace
+
+std::string format_diagnosis_json(const Diagnosis& d) {
+  std::string out = "{\n  \"mode\": \"" + std::string(replay_mode_name(d.mode)) + "\",\n";
+  out += "  \"samples\": " + std::to_string(d.n) + ",\n";
+  out += "  \"baseline\": {\"fit_percent\": " + json_map(d.base_fit) + ", \"rss\": " + json_number(d.base_rss) + "},\n";
+  out += "  \"ranking\": [\n";
+  for (std::size_t i = 0; i < d.ranking.size(); ++i) {
+    const auto& f = d.ranking[i];
+    out += "    {\"effect\": \"" + f.effect + "\", \"params\": " + json_map(f.params) + ", \"stderr\": " +
+           json_map(f.stderr_) + ", \"fit_percent\": " + json_map(f.fit_percent) +
+           ", \"delta_bic\": " + json_number(f.delta_bic) + ", \"significant\": " + (f.significant ? "true" : "false") +
+           ", \"ok\": " + (f.ok ? "true" : "false") + (f.note.empty() ? "" : ", \"note\": \"" + f.note + "\"") + "}" +
+           (i + 1 < d.ranking.size() ? "," : "") + "\n";
+  }
+  out += "  ],\n  \"verdict\": \"" + d.verdict + "\"\n}\n";
+  return out;
+}
+
+std::string format_diagnosis_text(const Diagnosis& d) {
+  std::string out = "baseline fit (" + std::string(replay_mode_name(d.mode)) + "):";
+  char buf[256];
+  for (const auto& [c, v] : d.base_fit) {
+    std::snprintf(buf, sizeof buf, " %s %.2f %%", c.c_str(), v);
+    out += buf;
+  }
+  out += "\n\n  rank  effect                      delta BIC   fit % after      parameters\n";
+  int rank = 0;
+  for (const auto& f : d.ranking) {
+    std::string fits, params;
+    for (const auto& [c, v] : f.fit_percent) {
+      std::snprintf(buf, sizeof buf, "%s%.2f", fits.empty() ? "" : "/", v);
+      fits += buf;
+    }
+    for (const auto& [p, v] : f.params) {
+      const double se = f.stderr_.count(p) ? f.stderr_.at(p) : NAN;
+      std::snprintf(buf, sizeof buf, std::isfinite(se) ? "%s%s = %.4g ± %.2g" : "%s%s = %.4g", params.empty() ? "" : ", ",
+                    p.c_str(), v, se);
+      params += buf;
+    }
+    std::snprintf(buf, sizeof buf, "  %4d  %-26s %10.1f%s  %-15s  %s\n", ++rank, f.effect.c_str(), f.delta_bic,
+                  f.significant ? "*" : " ", f.ok ? fits.c_str() : "failed", f.ok ? params.c_str() : f.note.c_str());
+    out += buf;
+  }
+  out += "\n  * significant: delta BIC < " + json_number(kSignificantDeltaBic) + "\n";
+  out += "verdict: " + (d.verdict == "none" ? std::string("none of the candidates is missing") : d.verdict + " is missing") + "\n";
+  return out;
+}
+
+}  // namespace ff

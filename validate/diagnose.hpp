@@ -1,0 +1,77 @@
+// Which physical effect is the model missing? Each candidate (validate/effects.hpp) is added to the
+// model and its parameters fitted to the record by nonlinear least squares (Ceres, Levenberg-
+// Marquardt; the Jacobian by forward differences, its columns run as lanes of one batch). Candidates
+// are ranked by the Bayesian information criterion against the base model:
+//   BIC = n ln(RSS / n) + k ln n,   Delta BIC = BIC(effect) - BIC(base),
+// with n residuals (every scored channel, each divided by its measured standard deviation) and k
+// fitted parameters. Delta BIC < -10 is "very strong" evidence (Kass and Raftery 1995): significant.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "sweep/paths.hpp"
+#include "validate/effects.hpp"
+#include "validate/record.hpp"
+#include "validate/replay.hpp"
+
+namespace ff {
+
+inline constexpr double kSignificantDeltaBic = -10.0;
+
+// The model to diagnose: its document (so effects can be set by path) and where it came from.
+struct ModelSource {
+  YAML::Node doc;
+  std::string path;
+  std::vector<Assignment> set;  // --set overrides, applied first
+};
+ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets);
+Model build_model(const ModelSource& src, const std::vector<Assignment>& extra = {});
+
+struct EffectFit {
+  std::string effect;
+  std::string physics;
+  std::vector<std::pair<std::string, std::string>> switches;  // fixed settings the effect needs (path -> YAML)
+  std::map<std::string, double> params;       // fitted values by path
+  std::map<std::string, double> stderr_;      // their standard errors (NaN when not identifiable)
+  std::map<std::string, double> fit_percent;  // per scored channel
+  double rss = NAN;                            // normalised residual sum of squares
+  int k = 0;                                   // parameters fitted (a grid search counts one)
+  double delta_bic = NAN;
+  bool significant = false;
+  bool ok = false;                             // false: the fit failed (reason in `note`)
+  std::string note;
+  std::vector<Assignment> assignments() const; // what to set in the model to add this effect
+};
+
+struct Diagnosis {
+  ReplayMode mode = ReplayMode::kClosedLoop;
+  std::vector<std::string> channels;
+  int n = 0;                                   // residuals
+  double base_rss = NAN;
+  std::map<std::string, double> base_fit;      // fit % per channel of the base model
+  std::vector<EffectFit> ranking;              // best (lowest Delta BIC) first
+  std::string verdict = "none";                // the best significant effect, or "none"
+};
+
+struct DiagnoseOptions {
+  ReplayMode mode = ReplayMode::kClosedLoop;
+  std::vector<std::string> only;               // effects to try (empty = all that apply)
+  int max_iterations = 25;
+  int max_samples = 1500;                      // per channel: the record is decimated to at most this
+};
+
+Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOptions& opt);
+
+// One effect fitted alone (what `calibrate --add` uses).
+EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& effect);
+
+// JSON of a diagnosis (docs/formats.md, "diagnose JSON").
+std::string format_diagnosis_json(const Diagnosis& d);
+// A human-readable summary for the terminal.
+std::string format_diagnosis_text(const Diagnosis& d);
+
+}  // namespace ff

@@ -1,0 +1,43 @@
+// The candidate effects diagnose tries: each a piece of physics (or a re-fit) the model may lack,
+// switched on by model paths and fitted by its parameters (docs/validation.md).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "kernel/model.hpp"
+#include "validate/replay.hpp"
+
+namespace ff {
+
+// A continuous parameter, fitted as log(value) (every one is positive).
+struct EffectParam {
+  std::string path;      // model path, e.g. "friction.coulomb"
+  double initial = 1.0;  // starting value, > 0
+};
+
+struct Effect {
+  std::string name;                                      // e.g. "coulomb_friction"
+  std::string physics;                                   // one line: what it adds
+  std::vector<std::pair<std::string, std::string>> set;  // fixed switches: path -> YAML value
+  std::vector<EffectParam> params;                       // fitted by least squares
+  std::string grid_path;                                 // a discrete parameter searched first ("" = none)
+  std::vector<double> grid;                              // its values
+};
+
+// Scales the candidates' starting values take from the base model's replay of the record.
+struct EffectScales {
+  double torque_rms = 1.0;  // N·m
+  double rate_rms = 1.0;    // rad/s
+  double torque_max = 1.0;  // N·m
+};
+
+// The candidates that apply to `mode` on `base` (plant effects everywhere; controller-side
+// effects - sensors, saturation - only in closed loop).
+std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& scales);
+
+// Every candidate's name, in the order diagnose lists them.
+std::vector<std::string> effect_names();
+
+}  // namespace ff

@@ -1,0 +1,150 @@
+#include "validate/ledger.hpp"
+
+#include <sqlite3.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+
+#include "plotting/plot.hpp"
+
+namespace ff {
+
+std::string format_calibrated_model(const ModelSource& src, const EffectFit& fit, const std::string& record_path) {
+  YAML::Node doc = YAML::Clone(src.doc);
+  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+  for (const auto& a : fit.assignments()) set_path(doc, a.path, a.value, "calibrate");
+  std::string head = "# " + src.path + " with " + fit.effect + " (" + fit.physics + ") added by flexfarm calibrate,\n";
+  head += "# fitted to " + record_path + ":";
+  char buf[160];
+  for (const auto& [p, v] : fit.params) {
+    std::snprintf(buf, sizeof buf, " %s = %.6g", p.c_str(), v);
+    head += buf;
+  }
+  std::snprintf(buf, sizeof buf, " (delta BIC %.1f).\n", fit.delta_bic);
+  head += buf;
+  YAML::Emitter out;
+  out.SetDoublePrecision(10);
+  out << doc;
+  return head + out.c_str() + "\n";
+}
+
+namespace {
+
+struct Ledger {
+  sqlite3* db = nullptr;
+  std::string path;
+  explicit Ledger(const std::string& p) : path(p) {
+    if (sqlite3_open(p.c_str(), &db) != SQLITE_OK) throw std::runtime_error(p + ": cannot open the ledger");
+    exec("CREATE TABLE IF NOT EXISTS versions (version INTEGER PRIMARY KEY, model TEXT, parent INTEGER, "
+         "effect TEXT, params TEXT, record TEXT, mode TEXT)");
+    exec("CREATE TABLE IF NOT EXISTS fits (version INTEGER, channel TEXT, fit_percent REAL, rmse REAL, "
+         "PRIMARY KEY (version, channel))");
+  }
+  ~Ledger() { sqlite3_close(db); }
+  void exec(const std::string& sql) {
+    char* err = nullptr;
+    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+      const std::string msg = err ? err : "?";
+      sqlite3_free(err);
+      throw std::runtime_error(path + ": sqlite: " + msg);
+    }
+  }
+  sqlite3_stmt* prepare(const std::string& sql) {
+    sqlite3_stmt* st = nullptr;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr) != SQLITE_OK)
+      throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
+    return st;
+  }
+  // The latest version of a model file, or 0.
+  long find(const std::string& model) {
+    sqlite3_stmt* st = prepare("SELECT MAX(version) FROM versions WHERE model = ?");
+    sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
+    long v = 0;
+    if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) v = sqlite3_column_int64(st, 0);
+    sqlite3_finalize(st);
+    return v;
+  }
+  long add(const std::string& model, long parent, const std::string& effect, const std::string& params,
+           const std::string& record, const std::string& mode, const std::map<std::string, Fit>& fits) {
+    sqlite3_stmt* st = prepare("INSERT INTO versions (model, parent, effect, params, record, mode) VALUES (?, ?, ?, ?, ?, ?)");
+    sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
+    if (parent > 0) sqlite3_bind_int64(st, 2, parent); else sqlite3_bind_null(st, 2);
+    sqlite3_bind_text(st, 3, effect.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 4, params.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 5, record.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 6, mode.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(st) != SQLITE_DONE) throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
+    sqlite3_finalize(st);
+    const long v = sqlite3_last_insert_rowid(db);
+    for (const auto& [c, f] : fits) {
+      sqlite3_stmt* fs = prepare("INSERT OR REPLACE INTO fits VALUES (?, ?, ?, ?)");
+      sqlite3_bind_int64(fs, 1, v);
+      sqlite3_bind_text(fs, 2, c.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_double(fs, 3, f.percent);
+      sqlite3_bind_double(fs, 4, f.rmse);
+      if (sqlite3_step(fs) != SQLITE_DONE) throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
+      sqlite3_finalize(fs);
+    }
+    return v;
+  }
+};
+
+std::map<std::string, Fit> fits_of(const Model& m, const Record& r, ReplayMode mode) {
+  std::map<std::string, Fit> out;
+  const auto p = replay(std::span<const Model>(&m, 1), r, mode)[0];
+  for (const auto& c : scored_channels(mode, r)) out[c] = p.ok ? calc_fit(r.at(c), p.channels.at(c)) : Fit{-INFINITY, INFINITY};
+  return out;
+}
+
+}  // namespace
+
+std::string record_calibration(const std::string& ledger_path, const std::string& before_path, const Model& before,
+                               const std::string& after_path, const Model& after, const EffectFit& fit,
+                               const Record& r, ReplayMode mode) {
+  Ledger led(ledger_path);
+  led.exec("BEGIN");
+  long parent = led.find(before_path);
+  if (parent == 0) parent = led.add(before_path, 0, "base", "", r.source, replay_mode_name(mode), fits_of(before, r, mode));
+  std::string params;
+  for (const auto& [p, v] : fit.params) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "%s%s=%.6g", params.empty() ? "" : " ", p.c_str(), v);
+    params += buf;
+  }
+  led.add(after_path, parent, fit.effect, params, r.source, replay_mode_name(mode), fits_of(after, r, mode));
+  led.exec("COMMIT");
+
+  // Read the whole ledger back: a text table and the plot of fit % by version.
+  sqlite3_stmt* st = led.prepare(
+      "SELECT v.version, v.model, v.effect, f.channel, f.fit_percent, f.rmse FROM versions v JOIN fits f "
+      "ON f.version = v.version ORDER BY v.version, f.channel");
+  std::string text = "ledger " + ledger_path + ":\n  version  effect                     channel          fit %        RMSE  model\n";
+  std::map<std::string, Series> lines;
+  while (sqlite3_step(st) == SQLITE_ROW) {
+    const long v = sqlite3_column_int64(st, 0);
+    const std::string model = reinterpret_cast<const char*>(sqlite3_column_text(st, 1));
+    const std::string effect = reinterpret_cast<const char*>(sqlite3_column_text(st, 2));
+    const std::string channel = reinterpret_cast<const char*>(sqlite3_column_text(st, 3));
+    const double pct = sqlite3_column_double(st, 4), rmse = sqlite3_column_double(st, 5);
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "  %7ld  %-26s %-14s %7.2f  %10.4g  %s\n", v, effect.c_str(), channel.c_str(), pct, rmse,
+                  model.c_str());
+    text += buf;
+    auto& s = lines[channel];
+    s.label = channel;
+    s.x.push_back(static_cast<double>(v));
+    s.y.push_back(pct);
+  }
+  sqlite3_finalize(st);
+  LinePlot plot;
+  plot.title = "fit of each model version to its record";
+  plot.x_label = "model version";
+  plot.y_label = "fit (%)";
+  for (auto& [c, s] : lines) plot.series.push_back(s);
+  render_line_plot(plot, ledger_path + ".png");
+  return text + "plot: " + ledger_path + ".png\n";
+}
+
+}  // namespace ff

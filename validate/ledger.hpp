@@ -1,0 +1,23 @@
+// Calibration output: the model with an effect added (YAML), and the model ledger (SQLite): every
+// model version with its parent, the effect that made it and its fit per channel on the record,
+// plus a plot of the error falling version by version.
+#pragma once
+
+#include <string>
+
+#include "validate/diagnose.hpp"
+
+namespace ff {
+
+// The model document with the effect's switches and fitted values set, as YAML text, headed by a
+// comment naming the source model, the record, the effect and its fitted values.
+std::string format_calibrated_model(const ModelSource& src, const EffectFit& fit, const std::string& record_path);
+
+// Adds `before` (if the ledger does not know its file yet) and `after` (child of before) to the
+// ledger at `ledger_path`, with each one's fit % and RMSE per channel on the record, and redraws
+// ledger_path + ".png" (fit % per channel against version). Returns the ledger as a text table.
+std::string record_calibration(const std::string& ledger_path, const std::string& before_path, const Model& before,
+                               const std::string& after_path, const Model& after, const EffectFit& fit,
+                               const Record& r, ReplayMode mode);
+
+}  // namespace ff

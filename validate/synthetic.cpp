@@ -1,0 +1,40 @@
+#include "validate/synthetic.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "kernel/random.hpp"
+#include "kernel/simulate.hpp"
+
+namespace ff {
+
+Record make_synthetic_record(const Model& truth, double noise, std::uint64_t seed, int decimate) {
+  if (decimate < 1) throw std::invalid_argument("make_synthetic_record: decimate must be >= 1");
+  const BatchModel bm = make_batch(std::span<const Model>(&truth, 1));
+  const BatchRun run = simulate(bm);
+  if (run.status[0] != LaneStatus::kOk) throw std::runtime_error("the truth model failed to run");
+  const Trace& tr = run.traces[0];
+  Record r;
+  r.source = "<synthetic>";
+  const std::pair<const char*, const std::vector<double>*> cols[] = {
+      {"ref", &tr.ref}, {"hub_torque", &tr.torque}, {"hub_angle", &tr.hub_angle}, {"hub_rate", &tr.hub_rate},
+      {"tip_deflection", &tr.tip_deflection}};
+  for (std::size_t k = 0; k < tr.t.size(); k += decimate) r.t.push_back(tr.t[k]);
+  std::uint64_t channel = 0;
+  for (const auto& [name, y] : cols) {
+    auto& out = r.columns[name];
+    for (std::size_t k = 0; k < tr.t.size(); k += decimate) out.push_back((*y)[k]);
+    ++channel;
+    if (std::string(name) == "ref" || noise <= 0) continue;
+    double mean = 0.0, var = 0.0;
+    for (double x : out) mean += x;
+    mean /= out.size();
+    for (double x : out) var += (x - mean) * (x - mean);
+    const double sd = noise * std::sqrt(var / out.size());
+    CounterRng rng(calc_variant_seed(seed, channel));
+    for (double& x : out) x += sd * rng.normal();
+  }
+  return r;
+}
+
+}  // namespace ff
