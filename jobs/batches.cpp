@@ -8,13 +8,16 @@ namespace ff {
 
 namespace {
 // Everything two lanes of one batch must share.
-using Shape = std::tuple<int, int, int, double, double, int, int>;
+using Shape = std::tuple<int, int, int, double, double, int, int, int>;
 Shape shape_of(const Model& m) {
   const int sections = m.spec.notch.enabled ? 2 * m.spec.notch.order + 1 : 0;
   const int drive_parts = (m.spec.hydraulics.enabled ? 1 : 0) + (m.spec.drive.enabled ? 2 : 0) +
                           (m.spec.friction.model == "lugre" ? 4 : 0);
+  const auto& ss = m.spec.sensors;  // recorded sensors: the trace columns
+  const int recorded = (ss.strain_gauge.enabled ? 1 : 0) + (ss.tip_accelerometer.enabled ? 2 : 0) +
+                       (ss.tip_position.enabled ? 4 : 0);
   return {m.nseg, sections, m.substeps, m.control_period, m.duration, static_cast<int>(m.spec.simulation.integrator),
-          drive_parts};
+          drive_parts, recorded};
 }
 }  // namespace
 

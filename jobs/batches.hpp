@@ -1,5 +1,6 @@
 // Lane batches: variants of equal shape (segments, notch sections, substeps, rate, duration,
-// integrator) grouped W at a time, in eval_id order, so one kernel call advances them together.
+// integrator, hub drive parts, recorded sensors) grouped W at a time, in eval_id order, so one
+// kernel call advances them together.
 #pragma once
 
 #include <vector>

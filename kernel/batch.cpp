@@ -1,6 +1,7 @@
 #include "kernel/batch.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -46,9 +47,13 @@ BatchModel make_batch(std::span<const Model> models) {
     if (m.nseg != bm.nseg || ns != bm.nsections || m.substeps != bm.substeps ||
         m.control_period != bm.control_period || m.duration != bm.duration ||
         m.spec.hydraulics.enabled != m0.spec.hydraulics.enabled || m.spec.drive.enabled != m0.spec.drive.enabled ||
-        m.spec.friction.model != m0.spec.friction.model)
+        m.spec.friction.model != m0.spec.friction.model ||
+        m.spec.sensors.strain_gauge.enabled != m0.spec.sensors.strain_gauge.enabled ||
+        m.spec.sensors.tip_accelerometer.enabled != m0.spec.sensors.tip_accelerometer.enabled ||
+        m.spec.sensors.tip_position.enabled != m0.spec.sensors.tip_position.enabled)
       throw std::invalid_argument(
-          "make_batch: models differ in shape (segments, notch order, rate, substeps, duration or hub drive parts)");
+          "make_batch: models differ in shape (segments, notch order, rate, substeps, duration, hub drive parts or "
+          "recorded sensors)");
   }
   bm.layout = make_drive_layout(m0.spec);
   for (const auto& m : models) bm.drive.push_back(make_lane_drive(m));
@@ -98,6 +103,23 @@ BatchModel make_batch(std::span<const Model> models) {
       bm.sensor_history = std::max(bm.sensor_history, ch[c]->delay + 1);
     }
   }
+  for (const auto& m : models) {
+    const SensorSpec& ss = m.spec.sensors;
+    const RecordedChannelSpec* ch[kRecordedChannels] = {&ss.strain_gauge, &ss.tip_accelerometer, &ss.tip_position};
+    for (int c = 0; c < kRecordedChannels; ++c) {
+      bm.rec_enabled[c] = ch[c]->enabled;
+      const int hold = ch[c]->rate > 0 ? static_cast<int>(std::lround(m.spec.controller.rate / ch[c]->rate)) : 1;
+      bm.rec_resolution[c].push_back(ch[c]->resolution);
+      bm.rec_noise[c].push_back(ch[c]->noise);
+      bm.rec_delay[c].push_back(ch[c]->delay);
+      bm.rec_hold[c].push_back(hold);
+      bm.rec_key[c].push_back(calc_variant_seed(m.spec.simulation.seed, static_cast<std::uint64_t>(2 + c)));
+      if (ch[c]->enabled) bm.rec_history = std::max(bm.rec_history, ch[c]->delay + hold);
+    }
+    bm.strain_joint.push_back(ss.strain_gauge.joint);
+    bm.strain_gain.push_back(calc_strain_tip_gain(m.spec.beam, m.nseg, ss.strain_gauge.joint));
+    bm.notch_feedback.push_back(m.spec.notch.placement == "feedback" ? 1 : 0);
+  }
 
   bm.notch_coef.assign(static_cast<std::size_t>(5) * bm.nsections * W, 0.0);
   if (bm.nsections > 0)
@@ -119,6 +141,8 @@ BatchState make_state(const BatchModel& bm) {
   s.notch_state.assign(static_cast<std::size_t>(2) * bm.nsections * bm.W, 0.0);
   s.status.assign(bm.W, LaneStatus::kOk);
   for (auto& m : s.measured) m.assign(static_cast<std::size_t>(bm.sensor_history) * bm.W, 0.0);
+  for (int c = 0; c < kRecordedChannels; ++c)
+    if (bm.rec_enabled[c]) s.recorded[c].assign(static_cast<std::size_t>(bm.rec_history) * bm.W, 0.0);
   return s;
 }
 

@@ -19,6 +19,10 @@ const char* lane_status_name(LaneStatus s);
 // The most lanes one batch may hold.
 inline constexpr int kMaxLanes = 256;
 
+// Recorded sensors (kernel/sensors.hpp), in trace order; their noise streams are channels 2, 3, 4
+// (0 and 1 are the hub angle and rate).
+enum RecordedChannel { kStrainGauge = 0, kTipAccelerometer, kTipPositionSensor, kRecordedChannels };
+
 // The parameters of W models of equal shape, gathered lane-innermost. Immutable once made.
 struct BatchModel {
   int W = 0;                        // lanes
@@ -41,6 +45,7 @@ struct BatchModel {
   std::vector<char> load_pressure;  // (W) 1: load signal n D (p_a - p_b) from the pressures, 0: root bending moment
   std::vector<double> ff_gain;      // (W) gain of the model-based feed-forward
   std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
+  std::vector<char> notch_feedback; // (W) 1: the notch filters the measured hub angle, 0: the reference
   // Hub friction (W each): viscous b, Coulomb Fc, Stribeck excess Fs - Fc, 1/vs, 1/eps.
   std::vector<double> fric_b, fric_c, fric_s, fric_inv_vs, fric_inv_eps;
   // Sensors, per channel (0 hub angle, 1 hub rate) and lane: quantum, noise std, delay, noise key.
@@ -48,12 +53,21 @@ struct BatchModel {
   std::vector<int> sensor_delay[2];                           // (W), samples
   std::vector<std::uint64_t> sensor_key[2];                   // (W)
   int sensor_history = 1;           // ring length: the largest delay + 1
+  // Recorded sensors: which ones the lanes have (the same in every lane), then per channel and lane:
+  // quantum, noise std, delay (samples), hold (controller samples per sensor sample), noise key.
+  bool rec_enabled[kRecordedChannels] = {};
+  std::vector<double> rec_resolution[kRecordedChannels], rec_noise[kRecordedChannels];  // (W)
+  std::vector<int> rec_delay[kRecordedChannels], rec_hold[kRecordedChannels];           // (W)
+  std::vector<std::uint64_t> rec_key[kRecordedChannels];                                // (W)
+  int rec_history = 1;              // ring length: the largest delay + hold
+  std::vector<int> strain_joint;    // (W) the strain gauge's joint, 1..N-1
+  std::vector<double> strain_gain;  // (W) tip deflection per gauge moment, m/(N·m) (calc_strain_tip_gain)
   DriveLayout layout;               // rows of the hub drive's states in BatchState::z
   std::vector<LaneDrive> drive;     // (W) the hub drive's constants (kernel/drive.hpp)
 };
 
 // Gathers models of equal shape (segments, notch order and enablement, rate, substeps, duration,
-// hub drive parts)
+// hub drive parts, recorded sensors enabled)
 // into lanes. Throws std::invalid_argument when shapes differ.
 BatchModel make_batch(std::span<const Model> models);
 
@@ -71,6 +85,7 @@ struct BatchState {
   std::vector<double> integral;     // (W) integral of the tracking error, rad·s
   std::vector<double> notch_state;  // (2 * nsections x W)
   std::vector<double> measured[2];  // (sensor_history x W) ring of past measurements per channel
+  std::vector<double> recorded[kRecordedChannels];  // (rec_history x W) rings of the enabled recorded sensors
   std::vector<LaneStatus> status;   // (W)
 };
 

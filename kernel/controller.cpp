@@ -8,27 +8,42 @@
 namespace ff {
 
 void reset_controller(const BatchModel& bm, BatchState& s, const double* r0) {
+  // A feedback-path notch rests at the hub angle measured at this sample (the measurement is a pure
+  // function of the sample and the state, so compute_control sees the same value again).
+  double angle[kMaxLanes] = {}, rate[kMaxLanes];
+  bool feedback = false;
+  for (int l = 0; l < bm.W; ++l) feedback |= bm.nsections > 0 && bm.notch_feedback[l];
+  if (feedback) compute_measurements(bm, s, angle, rate);
   for (int l = 0; l < bm.W; ++l) {
     s.integral[l] = 0.0;
-    if (bm.nsections > 0) reset_notch_state(bm.nsections, bm.W, l, bm.notch_coef.data(), r0[l], s.notch_state.data());
+    if (bm.nsections > 0)
+      reset_notch_state(bm.nsections, bm.W, l, bm.notch_coef.data(), bm.notch_feedback[l] ? angle[l] : r0[l],
+                        s.notch_state.data());
   }
 }
 
 void compute_control(const BatchModel& bm, BatchState& s, const double* ref, const double* ref_ff,
                      double* ref_filtered) {
   const int W = bm.W;
-  // Robust notch filter on the reference (seed eq. 6), or the reference itself.
-  if (bm.nsections > 0)
-    step_notch(bm.nsections, W, bm.notch_coef.data(), s.notch_state.data(), ref, ref_filtered);
-  else
+  // What the controller sees of the hub angle and rate (kernel/sensors.hpp).
+  double sensed_angle[kMaxLanes], sensed_rate[kMaxLanes];
+  compute_measurements(bm, s, sensed_angle, sensed_rate);
+  // Robust notch filter (seed eq. 6) on the reference, or on the measured hub angle (placement feedback).
+  if (bm.nsections > 0) {
+    double in[kMaxLanes], out[kMaxLanes];
+    for (int l = 0; l < W; ++l) in[l] = bm.notch_feedback[l] ? sensed_angle[l] : ref[l];
+    step_notch(bm.nsections, W, bm.notch_coef.data(), s.notch_state.data(), in, out);
+    for (int l = 0; l < W; ++l) {
+      ref_filtered[l] = bm.notch_feedback[l] ? ref[l] : out[l];
+      sensed_angle[l] = bm.notch_feedback[l] ? out[l] : sensed_angle[l];  // e = r - F(theta_m)
+    }
+  } else {
     std::copy(ref, ref + W, ref_filtered);
+  }
 
   const double T = bm.control_period;
   const double* q = s.q.data();
   const double* v = s.v.data();
-  // What the controller sees of the hub angle and rate (kernel/sensors.hpp).
-  double sensed_angle[kMaxLanes], sensed_rate[kMaxLanes];
-  compute_measurements(bm, s, sensed_angle, sensed_rate);
   const double* k1 = bm.joint_k.data() + W;  // joint 1: the root of the beam
   const double* c1 = bm.joint_c.data() + W;
   const double* k31 = bm.joint_k3.data() + W;

@@ -213,6 +213,22 @@ void compute_tip(const BatchModel& bm, const double* q, double* deflection, doub
   for (int l = 0; l < W; ++l) angle[l] = q[l] + std::atan2(deflection[l], along[l]);
 }
 
+void compute_tip_acceleration(const BatchModel& bm, const double* q, const double* v, const double* qdd,
+                              double* accel) {
+  const int W = bm.W;
+  for (int l = 0; l < W; ++l) {
+    double phi = 0.0, rate = 0.0, acc = 0.0, y = 0.0;  // phi_i and its derivatives, rad, rad/s, rad/s^2
+    for (int i = 1; i < bm.nseg; ++i) {
+      const int o = i * W + l;
+      phi += q[o];
+      rate += v[o];
+      acc += qdd[o];
+      y += bm.seg_length[o] * (std::cos(phi) * acc - std::sin(phi) * rate * rate);
+    }
+    accel[l] = y;
+  }
+}
+
 TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane) {
   const int W = bm.W;
   double phi = 0.0, defl = 0.0, along = 0.0;

@@ -33,6 +33,12 @@ struct TipKinematics {
 TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane);
 // Tip deflection (m) and tip angle (rad) of every lane at once (W each); uses ws.a0..a2, cq, sq as scratch.
 void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws);
+// Lateral tip acceleration in the frame turning with the hub: the second time derivative of the tip
+// deflection y = sum L_i sin phi_i, phi_i = q_1 + ... + q_i (relative to that frame: no centripetal,
+// Coriolis or hub-angular terms), from the rates v and accelerations qdd (N x W each), m/s^2 (W):
+//   y'' = sum L_i (cos phi_i phi_i'' - sin phi_i phi_i'^2).
+void compute_tip_acceleration(const BatchModel& bm, const double* q, const double* v, const double* qdd,
+                              double* accel);
 
 // Kinetic energy 1/2 v^T M(q) v and spring energy sum (k_i q_i^2 / 2 + k3_i q_i^4 / 4) of one lane, J.
 double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* v, int lane);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "kernel/errors.hpp"
 #include "kernel/batch.hpp"
@@ -17,6 +18,12 @@ double calc_area_moment(const BeamSpec& b) { return b.height * b.thickness * b.t
 
 double calc_cantilever_stiffness(const BeamSpec& b, double length) {
   return 3.0 * b.youngs_modulus * calc_area_moment(b) / length;  // seed eq. 5
+}
+
+double calc_strain_tip_gain(const BeamSpec& b, int segments, int joint) {
+  const double cell = b.length / (segments - 1);
+  const double arm = b.length - (joint - 0.5) * cell;  // L - x_i, m
+  return b.length * b.length * b.length / (3.0 * b.youngs_modulus * calc_area_moment(b) * arm);
 }
 
 namespace {
@@ -73,6 +80,8 @@ void validate(const ModelSpec& s, const std::string& src) {
   }
   if ((s.notch.omega_z[0] > 0) != (s.notch.omega_z[1] > 0))
     throw ConfigError(src, 0, "notch.omega_z", "give both zero frequencies or neither");
+  if (s.notch.placement != "reference" && s.notch.placement != "feedback")
+    throw ConfigError(src, 0, "notch.placement", "unknown placement '" + s.notch.placement + "' (reference, feedback)");
   positive(s.trajectory.move_time, "trajectory.move_time");
   double previous = 0.0;
   for (std::size_t j = 0; j < s.trajectory.moves.size(); ++j) {
@@ -100,6 +109,32 @@ void validate(const ModelSpec& s, const std::string& src) {
     if (ch->delay < 0 || ch->delay > 10000)
       throw ConfigError(src, 0, std::string(key) + ".delay", "must be between 0 and 10000 samples");
   }
+  // Recorded sensors: every value checked, enabled or not; the rate must divide controller.rate.
+  const std::pair<const RecordedChannelSpec*, const char*> recorded[] = {
+      {&s.sensors.strain_gauge, "sensors.strain_gauge"},
+      {&s.sensors.tip_accelerometer, "sensors.tip_accelerometer"},
+      {&s.sensors.tip_position, "sensors.tip_position"}};
+  for (const auto& [ch, key] : recorded) {
+    const std::string k(key);
+    non_negative(ch->resolution, (k + ".resolution").c_str());
+    non_negative(ch->noise, (k + ".noise").c_str());
+    if (ch->delay < 0 || ch->delay > 10000)
+      throw ConfigError(src, 0, k + ".delay", "must be between 0 and 10000 samples");
+    non_negative(ch->rate, (k + ".rate").c_str());
+    if (ch->rate > 0) {
+      const double ratio = s.controller.rate / ch->rate;
+      if (!(ratio >= 1.0 - 1e-9) || std::fabs(ratio - std::round(ratio)) > 1e-9 * ratio || ratio > 1e6) {
+        char msg[160];
+        std::snprintf(msg, sizeof msg, "must divide controller.rate = %g Hz a whole number of times, got %g Hz",
+                      s.controller.rate, ch->rate);
+        throw ConfigError(src, 0, k + ".rate", msg);
+      }
+    }
+  }
+  const int joint = s.sensors.strain_gauge.joint;
+  if (joint < 1 || joint > s.segments - 1)
+    throw ConfigError(src, 0, "sensors.strain_gauge.joint",
+                      "must be a beam joint 1.." + std::to_string(s.segments - 1) + ", got " + std::to_string(joint));
   positive(s.simulation.atol, "simulation.atol");
   if (s.friction.model != "static" && s.friction.model != "lugre")
     throw ConfigError(src, 0, "friction.model", "unknown model '" + s.friction.model + "' (static, lugre)");

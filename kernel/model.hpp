@@ -40,9 +40,12 @@ struct ControllerSpec {
   std::string load_signal = "moment";  // load compensation from the root bending "moment" or the hydraulic "pressure" (n D dp)
 };
 
-// Robust notch filter of seed eq. 6 acting on the reference.
+// Robust notch filter of seed eq. 6 acting on the reference, or on the measured hub angle.
 struct NotchSpec {
   bool enabled = false;
+  // "reference": F acts on r, e = F(r) - theta_m. "feedback": F acts on the measured hub angle, e = r - F(theta_m);
+  // the derivative path keeps the measured rate unfiltered.
+  std::string placement = "reference";
   int order = 1;                  // n
   double alpha[2] = {1.6, 1.6};   // omega_pi = alpha_i * omega_zi
   double zeta[2] = {1.0, 1.0};    // zeta_pi
@@ -56,10 +59,30 @@ struct ChannelSpec {
   int delay = 0;                  // controller samples
 };
 
-// What the controller measures (reference-rig.md: the PD uses the hub angle and the hub rate).
+// A recorded channel (off by default): written to the trace at every controller sample, not fed back.
+// Sampled and held at `rate`, then quantised, noisy and delayed like ChannelSpec.
+struct RecordedChannelSpec {
+  bool enabled = false;
+  double resolution = 0.0;        // quantum, in the channel's unit; 0 = none
+  double noise = 0.0;             // standard deviation, in the channel's unit; 0 = none
+  int delay = 0;                  // controller samples
+  double rate = 0.0;              // sample rate, Hz; must divide controller.rate; 0 = controller.rate
+};
+
+// Strain gauge at a beam joint: the elastic bending moment k_i q_i + k3_i q_i^3 (N·m) and the tip
+// deflection a static cantilever with a tip load would have under it (calc_strain_tip_gain), m.
+struct StrainGaugeSpec : RecordedChannelSpec {
+  int joint = 1;                  // beam joint 1..N-1 (1 = the root)
+};
+
+// What the controller measures (reference-rig.md: the PD uses the hub angle and the hub rate),
+// and the recorded sensors.
 struct SensorSpec {
   ChannelSpec hub_angle;          // encoder, rad
   ChannelSpec hub_rate;           // tachometer, rad/s
+  StrainGaugeSpec strain_gauge;   // N·m (and m)
+  RecordedChannelSpec tip_accelerometer;  // lateral tip acceleration in the hub frame, m/s^2
+  RecordedChannelSpec tip_position;       // tip deflection (camera, laser tracker), m
 };
 
 // Friction at the hub (off by default): viscous, Coulomb and Stribeck, regularised at zero velocity:
@@ -215,5 +238,11 @@ double calc_beam_mass(const BeamSpec& beam);
 double calc_area_moment(const BeamSpec& beam);
 // Equivalent cantilever torsional stiffness 3EI/L of a beam of length `length` (seed eq. 5), N·m/rad.
 double calc_cantilever_stiffness(const BeamSpec& beam, double length);
+// Tip deflection per bending moment at beam joint `joint` (1..N-1, at x_i = (i - 1/2) l from the hub) of a
+// continuous clamped cantilever with a tip load P (Euler-Bernoulli, EI from `beam`): M(x) = P (L - x),
+// delta = P L^3 / (3 EI), so delta / M_i = L^3 / (3 EI (L - x_i)), m/(N·m). The segmented chain with
+// k = EI / l deflects (1 - 1/(4 (N-1)^2)) times this (midpoint sum of (L - x_i)^2), EI / (k l) times
+// more for other k (1.105 on the reference rig).
+double calc_strain_tip_gain(const BeamSpec& beam, int segments, int joint);
 
 }  // namespace ff

@@ -85,6 +85,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   notch.optional_array("alpha", s.notch.alpha, 2);
   notch.optional_array("zeta", s.notch.zeta, 2);
   notch.optional_array("omega_z", s.notch.omega_z, 2);
+  notch.optional("placement", s.notch.placement);
   notch.finish();
 
   auto shaper = top.child("shaper");
@@ -100,6 +101,19 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
     c.optional("resolution", ch->resolution);
     c.optional("noise", ch->noise);
     c.optional("delay", ch->delay);
+    c.finish();
+  }
+  const std::pair<const char*, RecordedChannelSpec*> recorded[] = {{"strain_gauge", &s.sensors.strain_gauge},
+                                                                   {"tip_accelerometer", &s.sensors.tip_accelerometer},
+                                                                   {"tip_position", &s.sensors.tip_position}};
+  for (const auto& [name, ch] : recorded) {
+    auto c = sensors.child(name);
+    c.optional("enabled", ch->enabled);
+    c.optional("resolution", ch->resolution);
+    c.optional("noise", ch->noise);
+    c.optional("delay", ch->delay);
+    c.optional("rate", ch->rate);
+    if (ch == &s.sensors.strain_gauge) c.optional("joint", s.sensors.strain_gauge.joint);
     c.finish();
   }
   sensors.finish();

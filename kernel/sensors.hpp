@@ -1,6 +1,8 @@
 // The controller's sensors: each measured channel (hub angle, hub rate) is the true value plus
 // Gaussian noise, quantised, and delayed by whole controller samples. Noise is a pure function of
-// (the model's seed, channel, sample): runs repeat bit for bit on any machine.
+// (the model's seed, channel, sample): runs repeat bit for bit on any machine. The recorded sensors
+// (strain gauge, tip accelerometer, tip position) work alike, sampled and held at their own rate,
+// and go to the trace only.
 #pragma once
 
 #include "kernel/batch.hpp"
@@ -11,5 +13,29 @@ namespace ff {
 // s.measured, and writes what the controller sees now (W each): the measurement `delay` samples
 // old, or the first one while the run is younger than the delay.
 void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle, double* hub_rate);
+
+// Trace columns of the recorded sensors (rows of compute_recorded_sensors' output), in order.
+enum RecordedColumn { kStrainMoment = 0, kStrainTipEstimate, kTipAccel, kTipPosition, kRecordedColumns };
+// Their names in Trace::extra and the trace CSV.
+const char* recorded_column_name(RecordedColumn c);
+// The sensor a column belongs to.
+inline RecordedChannel recorded_channel(RecordedColumn c) {
+  return c <= kStrainTipEstimate ? kStrainGauge : c == kTipAccel ? kTipAccelerometer : kTipPositionSensor;
+}
+
+// Takes this sample's reading of every enabled recorded sensor (BatchModel::rec_enabled) of every lane
+// and writes what is recorded now, out[column * W + lane] (kRecordedColumns x W; rows of disabled sensors
+// untouched). Each channel: y = Q(x + sigma n) with n from the stream (seed, channel) at sample k, stored
+// in the ring s.recorded; the recorded value at sample k is the reading of sample n floor((k - d) / n)
+// (d = delay, n = hold = controller rate / sensor rate), or the first reading while k < d. The truths x:
+//   strain gauge: M = k_i q_i + k3_i q_i^3 at its joint (the elastic moment: a gauge reads strain, so the
+//     damper c_i qd_i is not seen), N·m; its tip estimate is strain_gain times the recorded M, m;
+//   tip accelerometer: compute_tip_acceleration with qdd = compute_acceleration under the held torque
+//     s.tau (called before compute_control: the previous sample's torque, the acceleration just before
+//     this sample, as a sensor read before the new torque acts), m/s^2;
+//   tip position: the tip deflection (compute_tip), m.
+// ws is scratch of its own, not the integrators' (SDIRK2 leaves joint armature in theirs): its q1 and zdot
+// receive qdd and the drive rates. Allocates nothing.
+void compute_recorded_sensors(const BatchModel& bm, BatchState& s, Workspace& ws, double* out);
 
 }  // namespace ff

@@ -12,6 +12,7 @@
 #include "kernel/dynamics.hpp"
 #include "kernel/files.hpp"
 #include "kernel/fixed_step.hpp"
+#include "kernel/sensors.hpp"
 #include "kernel/trajectory.hpp"
 
 namespace ff {
@@ -38,11 +39,19 @@ std::vector<std::string> extra_channels(const BatchModel& bm) {
     names.push_back("pressure_a");
     names.push_back("pressure_b");
   }
+  // Recorded sensors (kernel/sensors.hpp): the strain gauge gives two columns.
+  if (bm.rec_enabled[kStrainGauge]) {
+    names.push_back(recorded_column_name(kStrainMoment));
+    names.push_back(recorded_column_name(kStrainTipEstimate));
+  }
+  if (bm.rec_enabled[kTipAccelerometer]) names.push_back(recorded_column_name(kTipAccel));
+  if (bm.rec_enabled[kTipPositionSensor]) names.push_back(recorded_column_name(kTipPosition));
   return names;
 }
 
+// rec (kRecordedColumns x W): the recorded sensors' output at this sample.
 void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f, double* defl,
-            double* tip_angle, Workspace& ws, std::vector<Trace>& out) {
+            double* tip_angle, const double* rec, Workspace& ws, std::vector<Trace>& out) {
   compute_tip(bm, s.q.data(), defl, tip_angle, ws);
   double* torque = ws.tau_hub.data();
   compute_actuator_torque(bm, s.q.data(), s.v.data(), s.z.data(), s.tau.data(), torque);
@@ -59,6 +68,8 @@ void record(const BatchModel& bm, const BatchState& s, const double* ref, const 
       tr.extra[c++].second.push_back(s.z[pr * W + l] * kPressureUnit);
       tr.extra[c++].second.push_back(s.z[(pr + 1) * W + l] * kPressureUnit);
     }
+    for (int col = 0; col < kRecordedColumns; ++col)
+      if (bm.rec_enabled[recorded_channel(RecordedColumn(col))]) tr.extra[c++].second.push_back(rec[col * W + l]);
     tr.hub_angle.push_back(s.q[l]);
     tr.hub_rate.push_back(s.v[l]);
     tr.tip_deflection.push_back(defl[l]);
@@ -135,7 +146,9 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
     }
   }
 
-  std::vector<double> ref(W), ref_ff(W), ref_f(W), defl(W), tip_angle(W);
+  std::vector<double> ref(W), ref_ff(W), ref_f(W), defl(W), tip_angle(W), rec(kRecordedColumns * W);
+  const bool recording = std::any_of(bm.rec_enabled, bm.rec_enabled + kRecordedChannels, [](bool b) { return b; });
+  Workspace sensor_ws = recording ? make_workspace(bm) : Workspace{};  // the recorded sensors' own scratch
   const double h = T / bm.substeps;
   for (long k = 0; k < nsamples; ++k) {
     s.t = k * T;
@@ -152,10 +165,12 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
                       : 0.0;
     }
     if (inputs) apply_inputs(*inputs, k, s, ref.data(), ref_ff.data(), W);
+    // The recorded sensors read the plant before this sample's torque is applied.
+    if (recording) compute_recorded_sensors(bm, s, sensor_ws, rec.data());
     if (k == 0) reset_controller(bm, s, ref.data());
     compute_control(bm, s, ref.data(), ref_ff.data(), ref_f.data());
     if (inputs && !inputs->torque.empty()) std::fill(s.tau.begin(), s.tau.end(), at_sample(inputs->torque, k));
-    record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), ws, run.traces);
+    record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), rec.data(), ws, run.traces);
     if (observe) observe(s);
     if (k + 1 == nsamples) break;
     // Plant: integrate to the next sample with the torque held.

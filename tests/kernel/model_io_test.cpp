@@ -336,6 +336,60 @@ TEST(ModelIo, ZeroControllerRateIsRejected) {
   expect_rejected(with_line(26, "  rate: 0"), 26, "controller.rate", "> 0");
 }
 
+// ---- recorded sensors and the notch placement ---------------------------------------------
+
+// Line 12 of the reference file is blank and at the top level: room for a one-line sensors block.
+std::string with_sensors(const std::string& flow_map) { return with_line(12, "sensors: " + flow_map); }
+
+TEST(ModelIo, RecordedSensorBlocksParse) {
+  const ff::Model m = ff::parse_model(
+      YAML::Load(with_sensors("{strain_gauge: {enabled: true, joint: 4, resolution: 0.5, noise: 2, delay: 1, "
+                              "rate: 500}, tip_accelerometer: {enabled: true, rate: 0}, "
+                              "tip_position: {delay: 40, rate: 25}}")),
+      "good.yaml");
+  const auto& g = m.spec.sensors.strain_gauge;
+  EXPECT_TRUE(g.enabled);
+  EXPECT_EQ(g.joint, 4);
+  EXPECT_DOUBLE_EQ(g.resolution, 0.5);
+  EXPECT_DOUBLE_EQ(g.noise, 2.0);
+  EXPECT_EQ(g.delay, 1);
+  EXPECT_DOUBLE_EQ(g.rate, 500.0);
+  EXPECT_TRUE(m.spec.sensors.tip_accelerometer.enabled);
+  EXPECT_FALSE(m.spec.sensors.tip_position.enabled);
+  EXPECT_EQ(m.spec.sensors.tip_position.delay, 40);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.tip_position.rate, 25.0);
+  EXPECT_EQ(m.spec.notch.placement, "reference");
+}
+
+TEST(ModelIo, NegativeRecordedNoiseIsRejected) {
+  expect_rejected(with_sensors("{tip_position: {noise: -0.001}}"), 12, "sensors.tip_position.noise", ">= 0");
+}
+
+TEST(ModelIo, StrainGaugeJointOutsideTheBeamIsRejected) {
+  expect_rejected(with_sensors("{strain_gauge: {enabled: true, joint: 6}}"), 12, "sensors.strain_gauge.joint",
+                  "beam joint 1..5, got 6");
+  expect_rejected(with_sensors("{strain_gauge: {joint: 0}}"), 12, "sensors.strain_gauge.joint", "got 0");
+}
+
+TEST(ModelIo, SensorRateNotDividingTheControllerRateIsRejected) {
+  expect_rejected(with_sensors("{tip_accelerometer: {rate: 300}}"), 12, "sensors.tip_accelerometer.rate",
+                  "must divide controller.rate = 1000 Hz");
+  expect_rejected(with_sensors("{tip_accelerometer: {rate: 2000}}"), 12, "sensors.tip_accelerometer.rate",
+                  "must divide controller.rate");
+}
+
+TEST(ModelIo, NegativeRecordedDelayIsRejected) {
+  expect_rejected(with_sensors("{strain_gauge: {delay: -1}}"), 12, "sensors.strain_gauge.delay", "between 0 and 10000");
+}
+
+TEST(ModelIo, JointKeyBelongsToTheStrainGaugeOnly) {
+  expect_rejected(with_sensors("{tip_position: {joint: 2}}"), 12, "sensors.tip_position.joint", "unknown key");
+}
+
+TEST(ModelIo, UnknownNotchPlacementIsRejected) {
+  expect_rejected(with_line(38, "  placement: sideways"), 38, "notch.placement", "unknown placement 'sideways'");
+}
+
 // ---- files -------------------------------------------------------------------------------
 
 TEST(ModelIo, BadIndentationNamesTheFileAndLine) {

@@ -257,4 +257,22 @@ TEST(ApplyAssignment, OverridesReachTheModel) {
   EXPECT_NEAR(m.cell, 4.1656 / 10, 1e-12);
 }
 
+TEST(ApplyAssignment, SensorAndNotchPlacementParametersAreSweepable) {
+  // The reference file has no sensors block: paths create it, every recorded-sensor parameter included.
+  auto d = YAML::LoadFile(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml");
+  for (const char* a : {"sensors.strain_gauge.enabled=true", "sensors.strain_gauge.joint=3",
+                        "sensors.strain_gauge.noise=5", "sensors.tip_accelerometer.rate=250",
+                        "sensors.tip_position.delay=12", "sensors.tip_position.resolution=1e-4",
+                        "notch.placement=feedback"})
+    assign(d, a);
+  const ff::Model m = ff::parse_model(d, "fbtb.yaml");
+  EXPECT_TRUE(m.spec.sensors.strain_gauge.enabled);
+  EXPECT_EQ(m.spec.sensors.strain_gauge.joint, 3);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.strain_gauge.noise, 5.0);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.tip_accelerometer.rate, 250.0);
+  EXPECT_EQ(m.spec.sensors.tip_position.delay, 12);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.tip_position.resolution, 1e-4);
+  EXPECT_EQ(m.spec.notch.placement, "feedback");
+}
+
 }  // namespace
