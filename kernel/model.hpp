@@ -129,7 +129,7 @@ struct DriveSpec {
   double inertia = 5.0;           // J_a, actuator-side inertia (rotor, pinion, gears) on the shaft, kg·m^2
   double ratio = 1.0;             // n = shaft angle / output angle
   double efficiency = 1.0;        // eta in (0, 1]
-  double stiffness = 2.0e6;       // k, output side, N·m/rad
+  double stiffness = 2.0e7;       // k, output side, N·m/rad
   double cubic_stiffness = 0.0;   // k3, hardening, N·m/rad^3
   double damping = 2.0e3;         // c, N·m·s/rad
   double backlash = 0.0;          // total free play 2b at the output, rad

@@ -30,7 +30,7 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
     out.push_back({"backlash", "free play in the drive train", {{"drive.enabled", "true"}},
                    {{"drive.backlash", start(s.drive.backlash, 1e-3)}}, "", {}});
     out.push_back({"drive_compliance", "a compliant drive train between actuator and hub", {{"drive.enabled", "true"}},
-                   {{"drive.stiffness", s.drive.enabled ? s.drive.stiffness : 20.0 * std::max(s.controller.kp, 1.0)}},
+                   {{"drive.stiffness", s.drive.enabled ? s.drive.stiffness : 200.0 * std::max(s.controller.kp, 1.0)}},
                    "", {}});
     out.push_back({"hydraulic_compressibility", "oil compressibility of a hydraulic actuator",
                    {{"hydraulics.enabled", "true"}},
