@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   ff::add_table_verb(app);
   ff::add_plot_verb(app);
   ff::add_animate_verb(app);
+  ff::add_compare_verb(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
