@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   ff::add_record_verb(app);
   ff::add_diagnose_verb(app);
   ff::add_calibrate_verb(app);
+  ff::add_compare_verb(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -27,6 +27,7 @@ void add_animate_verb(CLI::App& app);
 void add_diagnose_verb(CLI::App& app);
 void add_calibrate_verb(CLI::App& app);
 void add_record_verb(CLI::App& app);
+void add_compare_verb(CLI::App& app);
 
 // Loads a model file and applies `--set PATH=VALUE` overrides (sweep/paths.hpp).
 Model load_model_with(const std::string& path, const std::vector<std::string>& sets);

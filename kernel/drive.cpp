@@ -95,6 +95,10 @@ double calc_drive_rate(const Model& m) {
     const double inv = 1.0 / (p.ja * p.n * p.n) + 1.0 / j0;  // shaft reflected to the output, and the hub
     coupled = std::max({coupled, std::sqrt(p.k * inv), p.c * inv});
   }
+  // The static friction map's slope at rest, (F_s or F_c) / eps, on the hub's own inertia: a real
+  // eigenvalue, which RK4 keeps stable up to h rate = 2.78 (allowed 2.5).
+  const auto& f = m.spec.friction;
+  if (L.bristle < 0) own = std::max(own, std::max(f.coulomb, f.stiction) / (f.smoothing * j0) / 2.5);
   if (L.bristle >= 0) {
     coupled = std::max({coupled, std::sqrt(p.sigma0 / j0), p.sigma1 / j0});
     own = std::max(own, p.sigma0 / m.spec.friction.coulomb);  // bristle relaxation at 1 rad/s

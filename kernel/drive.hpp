@@ -64,7 +64,8 @@ double calc_transmission_torque(const LaneDrive& p, double d, double dd);
 
 // The fastest rate (1/s) of the drive's dynamics a fixed step must resolve (h rate <= 1): the
 // spool, the torque loop, relief valves, the oil spring and drive train on the hub's own inertia,
-// the LuGre bristles. Used to choose substeps; 0 without drive parts.
+// the static friction map's slope at rest, the LuGre bristles. Used to choose substeps; 0 without
+// drive parts or friction.
 double calc_drive_rate(const Model& m);
 
 // The damping the hydraulic torque loop adds at the hub below its bandwidth: the flow D w the hub

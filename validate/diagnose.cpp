@@ -1,6 +1,7 @@
 #include "validate/diagnose.hpp"
 
 #include <ceres/ceres.h>
+#include <glog/logging.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -58,12 +59,12 @@ struct Scorer {
 
   // Residuals of each model (empty vector for a failed lane).
   std::vector<std::vector<double>> residuals(const std::vector<Model>& models) const {
+    // One batch when the models share a shape; one at a time when (e.g.) their substeps differ.
     std::vector<Prediction> p;
-    bool same_shape = true;
-    for (const auto& m : models) same_shape &= m.nseg == models[0].nseg;
-    if (same_shape) {
+    try {
       p = replay(models, *rec, mode);
-    } else {
+    } catch (const std::invalid_argument&) {
+      p.clear();
       for (const auto& m : models) p.push_back(replay(std::span<const Model>(&m, 1), *rec, mode)[0]);
     }
     std::vector<std::vector<double>> out(models.size());
@@ -175,6 +176,30 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int
       f.rss = best;
     }
     if (!e.params.empty()) {
+      // Multi-start: every starting value scaled together by 1/30 .. 30, run as lanes; the best starts.
+      std::vector<double> factors;
+      for (int i = -6; i <= 6; ++i) factors.push_back(std::pow(30.0, i / 6.0));
+      std::vector<Model> starts;
+      std::vector<double> used;
+      for (double fct : factors) {
+        std::vector<double> t = theta;
+        for (double& x : t) x += std::log(fct);
+        try {
+          starts.push_back(build_model(*sc.src, effect_assignments(e, t.data(), grid_value)));
+          used.push_back(fct);
+        } catch (const std::exception&) {
+        }
+      }
+      if (!starts.empty()) {
+        const auto r = sc.residuals(starts);
+        double best = INFINITY, pick = 1.0;
+        for (std::size_t i = 0; i < r.size(); ++i)
+          if (!r[i].empty() && sum_squares(r[i]) < best) {
+            best = sum_squares(r[i]);
+            pick = used[i];
+          }
+        for (double& x : theta) x += std::log(pick);
+      }
       ceres::Problem problem;
       auto* cost = new ReplayCost(sc, e, grid_value);
       problem.AddResidualBlock(cost, nullptr, theta.data());
@@ -267,6 +292,12 @@ EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOpti
 }
 
 Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
+  // Ceres reports failed steps through glog; they are results here, not news.
+  static const bool quiet = [] {
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    return true;
+  }();
+  (void)quiet;
   for (const auto& c : replay_inputs(opt.mode))
     if (!r.has(c)) throw ConfigError(r.source, 1, c, std::string("missing column '") + c + "', needed in " + replay_mode_name(opt.mode) + " mode");
   const Model base = build_model(src);

@@ -118,7 +118,7 @@ const char* kPlots[] = {"tip_angle.png", "hub_angle.png", "tip_deflection.png", 
 TEST_F(Cli, HelpListsEveryVerb) {
   const auto r = run("--help");
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  for (const char* verb : {"modes", "simulate", "run"}) EXPECT_NE(r.output.find(verb), std::string::npos) << verb;
+  for (const char* verb : {"modes", "simulate", "run", "compare"}) EXPECT_NE(r.output.find(verb), std::string::npos) << verb;
 }
 
 TEST_F(Cli, VerbHelpListsEveryOption) {
@@ -129,6 +129,7 @@ TEST_F(Cli, VerbHelpListsEveryOption) {
       {"modes", {"model", "--set", "--count"}},
       {"simulate", {"model", "--out", "--set", "trace.csv"}},
       {"run", {"study", "--out", "--threads"}},
+      {"compare", {"--model", "--data", "--mode", "--k", "--set", "--out", "report.md", "compare.json"}},
   };
   for (const auto& c : cases) {
     const auto r = run(std::string(c.verb) + " --help");
@@ -265,6 +266,40 @@ TEST_F(Cli, RunStudyWithoutRunsWritesNothing) {
   EXPECT_FALSE(fs::exists(work / "out"));
 }
 
+// A measurement record (t, ref, hub_torque, hub_angle, tip_deflection) of 30 rows at 1 kHz with `bad`
+// put in the hub_angle cell of data line `bad_line` (file line bad_line + 1).
+std::string record_text(int bad_line = -1, const std::string& bad = "") {
+  std::string text = "t,ref,hub_torque,hub_angle,tip_deflection\n";
+  for (int k = 0; k < 30; ++k) {
+    const std::string angle = k + 1 == bad_line ? bad : std::to_string(0.001 * k);
+    text += std::to_string(0.001 * k) + ",0.1,100," + angle + ",0.0\n";
+  }
+  return text;
+}
+
+TEST_F(Cli, CompareRecordWithNanCellNamesFileLineAndColumnAndWritesNothing) {
+  write("rec.csv", record_text(6, "nan"));
+  const auto r = run("compare --model configs/fbtb.yaml --data rec.csv --out out");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  expect_one_error_line(r, "rec.csv:7: hub_angle: 'nan' is not finite");
+  EXPECT_FALSE(fs::exists(work / "out"));
+  EXPECT_EQ(tree(work).size(), 3u) << "compare writes nothing";  // configs/, configs/fbtb.yaml, rec.csv
+}
+
+TEST_F(Cli, CompareRecordMissingAColumnTheModeNeedsWritesNothing) {
+  write("rec.csv", record_text());
+  const auto r = run("compare --model configs/fbtb.yaml --data rec.csv --mode open-loop --out out");
+  // open-loop has hub_torque and hub_angle: fine; a record without hub_torque is not.
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::string text = "t,ref,hub_angle\n";
+  for (int k = 0; k < 30; ++k) text += std::to_string(0.001 * k) + ",0.1,0.0\n";
+  write("short.csv", text);
+  const auto bad = run("compare --model configs/fbtb.yaml --data short.csv --mode open-loop --out out2");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  expect_one_error_line(bad, "short.csv:1: hub_torque: missing column");
+  EXPECT_FALSE(fs::exists(work / "out2"));
+}
+
 // ---- complete outputs --------------------------------------------------------------------
 
 TEST_F(Cli, SimulateShortMoveWritesEveryOutput) {
@@ -321,6 +356,29 @@ TEST_F(Cli, RunShortStudyWritesEveryOutput) {
   EXPECT_EQ(read_text(out / "table.md").rfind("# short", 0), 0u);
   for (const char* png : kPlots) expect_png(out / png);
   expect_no_tmp_files(out);
+}
+
+TEST_F(Cli, CompareModelWithItsOwnTraceWritesEveryOutput) {
+  const std::string moves = quote("trajectory.moves=[{target: 0.2, hold: 1}]");
+  ASSERT_EQ(run("simulate configs/fbtb.yaml --out sim --set " + moves).exit_code, 0);
+  const auto r = run("compare --model configs/fbtb.yaml --data sim/trace.csv --set " + moves + " --k 5 --out cmp");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("| hub_angle | rad | 100.00 | 100.00 |"), std::string::npos) << r.output;
+  const fs::path out = work / "cmp";
+  const std::string json = read_text(out / "compare.json");
+  EXPECT_NE(json.find("\"k\": 5,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"hub_angle\": {\"free_run\": 99.9999"), std::string::npos) << json;  // the trace has 10 digits
+  EXPECT_NE(read_text(out / "report.md").find("| hub_torque | N m | 100.00 | 100.00 |"), std::string::npos);
+  for (const char* ch : {"hub_angle", "tip_deflection", "hub_torque"})
+    for (const std::string kind : {"overlay_", "acf_", "ccf_", "spectrum_", "binned_"})
+      expect_png(out / (kind + ch + (kind == "binned_" ? "_hub_velocity" : "") + ".png"));
+  expect_no_tmp_files(work);
+  EXPECT_EQ(tree(out).size(), 2u + 3u * 9u);
+  // Into an existing directory: the files are replaced, no staging directory is left.
+  ASSERT_EQ(run("compare --model configs/fbtb.yaml --data sim/trace.csv --set " + moves + " --out cmp").exit_code, 0);
+  EXPECT_EQ(tree(out).size(), 2u + 3u * 9u);
+  for (const auto& e : fs::directory_iterator(work))
+    EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
 }
 
 }  // namespace

@@ -1,0 +1,82 @@
+// flexfarm compare --model M.yaml --data D.csv --out DIR: the model against a measurement record,
+// free-run and k-step-ahead; fit table, failure report and residual plots.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "apps/verbs.hpp"
+#include "validate/compare.hpp"
+#include "validate/record.hpp"
+#include "validate/replay.hpp"
+
+namespace ff {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Writes the report into a sibling staging directory, then moves it into place: a fresh DIR
+// appears whole; into an existing DIR each file is renamed over its old version.
+std::vector<std::string> write_report_into(const CompareResult& result, const std::string& out) {
+  const fs::path target = fs::path(out).lexically_normal();
+  const fs::path stage = target.parent_path() / (target.filename().string() + ".partial-" + std::to_string(::getpid()));
+  std::error_code ec;
+  fs::remove_all(stage, ec);
+  try {
+    const auto files = write_compare_report(result, stage.string());
+    if (!fs::exists(target)) {
+      fs::rename(stage, target);
+    } else {
+      for (const auto& f : files) fs::rename(stage / f, target / f);
+      fs::remove_all(stage);
+    }
+    return files;
+  } catch (...) {
+    fs::remove_all(stage, ec);
+    throw;
+  }
+}
+
+}  // namespace
+
+void add_compare_verb(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "compare",
+      "Compare a model with a measurement record, free-run and k-step-ahead: writes DIR/report.md, "
+      "DIR/compare.json and plots (overlay, residual ACF, CCF, spectrum, residual binned against the states)");
+  struct Args {
+    std::string model, data, out, mode = "closed-loop";
+    int k = 10;
+    std::vector<std::string> sets;
+  };
+  auto args = std::make_shared<Args>();
+  cmd->add_option("--model", args->model, "model YAML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--data", args->data, "measurement record CSV (docs/formats.md, \"Measurement record\")")->required();
+  cmd->add_option("--mode", args->mode, "replay: closed-loop (record's ref drives the model's controller), "
+                                        "open-loop (record's hub_torque drives the plant), inverse-dynamics")
+      ->check(CLI::IsMember({"closed-loop", "open-loop", "inverse-dynamics"}))
+      ->capture_default_str();
+  cmd->add_option("--k", args->k, "k-step prediction horizon, controller samples")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
+  cmd->add_option("--out", args->out, "output directory (created)")->required();
+  cmd->callback([args] {
+    // Every input is checked before anything is written.
+    const ReplayMode mode = parse_replay_mode(args->mode);
+    const Model m = load_model_with(args->model, args->sets);
+    const Record r = read_record_csv(args->data, replay_inputs(mode));
+    std::fprintf(stderr, "comparing %s with %s: %zu samples, %s, k = %d\n", args->model.c_str(), args->data.c_str(),
+                 r.size(), replay_mode_name(mode), args->k);
+    const CompareResult result = compare_record(m, r, mode, args->k);
+    const auto files = write_report_into(result, args->out);
+    std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_fit_table(result).c_str(),
+                args->out.c_str(), files.size() - 2);
+    if (!result.free_ok || !result.k_ok)
+      std::printf("a replay failed numerically: see %s/report.md\n", args->out.c_str());
+  });
+}
+
+}  // namespace ff

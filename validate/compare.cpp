@@ -1,0 +1,353 @@
+#include "validate/compare.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "kernel/files.hpp"
+#include "plotting/plot.hpp"
+
+namespace ff {
+
+namespace {
+
+// Central differences of y(t), one-sided at the ends (units of y per s).
+std::vector<double> time_derivative(const std::vector<double>& t, const std::vector<double>& y) {
+  const std::size_t n = y.size();
+  std::vector<double> d(n, 0.0);
+  if (n < 2) return d;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t a = k > 0 ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
+    d[k] = (y[b] - y[a]) / (t[b] - t[a]);
+  }
+  return d;
+}
+
+const char* channel_unit(const std::string& c) {
+  if (c == "hub_angle") return "rad";
+  if (c == "hub_rate") return "rad/s";
+  if (c == "tip_deflection") return "m";
+  if (c == "hub_torque") return "N m";
+  return "";
+}
+
+const char* input_column(ReplayMode m) {
+  switch (m) {
+    case ReplayMode::kClosedLoop: return "ref";
+    case ReplayMode::kOpenLoop: return "hub_torque";
+    case ReplayMode::kInverseDynamics: return "hub_angle";
+  }
+  return "ref";
+}
+
+bool all_finite(const std::vector<double>& x) {
+  for (double v : x)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+std::string fmt(const char* f, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+
+// Fit % for a table: "-" when the prediction failed.
+std::string fit_cell(double x) { return std::isfinite(x) ? fmt("%.2f", x) : "failed"; }
+std::string num_cell(double x) { return std::isfinite(x) ? fmt("%.4g", x) : "failed"; }
+
+// ---------------------------------------------------------------- JSON
+
+std::string jnum(double x) { return std::isfinite(x) ? fmt("%.10g", x) : "null"; }
+std::string jbool(bool b) { return b ? "true" : "false"; }
+std::string jstr(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\', o += c;
+    else if (static_cast<unsigned char>(c) < 0x20) o += fmt("\\u%04x", static_cast<unsigned char>(c));
+    else o += c;
+  }
+  return o + "\"";
+}
+
+std::string json_failure(const ResidualAnalysis& a, const ResidualOptions& o) {
+  if (!a.valid) return "null";
+  const FailureReport& f = a.failure;
+  std::string s = "{\"rms\": " + jnum(f.rms) + ", \"worst_windows\": [";
+  for (std::size_t i = 0; i < f.worst_windows.size(); ++i) {
+    const auto& w = f.worst_windows[i];
+    s += std::string(i ? ", " : "") + "{\"t0\": " + jnum(w.t0) + ", \"t1\": " + jnum(w.t1) + ", \"rms\": " + jnum(w.rms) + "}";
+  }
+  s += "], \"peaks\": [";
+  for (std::size_t i = 0; i < f.peaks.size(); ++i)
+    s += std::string(i ? ", " : "") + "{\"frequency_hz\": " + jnum(f.peaks[i].frequency) +
+         ", \"amplitude\": " + jnum(f.peaks[i].amplitude) + "}";
+  s += "], \"states\": [";
+  for (std::size_t i = 0; i < f.states.size(); ++i)
+    s += std::string(i ? ", " : "") + "{\"state\": " + jstr(f.states[i].first) + ", \"departure\": " + jnum(f.states[i].second) + "}";
+  s += "], \"velocity_step\": ";
+  s += f.velocity_step.ok ? "{\"step\": " + jnum(f.velocity_step.step) + ", \"relative\": " + jnum(f.velocity_step.relative) +
+                                ", \"below\": " + std::to_string(f.velocity_step.below) +
+                                ", \"above\": " + std::to_string(f.velocity_step.above) + "}"
+                          : std::string("null");
+  s += ", \"friction_like\": " + jbool(f.friction_like) + ", \"acf_outside\": " + jnum(f.acf_outside) +
+       ", \"white\": " + jbool(f.white) + ", \"ccf_outside\": " + jnum(f.ccf_outside) +
+       ", \"uncorrelated\": " + jbool(f.uncorrelated) + ", \"findings\": [";
+  const auto words = describe_failure(f, o);
+  for (std::size_t i = 0; i < words.size(); ++i) s += std::string(i ? ", " : "") + jstr(words[i]);
+  return s + "]}";
+}
+
+// ---------------------------------------------------------------- plots
+
+std::string file_safe(const std::string& s) {
+  std::string o;
+  for (char c : s) o += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
+  return o;
+}
+
+std::vector<double> lags_of(const Correlation& c) { return {c.lag.begin(), c.lag.end()}; }
+
+void plot_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path) {
+  LinePlot p;
+  p.title = (cross ? "residual-input cross-correlation: " + c.name + " with " + input
+                   : "residual autocorrelation: " + c.name);
+  p.x_label = "lag (record samples)";
+  p.y_label = cross ? "r_eu" : "r_e";
+  const std::pair<const ResidualAnalysis*, const char*> runs[] = {{&c.free_analysis, "free run"},
+                                                                  {&c.k_analysis, "k-step"}};
+  for (const auto& [a, label] : runs) {
+    if (!a->valid) continue;
+    const Correlation& r = cross ? a->ccf : a->acf;
+    p.series.push_back({label, lags_of(r), r.value});
+    p.hlines.push_back({r.band, std::string("99 % band (") + label + ")"});
+    p.hlines.push_back({-r.band, ""});
+  }
+  render_line_plot(p, path);
+}
+
+void plot_spectrum(const ChannelCompare& c, const std::string& path) {
+  LinePlot p;
+  p.title = "residual amplitude spectrum: " + c.name;
+  p.x_label = "frequency (Hz)";
+  p.y_label = std::string("amplitude (") + channel_unit(c.name) + ")";
+  // Up to 50 Hz, further if a reported peak lies beyond.
+  double fmax = 50.0;
+  for (const auto* a : {&c.free_analysis, &c.k_analysis})
+    if (a->valid)
+      for (const auto& pk : a->failure.peaks) fmax = std::max(fmax, 1.2 * pk.frequency);
+  const std::pair<const ResidualAnalysis*, const char*> runs[] = {{&c.free_analysis, "free run"},
+                                                                  {&c.k_analysis, "k-step"}};
+  for (const auto& [a, label] : runs) {
+    if (!a->valid) continue;
+    Series s{label, {}, {}};
+    for (std::size_t i = 0; i < a->spectrum.frequency.size() && a->spectrum.frequency[i] <= fmax; ++i) {
+      s.x.push_back(a->spectrum.frequency[i]);
+      s.y.push_back(a->spectrum.amplitude[i]);
+    }
+    p.series.push_back(s);
+  }
+  render_line_plot(p, path);
+}
+
+void plot_binned(const ChannelCompare& c, std::size_t state, const std::string& path) {
+  const auto& ref = c.free_analysis.valid ? c.free_analysis : c.k_analysis;
+  const std::string& name = ref.binned[state].state;
+  static const std::pair<const char*, const char*> units[] = {{"hub_velocity", "rad/s"}, {"hub_angle", "rad"},
+      {"hub_acceleration", "rad/s^2"}, {"hub_torque", "N m"}, {"tip_deflection", "m"}};
+  std::string unit;
+  for (const auto& [n, u] : units)
+    if (name == n) unit = u;
+  LinePlot p;
+  p.title = "mean " + c.name + " residual binned against " + name;
+  p.x_label = name + (unit.empty() ? "" : " (" + unit + ")");
+  p.y_label = std::string("mean residual (") + channel_unit(c.name) + ")";
+  const std::pair<const ResidualAnalysis*, const char*> runs[] = {{&c.free_analysis, "free run"},
+                                                                  {&c.k_analysis, "k-step"}};
+  for (const auto& [a, label] : runs)
+    if (a->valid) p.series.push_back({label, a->binned[state].centre, a->binned[state].mean});
+  p.hlines.push_back({0.0, "", false});
+  render_line_plot(p, path);
+}
+
+void plot_overlay(const CompareResult& r, const ChannelCompare& c, const std::string& path) {
+  LinePlot p;
+  p.title = c.name + ": measured and predicted (" + replay_mode_name(r.mode) + ")";
+  p.x_label = "time (s)";
+  p.y_label = c.name + " (" + channel_unit(c.name) + ")";
+  // A failed prediction's non-finite values break its line (NaN) instead of stretching the axes.
+  auto finite = [](std::vector<double> y) {
+    for (double& v : y) v = std::isfinite(v) ? v : NAN;
+    return y;
+  };
+  p.series.push_back({"measured", r.t, c.measured});
+  p.series.push_back({"free run", r.t, finite(c.free_run)});
+  p.series.push_back({"k-step (k = " + std::to_string(r.k_ahead) + ")", r.t, finite(c.k_step), -1, 2.0, true});
+  render_line_plot(p, path);
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::vector<double>>> record_states(const Record& r) {
+  std::vector<std::pair<std::string, std::vector<double>>> s;
+  std::vector<double> w;
+  if (r.has("hub_rate")) w = r.at("hub_rate");
+  else if (r.has("hub_angle")) w = time_derivative(r.t, r.at("hub_angle"));
+  if (!w.empty()) s.emplace_back("hub_velocity", w);
+  if (r.has("hub_angle")) s.emplace_back("hub_angle", r.at("hub_angle"));
+  if (!w.empty()) s.emplace_back("hub_acceleration", time_derivative(r.t, w));
+  if (r.has("hub_torque")) s.emplace_back("hub_torque", r.at("hub_torque"));
+  if (r.has("tip_deflection")) s.emplace_back("tip_deflection", r.at("tip_deflection"));
+  return s;
+}
+
+CompareResult compare_record(const Model& model, const Record& record, ReplayMode mode, int k_ahead,
+                             const ResidualOptions& options) {
+  if (k_ahead < 1) throw std::invalid_argument("compare_record: k must be >= 1 controller sample");
+  CompareResult out;
+  out.mode = mode;
+  out.k_ahead = k_ahead;
+  out.control_period = model.control_period;
+  out.record_source = record.source;
+  out.input = input_column(mode);
+  out.t = record.t;
+  out.options = options;
+  const auto free_run = replay(std::span<const Model>(&model, 1), record, mode, 0)[0];
+  const auto k_step = replay(std::span<const Model>(&model, 1), record, mode, k_ahead)[0];
+  out.free_ok = free_run.ok;
+  out.k_ok = k_step.ok;
+  const auto states = record_states(record);
+  const auto& u = record.at(out.input);
+  for (const auto& name : scored_channels(mode, record)) {
+    ChannelCompare c;
+    c.name = name;
+    c.unit = channel_unit(name);
+    c.measured = record.at(name);
+    c.free_run = free_run.channels.at(name);
+    c.k_step = k_step.channels.at(name);
+    const std::pair<const std::vector<double>*, bool> preds[] = {{&c.free_run, free_run.ok}, {&c.k_step, k_step.ok}};
+    for (int i = 0; i < 2; ++i) {
+      const auto& yhat = *preds[i].first;
+      Fit fit = calc_fit(c.measured, yhat);
+      ResidualAnalysis a;
+      if (preds[i].second && all_finite(yhat)) {
+        std::vector<double> e(c.measured.size());
+        for (std::size_t k = 0; k < e.size(); ++k) e[k] = c.measured[k] - yhat[k];
+        a = analyse_residual(record.t, e, u, states, options);
+      } else {
+        fit.percent = -INFINITY;
+        fit.rmse = NAN;
+      }
+      (i == 0 ? c.fit_free : c.fit_k) = fit;
+      (i == 0 ? c.free_analysis : c.k_analysis) = std::move(a);
+    }
+    out.channels.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::string format_fit_table(const CompareResult& r) {
+  std::string s = "| channel | unit | fit % free run | fit % k-step | RMSE free run | RMSE k-step |\n"
+                  "|---|---|---:|---:|---:|---:|\n";
+  for (const auto& c : r.channels)
+    s += "| " + c.name + " | " + c.unit + " | " + fit_cell(c.fit_free.percent) + " | " + fit_cell(c.fit_k.percent) +
+         " | " + num_cell(c.fit_free.rmse) + " | " + num_cell(c.fit_k.rmse) + " |\n";
+  return s;
+}
+
+std::string format_compare_report(const CompareResult& r) {
+  std::string s = "# Model vs record\n\n";
+  s += "Record `" + r.record_source + "`: " + std::to_string(r.t.size()) + " samples, t = " +
+       fmt("%.3f", r.t.empty() ? 0.0 : r.t.front()) + "-" + fmt("%.3f", r.t.empty() ? 0.0 : r.t.back()) + " s. ";
+  s += std::string("Mode ") + replay_mode_name(r.mode) + "; input u = `" + r.input + "`; k-step prediction " +
+       std::to_string(r.k_ahead) + " controller samples (" + fmt("%.4g", r.k_ahead * r.control_period) + " s) ahead.\n";
+  if (r.mode == ReplayMode::kInverseDynamics)
+    s += "\nInverse dynamics follows the measured hub motion in both replays: the k-step columns equal the free run.\n";
+  if (!r.free_ok) s += "\n**The free-run replay failed numerically** (its fits are marked `failed`).\n";
+  if (!r.k_ok) s += "\n**The k-step replay failed numerically** (its fits are marked `failed`).\n";
+  s += "\n## Fit\n\nFit % = 100 (1 - |y - yhat| / |y - mean(y)|); RMSE in the channel's unit.\n\n" + format_fit_table(r);
+  s += "\n## Where the model fails\n";
+  for (const auto& c : r.channels) {
+    s += "\n### " + c.name + "\n\n";
+    if (!c.free_analysis.valid) {
+      s += "The free-run prediction is not finite: no residual analysis.\n";
+    } else {
+      if (c.fit_free.percent >= 99.5 && c.free_analysis.failure.rms > 0)
+        s += "The free run fits to " + fmt("%.2f", c.fit_free.percent) +
+             " %: what follows describes differences at that level.\n\n";
+      s += "Free run:\n\n";
+      for (const auto& w : describe_failure(c.free_analysis.failure, r.options)) s += "- " + w + ".\n";
+    }
+    if (c.k_analysis.valid && r.mode != ReplayMode::kInverseDynamics) {
+      s += "\nk-step prediction errors:\n\n";
+      const auto& f = c.k_analysis.failure;
+      if (!(f.rms > 0)) {
+        s += "- zero: the model predicts the record exactly.\n";
+        continue;
+      }
+      s += fmt("- RMS %.4g; ", f.rms) + (f.white ? "white" : "not white") +
+           fmt(" (%.0f %% of ACF lags outside the 99 %% band); ", 100.0 * f.acf_outside) +
+           (f.uncorrelated ? "uncorrelated" : "correlated") +
+           fmt(" with the input (%.0f %% of CCF lags outside).\n", 100.0 * f.ccf_outside);
+      if (f.velocity_step.ok)
+        s += fmt("- steps by %.0f %% of its RMS across zero hub velocity", 100.0 * std::abs(f.velocity_step.relative)) +
+             (f.friction_like ? ": a friction-like effect is missing.\n" : ".\n");
+    }
+  }
+  s += "\n## Plots\n\n";
+  for (const auto& c : r.channels) {
+    s += "- " + c.name + ": `overlay_" + c.name + ".png`, `acf_" + c.name + ".png`, `ccf_" + c.name +
+         ".png`, `spectrum_" + c.name + ".png`, `binned_" + c.name + "_<state>.png`\n";
+  }
+  return s;
+}
+
+std::string format_compare_json(const CompareResult& r) {
+  std::string s = "{\n  \"mode\": " + jstr(replay_mode_name(r.mode)) + ",\n  \"k\": " + std::to_string(r.k_ahead) +
+                  ",\n  \"control_period\": " + jnum(r.control_period) + ",\n  \"record\": " + jstr(r.record_source) +
+                  ",\n  \"samples\": " + std::to_string(r.t.size()) + ",\n  \"input\": " + jstr(r.input) +
+                  ",\n  \"replay_ok\": {\"free_run\": " + jbool(r.free_ok) + ", \"k_step\": " + jbool(r.k_ok) + "}";
+  auto per_channel = [&](const char* key, auto value) {
+    s += ",\n  \"" + std::string(key) + "\": {";
+    for (std::size_t i = 0; i < r.channels.size(); ++i)
+      s += std::string(i ? ",\n    " : "\n    ") + jstr(r.channels[i].name) + ": " + value(r.channels[i]);
+    s += "\n  }";
+  };
+  per_channel("fit_percent", [](const ChannelCompare& c) {
+    return "{\"free_run\": " + jnum(c.fit_free.percent) + ", \"k_step\": " + jnum(c.fit_k.percent) + "}";
+  });
+  per_channel("rmse", [](const ChannelCompare& c) {
+    return "{\"free_run\": " + jnum(c.fit_free.rmse) + ", \"k_step\": " + jnum(c.fit_k.rmse) + "}";
+  });
+  per_channel("failure", [&](const ChannelCompare& c) {
+    return "{\"free_run\": " + json_failure(c.free_analysis, r.options) +
+           ",\n      \"k_step\": " + json_failure(c.k_analysis, r.options) + "}";
+  });
+  return s + "\n}\n";
+}
+
+std::vector<std::string> write_compare_report(const CompareResult& r, const std::string& dir) {
+  make_directories(dir);
+  std::vector<std::string> files;
+  auto put = [&](const std::string& name) {
+    files.push_back(name);
+    return dir + "/" + name;
+  };
+  write_file_atomic(put("report.md"), format_compare_report(r));
+  write_file_atomic(put("compare.json"), format_compare_json(r));
+  for (const auto& c : r.channels) {
+    const std::string ch = file_safe(c.name);
+    plot_overlay(r, c, put("overlay_" + ch + ".png"));
+    if (!c.free_analysis.valid && !c.k_analysis.valid) continue;
+    plot_correlation(c, false, r.input, put("acf_" + ch + ".png"));
+    plot_correlation(c, true, r.input, put("ccf_" + ch + ".png"));
+    plot_spectrum(c, put("spectrum_" + ch + ".png"));
+    const auto& a = c.free_analysis.valid ? c.free_analysis : c.k_analysis;
+    for (std::size_t i = 0; i < a.binned.size(); ++i)
+      plot_binned(c, i, put("binned_" + ch + "_" + file_safe(a.binned[i].state) + ".png"));
+  }
+  return files;
+}
+
+}  // namespace ff
