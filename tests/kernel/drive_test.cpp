@@ -230,6 +230,7 @@ TEST(DriveTrain, ConservesEnergyWithAllDissipationOff) {
   s.joints.damping = 0.0;
   s.drive.enabled = true;
   s.drive.ratio = 3.0;
+  s.drive.stiffness = 2e6;
   s.drive.damping = 0.0;
   s.drive.cubic_stiffness = 1e9;
   const Model m = make_model(s);
