@@ -43,7 +43,7 @@ void add_diagnose_verb(CLI::App& app) {
                   "least squares, rank them by delta BIC and say which one is missing (or none)");
   struct Args {
     std::string model, data, json, mode = "closed-loop";
-    std::vector<std::string> sets, effects;
+    std::vector<std::string> sets, effects, refit;
     int iterations = 25, samples = 1500;
   };
   auto a = std::make_shared<Args>();
@@ -53,6 +53,8 @@ void add_diagnose_verb(CLI::App& app) {
   cmd->add_option("--mode", a->mode, "closed-loop (ref drives the model's controller), open-loop (hub_torque "
                                      "drives the plant) or inverse-dynamics")->capture_default_str();
   cmd->add_option("--effects", a->effects, "only these effects, comma separated (default: every one that applies)");
+  cmd->add_option("--refit", a->refit, "existing parameters (paths) re-fitted with the baseline and with every effect, "
+                                       "comma separated, e.g. hub.inertia,friction.viscous");
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
@@ -60,6 +62,7 @@ void add_diagnose_verb(CLI::App& app) {
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.only = split_list(a->effects);
+    opt.refit = split_list(a->refit);
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
     const ModelSource src = load_model_source(a->model, a->sets);
@@ -78,7 +81,7 @@ void add_calibrate_verb(CLI::App& app) {
                    "and record both versions and their fit in a model ledger (SQLite) with a plot of the error");
   struct Args {
     std::string model, data, add, out, ledger, mode = "closed-loop";
-    std::vector<std::string> sets;
+    std::vector<std::string> sets, refit;
     int iterations = 25, samples = 1500;
   };
   auto a = std::make_shared<Args>();
@@ -88,6 +91,7 @@ void add_calibrate_verb(CLI::App& app) {
   cmd->add_option("--out", a->out, "the new model YAML")->required();
   cmd->add_option("--ledger", a->ledger, "model ledger (default: ledger.sqlite beside --out)");
   cmd->add_option("--mode", a->mode, "closed-loop, open-loop or inverse-dynamics")->capture_default_str();
+  cmd->add_option("--refit", a->refit, "existing parameters re-fitted with the effect, comma separated");
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
@@ -96,6 +100,7 @@ void add_calibrate_verb(CLI::App& app) {
     opt.mode = mode_of(a->mode);
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
+    opt.refit = split_list(a->refit);
     bool known = false;
     for (const auto& n : effect_names()) known |= n == a->add;
     if (!known) throw ExitError("--add: unknown effect '" + a->add + "'", 2);
@@ -107,6 +112,8 @@ void add_calibrate_verb(CLI::App& app) {
     const std::string ledger = a->ledger.empty()
                                    ? (std::filesystem::path(a->out).parent_path() / "ledger.sqlite").string()
                                    : a->ledger;
+    const auto dir = std::filesystem::path(a->out).parent_path();
+    if (!dir.empty()) std::filesystem::create_directories(dir);
     write_file_atomic(a->out, yaml);
     const Model before = build_model(src), after = load_model(a->out);
     const auto versions = record_calibration(ledger, a->model, before, a->out, after, f, r, opt.mode);

@@ -132,7 +132,7 @@ void validate(const ModelSpec& s, const std::string& src) {
     }
   }
   const int joint = s.sensors.strain_gauge.joint;
-  if (joint < 1 || joint > s.segments - 1)
+  if ((joint < 1 || joint > s.segments - 1) && (s.segments > 1 || s.sensors.strain_gauge.enabled))
     throw ConfigError(src, 0, "sensors.strain_gauge.joint",
                       "must be a beam joint 1.." + std::to_string(s.segments - 1) + ", got " + std::to_string(joint));
   positive(s.simulation.atol, "simulation.atol");

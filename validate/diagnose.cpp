@@ -46,6 +46,9 @@ YAML::Node number_node(const std::string& path, double x) {
   return YAML::Node(x);
 }
 
+// A trial model needing more fixed steps per control period than this is refused (too stiff).
+constexpr int kMaxFitSubsteps = 64;
+
 // The record's scored channels, decimated and normalised: residual = (y - yhat) / sd(y).
 struct Scorer {
   const ModelSource* src = nullptr;
@@ -123,6 +126,7 @@ class ReplayCost : public ceres::CostFunction {
     std::vector<Model> models;
     try {
       models.push_back(build_model(*sc_.src, effect_assignments(e_, theta.data(), grid_)));
+      if (models[0].substeps > kMaxFitSubsteps) return false;  // too stiff to be worth a trial
       if (jacobians && jacobians[0])
         for (int j = 0; j < p; ++j) {
           auto t = theta;
@@ -151,7 +155,8 @@ class ReplayCost : public ceres::CostFunction {
 };
 
 // Least-squares fit of one effect: the grid (if any) first, then the continuous parameters.
-EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int max_iterations) {
+// `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
+EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int max_iterations, int shared = 0) {
   EffectFit f;
   f.effect = e.name;
   f.physics = e.physics;
@@ -203,6 +208,14 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int
       ceres::Problem problem;
       auto* cost = new ReplayCost(sc, e, grid_value);
       problem.AddResidualBlock(cost, nullptr, theta.data());
+      // Within a factor 1000 of the start either way: far enough for any plausible value, and a
+      // bound on the stiffness (and so the substeps) a trial step can ask for.
+      for (std::size_t j = 0; j < theta.size(); ++j) {
+        const double t0 = std::log(e.params[j].initial);
+        problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), t0 - std::log(1e3));
+        problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), t0 + std::log(1e3));
+        theta[j] = std::clamp(theta[j], t0 - std::log(1e3), t0 + std::log(1e3));
+      }
       ceres::Solver::Options o;
       o.linear_solver_type = ceres::DENSE_QR;
       o.max_num_iterations = max_iterations;
@@ -226,7 +239,7 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int
         f.stderr_[e.params[j].path] = cov(j, j) >= 0 ? value * std::sqrt(cov(j, j)) : NAN;
       }
     }
-    f.k = static_cast<int>(e.params.size()) + (e.grid_path.empty() ? 0 : 1);
+    f.k = static_cast<int>(e.params.size()) - shared + (e.grid_path.empty() ? 0 : 1);
     f.delta_bic = n * std::log(f.rss / base_rss) + f.k * std::log(static_cast<double>(n));
     f.significant = f.delta_bic < kSignificantDeltaBic;
     f.fit_percent = sc.fit_percent(build_model(*sc.src, f.assignments()));
@@ -322,15 +335,61 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
                                    return std::find(opt.only.begin(), opt.only.end(), e.name) == opt.only.end();
                                  }),
                   effects.end());
+  // Re-fitted existing parameters: the baseline fits them alone, every effect with its own.
+  std::vector<EffectParam> refit;
+  if (!opt.refit.empty()) {
+    YAML::Node doc = YAML::Clone(src.doc);
+    for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+    for (const auto& path : opt.refit) {
+      const YAML::Node v = get_path(doc, path);
+      double x = 0.0;
+      try {
+        x = v ? v.as<double>() : 0.0;
+      } catch (const YAML::Exception&) {
+        throw std::invalid_argument("--refit: '" + path + "' is not a number in the model");
+      }
+      if (!v) throw std::invalid_argument("--refit: the model does not set '" + path + "'");
+      refit.push_back({path, x > 0 ? x : 1.0});
+    }
+    Effect baseline{"baseline", "the model as it is, its re-fitted parameters fitted", {}, refit, "", {}, ""};
+    const EffectFit b = fit_one(sc, baseline, d.base_rss, d.n, opt.max_iterations);
+    if (!b.ok) throw std::runtime_error("the baseline re-fit failed: " + b.note);
+    d.base_rss = b.rss;
+    d.base_fit = b.fit_percent;
+    d.base_params = b.params;
+    for (auto& p : refit) p.initial = b.params.at(p.path);
+  }
+  for (auto& e : effects) {
+    e.params.erase(std::remove_if(e.params.begin(), e.params.end(),
+                                  [&](const EffectParam& p) {
+                                    for (const auto& q : refit)
+                                      if (q.path == p.path) return true;
+                                    return false;
+                                  }),
+                   e.params.end());
+  }
+  effects.erase(std::remove_if(effects.begin(), effects.end(),
+                               [](const Effect& e) { return e.params.empty() && e.grid_path.empty(); }),
+                effects.end());
+  for (auto& e : effects) e.params.insert(e.params.end(), refit.begin(), refit.end());
   d.ranking.resize(effects.size());
 #pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t i = 0; i < effects.size(); ++i) {
-    d.ranking[i] = fit_one(sc, effects[i], d.base_rss, d.n, opt.max_iterations);
-  }
+  for (std::size_t i = 0; i < effects.size(); ++i)
+    d.ranking[i] = fit_one(sc, effects[i], d.base_rss, d.n, opt.max_iterations, static_cast<int>(refit.size()));
   std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
     return a.delta_bic < b.delta_bic;
   });
+  // Occam: an effect ranked above the simpler one it extends must fit visibly better, else the simpler goes first.
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    if (effects[i].extends.empty()) continue;
+    auto rich = std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectFit& f) { return f.effect == effects[i].name; });
+    auto simple = std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectFit& f) { return f.effect == effects[i].extends; });
+    if (rich == d.ranking.end() || simple == d.ranking.end() || simple < rich || !simple->ok) continue;
+    double gain = -INFINITY;
+    for (const auto& [c, v] : rich->fit_percent) gain = std::max(gain, v - simple->fit_percent.at(c));
+    if (gain < kNestedFitMargin) std::rotate(rich, simple, simple + 1);
+  }
   if (!d.ranking.empty() && d.ranking[0].ok && d.ranking[0].significant) d.verdict = d.ranking[0].effect;
   return d;
 }
@@ -356,7 +415,8 @@ std::string json_map(const std::map<std::string, double>& m) {
 std::string format_diagnosis_json(const Diagnosis& d) {
   std::string out = "{\n  \"mode\": \"" + std::string(replay_mode_name(d.mode)) + "\",\n";
   out += "  \"samples\": " + std::to_string(d.n) + ",\n";
-  out += "  \"baseline\": {\"fit_percent\": " + json_map(d.base_fit) + ", \"rss\": " + json_number(d.base_rss) + "},\n";
+  out += "  \"baseline\": {\"fit_percent\": " + json_map(d.base_fit) + ", \"params\": " + json_map(d.base_params) +
+         ", \"rss\": " + json_number(d.base_rss) + "},\n";
   out += "  \"ranking\": [\n";
   for (std::size_t i = 0; i < d.ranking.size(); ++i) {
     const auto& f = d.ranking[i];

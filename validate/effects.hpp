@@ -24,7 +24,12 @@ struct Effect {
   std::vector<EffectParam> params;                       // fitted by least squares
   std::string grid_path;                                 // a discrete parameter searched first ("" = none)
   std::vector<double> grid;                              // its values
+  std::string extends;                                   // the simpler effect this one contains ("" = none)
 };
+
+// How much better (percentage points of fit, on some channel) an effect must do than the simpler
+// effect it extends to be ranked above it: below this the extra parameters buy nothing a user sees.
+inline constexpr double kNestedFitMargin = 0.5;
 
 // Scales the candidates' starting values take from the base model's replay of the record.
 struct EffectScales {
