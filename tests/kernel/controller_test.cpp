@@ -80,6 +80,18 @@ TEST(Controller, LoadCompensationOpposesRootBendingMoment) {
   EXPECT_DOUBLE_EQ(loop.sample(0.0), -0.5 * 39.5e3 * 0.01);
 }
 
+TEST(Controller, LoadCompensationFromHydraulicPressureUsesTheActuatorTorque) {
+  // The seed's experimental rig: the load signal is n D (p_a - p_b), not the root moment.
+  ModelSpec s = test::rig_spec();
+  s.hydraulics.enabled = true;
+  s.controller.load_compensation = 0.5;
+  s.controller.load_signal = "pressure";
+  Loop loop(s);
+  loop.s.q[1] = 0.01;  // ignored now
+  loop.s.z[loop.bm.layout.pressure] += 2.0;  // p_a - p_b = 2 MPa
+  EXPECT_NEAR(loop.sample(0.0), -0.5 * s.hydraulics.displacement * 2.0e6, 1e-6);
+}
+
 TEST(Controller, FeedForwardTorqueEntersWithItsGain) {
   ModelSpec s = test::rig_spec();
   s.controller.feedforward = 1.0;
