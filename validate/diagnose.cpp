@@ -156,7 +156,8 @@ class ReplayCost : public ceres::CostFunction {
 
 // Least-squares fit of one effect: the grid (if any) first, then the continuous parameters.
 // `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
-EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int max_iterations, int shared = 0) {
+EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std::map<std::string, double>& base_fit, int n,
+                  int max_iterations, int shared = 0) {
   EffectFit f;
   f.effect = e.name;
   f.physics = e.physics;
@@ -241,8 +242,10 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, int n, int
     }
     f.k = static_cast<int>(e.params.size()) - shared + (e.grid_path.empty() ? 0 : 1);
     f.delta_bic = n * std::log(f.rss / base_rss) + f.k * std::log(static_cast<double>(n));
-    f.significant = f.delta_bic < kSignificantDeltaBic;
     f.fit_percent = sc.fit_percent(build_model(*sc.src, f.assignments()));
+    double gain = -INFINITY;
+    for (const auto& [c, v] : f.fit_percent) gain = std::max(gain, v - base_fit.at(c));
+    f.significant = f.delta_bic < kSignificantDeltaBic && gain >= kMinFitGain;
     f.ok = true;
   } catch (const std::exception& ex) {
     f.ok = false;
@@ -352,7 +355,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       refit.push_back({path, x > 0 ? x : 1.0});
     }
     Effect baseline{"baseline", "the model as it is, its re-fitted parameters fitted", {}, refit, "", {}, ""};
-    const EffectFit b = fit_one(sc, baseline, d.base_rss, d.n, opt.max_iterations);
+    const EffectFit b = fit_one(sc, baseline, d.base_rss, d.base_fit, d.n, opt.max_iterations);
     if (!b.ok) throw std::runtime_error("the baseline re-fit failed: " + b.note);
     d.base_rss = b.rss;
     d.base_fit = b.fit_percent;
@@ -375,7 +378,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   d.ranking.resize(effects.size());
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::size_t i = 0; i < effects.size(); ++i)
-    d.ranking[i] = fit_one(sc, effects[i], d.base_rss, d.n, opt.max_iterations, static_cast<int>(refit.size()));
+    d.ranking[i] = fit_one(sc, effects[i], d.base_rss, d.base_fit, d.n, opt.max_iterations, static_cast<int>(refit.size()));
   std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
     return a.delta_bic < b.delta_bic;

@@ -4,7 +4,8 @@
 // are ranked by the Bayesian information criterion against the base model:
 //   BIC = n ln(RSS / n) + k ln n,   Delta BIC = BIC(effect) - BIC(base),
 // with n residuals (every scored channel, each divided by its measured standard deviation) and k
-// fitted parameters. Delta BIC < -10 is "very strong" evidence (Kass and Raftery 1995): significant.
+// fitted parameters. Delta BIC < -10 is "very strong" evidence (Kass and Raftery 1995): significant,
+// when the fit also visibly improves (kMinFitGain).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -21,6 +22,9 @@
 namespace ff {
 
 inline constexpr double kSignificantDeltaBic = -10.0;
+// ... and must improve the fit of some channel by this many percentage points: on a noise-free
+// record whose residual is rounding, any parameter "explains" a share of it, and BIC alone says yes.
+inline constexpr double kMinFitGain = 0.02;
 
 // The model to diagnose: its document (so effects can be set by path) and where it came from.
 struct ModelSource {

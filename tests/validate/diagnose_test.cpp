@@ -102,6 +102,17 @@ TEST(Diagnose, RecordsWithNothingHiddenGetTheVerdictNone) {
   }
 }
 
+TEST(Diagnose, TheIndependentReferenceTraceLacksNothing) {
+  // tests/data/reference-traces: the rig computed by another implementation, no noise. Every
+  // candidate's ΔBIC on its rounding-level residual means nothing; no fit improves visibly.
+  const ModelSource base = load_model_source(kModel, {});
+  const Record r = read_record_csv(std::string(FLEXFARM_SOURCE_DIR) + "/tests/data/reference-traces/fbtb_n6_pd_0p5rad.csv",
+                                   replay_inputs(ReplayMode::kClosedLoop));
+  const Diagnosis d = diagnose(base, r, DiagnoseOptions{});
+  EXPECT_EQ(d.verdict, "none");
+  EXPECT_GT(d.base_fit.at("tip_deflection"), 99.99);
+}
+
 TEST(Diagnose, FittedCoulombFrictionMatchesTheTruthWithinItsStandardError) {
   const Diagnosis d = diagnose_hidden({"friction.coulomb=400"}, 11);
   ASSERT_EQ(d.verdict, "coulomb_friction");
