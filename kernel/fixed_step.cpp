@@ -41,6 +41,15 @@ void solve_small(int n, double* A, double* b) {
   }
 }
 
+// Joint armature gh c + gh^2 k for the implicit spring-damper terms of a stage with coefficient gh
+// (row 0: the hub, none); remade only when gh changes.
+void set_armature(const BatchModel& bm, Workspace& ws, double gh) {
+  if (ws.armature_gh == gh) return;
+  for (std::size_t j = static_cast<std::size_t>(bm.W); j < ws.armature.size(); ++j)
+    ws.armature[j] = gh * bm.joint_c[j] + gh * gh * bm.joint_k[j];
+  ws.armature_gh = gh;
+}
+
 // The hub drive's part of an SDIRK stage: solves Z = zpre + gh f(q, v, Z) for every lane by
 // simplified Newton (Jacobian df/dZ by forward differences at zpre, four iterations), with the
 // chain held at (q, v). Writes Z (nz x W); uses ws.zdot and ws.zpert.
@@ -124,15 +133,9 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
 
 void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const std::size_t n = s.q.size();
-  const int W = bm.W;
   const double g = 1.0 - 0.70710678118654752440;  // gamma
   const double gh = g * h;
-  // Joint armature h gamma c + (h gamma)^2 k: the implicit spring-damper terms (row 0: the hub, none).
-  if (ws.armature_gh != gh) {
-    for (std::size_t j = static_cast<std::size_t>(W); j < n; ++j)
-      ws.armature[j] = gh * bm.joint_c[j] + gh * gh * bm.joint_k[j];
-    ws.armature_gh = gh;
-  }
+  set_armature(bm, ws, gh);
   double* q = s.q.data();
   double* v = s.v.data();
   double* a_prev = ws.a_prev.data();
@@ -188,14 +191,8 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
 
 void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const std::size_t n = s.q.size();
-  const int W = bm.W;
   const double gh = 0.5 * h;
-  // Joint armature (h/2) c + (h/2)^2 k: the implicit spring-damper terms (row 0: the hub, none).
-  if (ws.armature_gh != gh) {
-    for (std::size_t j = static_cast<std::size_t>(W); j < n; ++j)
-      ws.armature[j] = gh * bm.joint_c[j] + gh * gh * bm.joint_k[j];
-    ws.armature_gh = gh;
-  }
+  set_armature(bm, ws, gh);
   double* q = s.q.data();
   double* v = s.v.data();
   double* a_prev = ws.a_prev.data();

@@ -16,41 +16,42 @@ std::string quote_ident(const std::string& s) {
   return out + "\"";
 }
 
-struct Db {
-  sqlite3* db = nullptr;
-  std::string path;
-  ~Db() {
-    if (db) sqlite3_close(db);
-  }
-  void exec(const std::string& sql) {
-    char* err = nullptr;
-    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
-      const std::string msg = err ? err : "unknown error";
-      sqlite3_free(err);
-      throw std::runtime_error(path + ": sqlite: " + msg);
-    }
-  }
-  sqlite3_stmt* prepare(const std::string& sql) {
-    sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr) != SQLITE_OK)
-      throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
-    return st;
-  }
-  void step(sqlite3_stmt* st) {
-    if (sqlite3_step(st) != SQLITE_DONE) throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
-    sqlite3_reset(st);
-  }
-};
 
 }  // namespace
+
+SqliteDb::SqliteDb(const std::string& file, const std::string& name) : name_(name.empty() ? file : name) {
+  if (sqlite3_open(file.c_str(), &db_) != SQLITE_OK) throw std::runtime_error(name_ + ": cannot open the database");
+}
+
+SqliteDb::~SqliteDb() { sqlite3_close(db_); }
+
+void SqliteDb::fail() const { throw std::runtime_error(name_ + ": sqlite: " + sqlite3_errmsg(db_)); }
+
+void SqliteDb::exec(const std::string& sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+    const std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw std::runtime_error(name_ + ": sqlite: " + msg);
+  }
+}
+
+sqlite3_stmt* SqliteDb::prepare(const std::string& sql) {
+  sqlite3_stmt* st = nullptr;
+  if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &st, nullptr) != SQLITE_OK) fail();
+  return st;
+}
+
+void SqliteDb::step(sqlite3_stmt* st) {
+  if (sqlite3_step(st) != SQLITE_DONE) fail();
+  sqlite3_reset(st);
+}
 
 void write_results_sqlite(const ResultTable& t, const std::map<std::string, std::string>& info, const std::string& path) {
   const std::string tmp = path + ".tmp";
   std::filesystem::remove(tmp);
   {
-    Db d;
-    d.path = path;
-    if (sqlite3_open(tmp.c_str(), &d.db) != SQLITE_OK) throw std::runtime_error(path + ": cannot create the database");
+    SqliteDb d(tmp, path);
     d.exec("BEGIN");
     d.exec("CREATE TABLE study (key TEXT PRIMARY KEY, value TEXT)");
     sqlite3_stmt* si = d.prepare("INSERT INTO study VALUES (?, ?)");

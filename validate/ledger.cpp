@@ -1,13 +1,12 @@
 #include "validate/ledger.hpp"
 
-#include <sqlite3.h>
-
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
 
 #include "plotting/plot.hpp"
+#include "results/sqlite.hpp"
 
 namespace ff {
 
@@ -32,34 +31,18 @@ std::string format_calibrated_model(const ModelSource& src, const EffectFit& fit
 
 namespace {
 
+// The model ledger's tables, on an open database.
 struct Ledger {
-  sqlite3* db = nullptr;
-  std::string path;
-  explicit Ledger(const std::string& p) : path(p) {
-    if (sqlite3_open(p.c_str(), &db) != SQLITE_OK) throw std::runtime_error(p + ": cannot open the ledger");
-    exec("CREATE TABLE IF NOT EXISTS versions (version INTEGER PRIMARY KEY, model TEXT, parent INTEGER, "
-         "effect TEXT, params TEXT, record TEXT, mode TEXT)");
-    exec("CREATE TABLE IF NOT EXISTS fits (version INTEGER, channel TEXT, fit_percent REAL, rmse REAL, "
-         "PRIMARY KEY (version, channel))");
-  }
-  ~Ledger() { sqlite3_close(db); }
-  void exec(const std::string& sql) {
-    char* err = nullptr;
-    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
-      const std::string msg = err ? err : "?";
-      sqlite3_free(err);
-      throw std::runtime_error(path + ": sqlite: " + msg);
-    }
-  }
-  sqlite3_stmt* prepare(const std::string& sql) {
-    sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr) != SQLITE_OK)
-      throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
-    return st;
+  SqliteDb db;
+  explicit Ledger(const std::string& path) : db(path) {
+    db.exec("CREATE TABLE IF NOT EXISTS versions (version INTEGER PRIMARY KEY, model TEXT, parent INTEGER, "
+            "effect TEXT, params TEXT, record TEXT, mode TEXT)");
+    db.exec("CREATE TABLE IF NOT EXISTS fits (version INTEGER, channel TEXT, fit_percent REAL, rmse REAL, "
+            "PRIMARY KEY (version, channel))");
   }
   // The latest version of a model file, or 0.
   long find(const std::string& model) {
-    sqlite3_stmt* st = prepare("SELECT MAX(version) FROM versions WHERE model = ?");
+    sqlite3_stmt* st = db.prepare("SELECT MAX(version) FROM versions WHERE model = ?");
     sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
     long v = 0;
     if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) v = sqlite3_column_int64(st, 0);
@@ -68,25 +51,25 @@ struct Ledger {
   }
   long add(const std::string& model, long parent, const std::string& effect, const std::string& params,
            const std::string& record, const std::string& mode, const std::map<std::string, Fit>& fits) {
-    sqlite3_stmt* st = prepare("INSERT INTO versions (model, parent, effect, params, record, mode) VALUES (?, ?, ?, ?, ?, ?)");
+    sqlite3_stmt* st = db.prepare("INSERT INTO versions (model, parent, effect, params, record, mode) VALUES (?, ?, ?, ?, ?, ?)");
     sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
     if (parent > 0) sqlite3_bind_int64(st, 2, parent); else sqlite3_bind_null(st, 2);
     sqlite3_bind_text(st, 3, effect.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 4, params.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 5, record.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 6, mode.c_str(), -1, SQLITE_TRANSIENT);
-    if (sqlite3_step(st) != SQLITE_DONE) throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
+    db.step(st);
     sqlite3_finalize(st);
-    const long v = sqlite3_last_insert_rowid(db);
+    const long v = sqlite3_last_insert_rowid(db.handle());
+    sqlite3_stmt* fs = db.prepare("INSERT OR REPLACE INTO fits VALUES (?, ?, ?, ?)");
     for (const auto& [c, f] : fits) {
-      sqlite3_stmt* fs = prepare("INSERT OR REPLACE INTO fits VALUES (?, ?, ?, ?)");
       sqlite3_bind_int64(fs, 1, v);
       sqlite3_bind_text(fs, 2, c.c_str(), -1, SQLITE_TRANSIENT);
       sqlite3_bind_double(fs, 3, f.percent);
       sqlite3_bind_double(fs, 4, f.rmse);
-      if (sqlite3_step(fs) != SQLITE_DONE) throw std::runtime_error(path + ": sqlite: " + sqlite3_errmsg(db));
-      sqlite3_finalize(fs);
+      db.step(fs);
     }
+    sqlite3_finalize(fs);
     return v;
   }
 };
@@ -104,7 +87,7 @@ std::string record_calibration(const std::string& ledger_path, const std::string
                                const std::string& after_path, const Model& after, const EffectFit& fit,
                                const Record& r, ReplayMode mode) {
   Ledger led(ledger_path);
-  led.exec("BEGIN");
+  led.db.exec("BEGIN");
   long parent = led.find(before_path);
   if (parent == 0) parent = led.add(before_path, 0, "base", "", r.source, replay_mode_name(mode), fits_of(before, r, mode));
   std::string params;
@@ -114,10 +97,10 @@ std::string record_calibration(const std::string& ledger_path, const std::string
     params += buf;
   }
   led.add(after_path, parent, fit.effect, params, r.source, replay_mode_name(mode), fits_of(after, r, mode));
-  led.exec("COMMIT");
+  led.db.exec("COMMIT");
 
   // Read the whole ledger back: a text table and the plot of fit % by version.
-  sqlite3_stmt* st = led.prepare(
+  sqlite3_stmt* st = led.db.prepare(
       "SELECT v.version, v.model, v.effect, f.channel, f.fit_percent, f.rmse FROM versions v JOIN fits f "
       "ON f.version = v.version ORDER BY v.version, f.channel");
   std::string text = "ledger " + ledger_path + ":\n  version  effect                     channel          fit %        RMSE  model\n";

@@ -10,6 +10,7 @@
 
 #include "kernel/simulate.hpp"
 #include "validate/compare.hpp"
+#include "validate/synthetic.hpp"
 
 namespace ff {
 namespace {
@@ -25,19 +26,7 @@ ModelSpec rig(double coulomb = 0.0) {
 }
 
 // The model's own closed-loop run as a measurement record.
-Record record_of(const Model& m) {
-  const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
-  const Trace tr = simulate(bm).traces[0];
-  Record r;
-  r.source = "simulated.csv";
-  r.t = tr.t;
-  r.columns["ref"] = tr.ref;
-  r.columns["hub_torque"] = tr.torque;
-  r.columns["hub_angle"] = tr.hub_angle;
-  r.columns["hub_rate"] = tr.hub_rate;
-  r.columns["tip_deflection"] = tr.tip_deflection;
-  return r;
-}
+Record record_of(const Model& m) { return make_synthetic_record(m, 0.0, 1); }  // noise-free
 
 const ChannelCompare& channel(const CompareResult& r, const std::string& name) {
   for (const auto& c : r.channels)

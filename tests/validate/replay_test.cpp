@@ -5,6 +5,7 @@
 
 #include "kernel/simulate.hpp"
 #include "validate/replay.hpp"
+#include "validate/synthetic.hpp"
 
 namespace ff {
 namespace {
@@ -17,18 +18,7 @@ ModelSpec rig(double payload = 328.7) {
 }
 
 // The model's own closed-loop run as a measurement record.
-Record record_of(const Model& m) {
-  const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
-  const Trace tr = simulate(bm).traces[0];
-  Record r;
-  r.t = tr.t;
-  r.columns["ref"] = tr.ref;
-  r.columns["hub_torque"] = tr.torque;
-  r.columns["hub_angle"] = tr.hub_angle;
-  r.columns["hub_rate"] = tr.hub_rate;
-  r.columns["tip_deflection"] = tr.tip_deflection;
-  return r;
-}
+Record record_of(const Model& m) { return make_synthetic_record(m, 0.0, 1); }  // noise-free
 
 TEST(Replay, ClosedLoopReplayOfTheModelsOwnRunIsExact) {
   const Model m = make_model(rig());
