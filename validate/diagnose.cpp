@@ -290,6 +290,32 @@ EffectScales make_scales(const Model& base, const Record& r, ReplayMode mode) {
   return s;
 }
 
+// `--refit auto`: of the model's existing parameters that no candidate effect fits (the beam's joint
+// stiffness and damping), the ones whose 1 % change moves the residual by more than a tenth of the
+// most sensitive one's, at most two; one batch of lanes.
+std::vector<std::string> pick_sensitive(const Scorer& sc, const ModelSource& src, const YAML::Node& doc) {
+  std::vector<std::string> paths, out;
+  for (const char* p : {"joints.stiffness", "joints.damping"}) {
+    const YAML::Node v = get_path(doc, p);
+    if (v && v.as<double>() > 0 && build_model(src).nseg > 1) paths.push_back(p);
+  }
+  if (paths.empty()) return out;
+  std::vector<Model> models = {build_model(src)};
+  for (const auto& p : paths) models.push_back(build_model(src, {assign(p, YAML::Node(1.01 * get_path(doc, p).as<double>()))}));
+  const auto r = sc.residuals(models);
+  std::vector<std::pair<double, std::string>> sens;
+  for (std::size_t j = 0; j < paths.size(); ++j) {
+    if (r[j + 1].empty() || r[0].empty()) continue;
+    double s2 = 0.0;
+    for (std::size_t i = 0; i < r[0].size(); ++i) s2 += (r[j + 1][i] - r[0][i]) * (r[j + 1][i] - r[0][i]);
+    sens.emplace_back(std::sqrt(s2), paths[j]);
+  }
+  std::sort(sens.rbegin(), sens.rend());
+  for (const auto& [v, p] : sens)
+    if (out.size() < 2 && v > 0.1 * sens[0].first) out.push_back(p);
+  return out;
+}
+
 }  // namespace
 
 std::vector<Assignment> EffectFit::assignments() const {
@@ -343,7 +369,10 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   if (!opt.refit.empty()) {
     YAML::Node doc = YAML::Clone(src.doc);
     for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
-    for (const auto& path : opt.refit) {
+    const std::vector<std::string> paths =
+        opt.refit == std::vector<std::string>{"auto"} ? pick_sensitive(sc, src, doc) : opt.refit;
+    d.refit = paths;
+    for (const auto& path : paths) {
       const YAML::Node v = get_path(doc, path);
       double x = 0.0;
       try {

@@ -58,6 +58,7 @@ struct Diagnosis {
   double base_rss = NAN;
   std::map<std::string, double> base_fit;      // fit % per channel of the base model (after its re-fit)
   std::map<std::string, double> base_params;   // the re-fitted existing parameters of the baseline
+  std::vector<std::string> refit;              // their paths (as given, or as `auto` chose them)
   std::vector<EffectFit> ranking;              // best (lowest Delta BIC) first
   std::string verdict = "none";                // the best significant effect, or "none"
 };
@@ -65,7 +66,8 @@ struct Diagnosis {
 struct DiagnoseOptions {
   ReplayMode mode = ReplayMode::kClosedLoop;
   std::vector<std::string> only;               // effects to try (empty = all that apply)
-  std::vector<std::string> refit;              // existing parameters re-fitted with the baseline and every effect
+  std::vector<std::string> refit;              // existing parameters re-fitted with the baseline and every effect;
+                                               // {"auto"}: the beam's joint stiffness and damping, by sensitivity
   int max_iterations = 25;
   int max_samples = 1500;                      // per channel: the record is decimated to at most this
 };

@@ -113,6 +113,22 @@ TEST(Diagnose, TheIndependentReferenceTraceLacksNothing) {
   EXPECT_GT(d.base_fit.at("tip_deflection"), 99.99);
 }
 
+TEST(Diagnose, AutoRefitRetunesTheBeamStiffnessWhileFittingTheEffect) {
+  // Truth: Coulomb friction and a 6 % stiffer beam than the model's. `--refit auto` picks the joint
+  // stiffness (the residual's most sensitive existing parameter) and recovers both.
+  std::vector<std::string> truth_set = kShortRun;
+  truth_set.insert(truth_set.end(), {"friction.coulomb=300", "joints.stiffness=42000"});
+  const Record r = make_synthetic_record(build_model(load_model_source(kModel, truth_set)), 0.01, 5, 5);
+  DiagnoseOptions opt;
+  opt.only = {"coulomb_friction"};
+  opt.refit = {"auto"};
+  const Diagnosis d = diagnose(load_model_source(kModel, kShortRun), r, opt);
+  ASSERT_EQ(d.refit, std::vector<std::string>{"joints.stiffness"});
+  ASSERT_EQ(d.verdict, "coulomb_friction");
+  EXPECT_NEAR(d.ranking[0].params.at("friction.coulomb"), 300.0, 6.0);
+  EXPECT_NEAR(d.ranking[0].params.at("joints.stiffness"), 42000.0, 400.0);
+}
+
 TEST(Diagnose, FittedCoulombFrictionMatchesTheTruthWithinItsStandardError) {
   const Diagnosis d = diagnose_hidden({"friction.coulomb=400"}, 11);
   ASSERT_EQ(d.verdict, "coulomb_friction");
