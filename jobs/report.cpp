@@ -153,12 +153,29 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
     plot.title = std::string(title) + " against " + x_name;
     plot.x_label = x_name;
     plot.y_label = title;
+    // Cells where nothing settled are crosses above a dashed line over the highest value, one row per case.
+    double top = 0.0;
+    for (const auto& row : cell)
+      for (double y : row)
+        if (std::isfinite(y)) top = std::max(top, y);
+    if (!(top > 0.0)) top = 1.0;
+    const double unsettled_line = 1.05 * top;
+    bool any_unsettled = false;
     for (std::size_t c = 0; c < cell.size(); ++c) {
       md += "| " + study.case_labels[c] + " |";
-      Series line;
+      Series line, unsettled;
       line.label = study.case_labels[c];
-      line.dashed = c >= 6;  // the palette repeats
+      line.colour = unsettled.colour = static_cast<int>(c);
+      line.dashed = static_cast<int>(c) >= palette_size();  // the palette repeats
+      line.marker = Series::Marker::kDot;
+      unsettled.line = false;
+      unsettled.marker = Series::Marker::kCross;
       for (std::size_t i = 0; i < xs.size(); ++i) {
+        if (std::isnan(cell[c][i])) {
+          unsettled.x.push_back(xs[i]);
+          unsettled.y.push_back(unsettled_line + (0.03 + 0.035 * static_cast<double>(c)) * top);
+          any_unsettled = true;
+        }
         char buf[32];
         const double a = std::abs(cell[c][i]);
         std::snprintf(buf, sizeof buf, a >= 100 ? " %.0f |" : (a < 0.1 && a > 0 ? " %.3g |" : " %.2f |"), cell[c][i]);
@@ -168,7 +185,9 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
       }
       md += "\n";
       plot.series.push_back(line);
+      plot.series.push_back(unsettled);
     }
+    if (any_unsettled) plot.hlines.push_back({unsettled_line, "x above: not settled", true});
     md += "\n";
     std::string file = metric;
     render_line_plot(plot, dir + "/cases_" + file_safe(file) + ".png");

@@ -67,6 +67,24 @@ Stroke series_stroke(const Series& s, int colour, const Style& st) {
 
 Stroke hline_stroke(const HLine& h, const Style& st) { return {kRefLineColour, st.px(1.5), h.dashed}; }
 
+// A marker at every finite point of s inside the plot area: a dot, or a cross (e.g. "not settled").
+void draw_markers(cv::Mat& roi, const Axes& a, const Series& s, const Stroke& k, const Style& st) {
+  if (s.marker == Series::Marker::kNone) return;
+  const double r = 4.5 * st.s + k.thickness;  // px
+  for (size_t i = 0; i < s.x.size(); ++i) {
+    if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+    const cv::Point2d c(a.ax(s.x[i]), a.ay(s.y[i]));
+    if (c.x < -r || c.y < -r || c.x > roi.cols + r || c.y > roi.rows + r) continue;
+    if (s.marker == Series::Marker::kDot) {
+      cv::circle(roi, fixed_point(c), int(std::lround(r * 16)), k.colour, cv::FILLED, cv::LINE_AA, kShift);
+    } else {
+      for (double sgn : {-1.0, 1.0})
+        cv::line(roi, fixed_point(c + cv::Point2d(-r, -sgn * r)), fixed_point(c + cv::Point2d(r, sgn * r)), k.colour,
+                 std::max(2, k.thickness), cv::LINE_AA, kShift);
+    }
+  }
+}
+
 // Draws h-lines and series into the plot area; returns the legend entries in drawing order.
 std::vector<LegendEntry> draw_line_data(cv::Mat& img, const Axes& a, const LinePlot& p, const Style& st) {
   cv::Mat roi = img(a.area);
@@ -82,7 +100,8 @@ std::vector<LegendEntry> draw_line_data(cv::Mat& img, const Axes& a, const LineP
   const auto colours = assign_colours(requested);
   for (size_t i = 0; i < p.series.size(); ++i) {
     const Stroke k = series_stroke(p.series[i], colours[i], st);
-    draw_series(roi, a, p.series[i].x, p.series[i].y, k, st);
+    if (p.series[i].line) draw_series(roi, a, p.series[i].x, p.series[i].y, k, st);
+    draw_markers(roi, a, p.series[i], k, st);
     if (!p.series[i].label.empty()) legend.push_back({hershey_text(p.series[i].label), k});
   }
   for (const auto& h : p.hlines)

@@ -37,6 +37,8 @@ struct Series {
   int colour = -1;                // palette index; -1 = next in order
   double width = 2.0;             // px at 1400 × 800; scales with the image like the text
   bool dashed = false;
+  bool line = true;               // false: markers only
+  enum class Marker { kNone, kDot, kCross } marker = Marker::kNone;  // drawn at every finite point
 };
 
 // Horizontal reference line drawn dark grey across the plot, e.g. one edge of a ±2 % settling

@@ -199,6 +199,26 @@ TEST(Plot, NanBreaksTheLine) {
   EXPECT_FALSE(colour_near(img, col(5.5), row, c));
 }
 
+TEST(Plot, MarkersOnlySeriesDrawCrossesAndNoLine) {
+  ff::LinePlot p;
+  p.x_min = 0, p.x_max = 10, p.y_min = 0, p.y_max = 1;
+  p.series = {line({2, 8}, {0.5, 0.5})};
+  p.series[0].line = false;
+  p.series[0].marker = ff::Series::Marker::kCross;
+  const ff::PlotFrame f = ff::line_plot_frame(p);
+  const Image img = render(p);
+  const ff::Rgb c = ff::palette_colour(0);
+  const int row = int(std::lround(f.y_to_px(0.5)));
+  const auto col = [&](double xv) { return int(std::lround(f.x_to_px(xv))); };
+  EXPECT_TRUE(colour_near(img, col(2), row, c));   // the crosses' centres
+  EXPECT_TRUE(colour_near(img, col(8), row, c));
+  EXPECT_FALSE(colour_near(img, col(5), row, c));  // nothing joins them
+  // A cross has arms on both diagonals: pixels 4 px up-left and up-right of its centre, none 12 px above.
+  EXPECT_TRUE(near(img.at(col(2) - 4, row - 4), c, 60));
+  EXPECT_TRUE(near(img.at(col(2) + 4, row - 4), c, 60));
+  EXPECT_FALSE(near(img.at(col(2), row - 12), c, 60));
+}
+
 TEST(Plot, DashedLinesHaveGaps) {
   ff::LinePlot p;
   p.x_min = 0, p.x_max = 10, p.y_min = 0, p.y_max = 1;
