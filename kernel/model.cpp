@@ -103,18 +103,14 @@ void validate(const ModelSpec& s, const std::string& src) {
     throw ConfigError(src, 0, "friction.stiction", "must be >= friction.coulomb (or 0 for no Stribeck peak)");
   positive(s.friction.stribeck_velocity, "friction.stribeck_velocity");
   positive(s.friction.smoothing, "friction.smoothing");
-  for (const auto& [ch, key] : {std::pair{&s.sensors.hub_angle, "sensors.hub_angle"}, {&s.sensors.hub_rate, "sensors.hub_rate"}}) {
-    non_negative(ch->resolution, (std::string(key) + ".resolution").c_str());
-    non_negative(ch->noise, (std::string(key) + ".noise").c_str());
-    if (ch->delay < 0 || ch->delay > 10000)
-      throw ConfigError(src, 0, std::string(key) + ".delay", "must be between 0 and 10000 samples");
-  }
-  // Recorded sensors: every value checked, enabled or not; the rate must divide controller.rate.
-  const std::pair<const RecordedChannelSpec*, const char*> recorded[] = {
+  // Every sensor's values checked, recorded ones enabled or not; a rate must divide controller.rate.
+  const std::pair<const ChannelSpec*, const char*> channels[] = {
+      {&s.sensors.hub_angle, "sensors.hub_angle"},
+      {&s.sensors.hub_rate, "sensors.hub_rate"},
       {&s.sensors.strain_gauge, "sensors.strain_gauge"},
       {&s.sensors.tip_accelerometer, "sensors.tip_accelerometer"},
       {&s.sensors.tip_position, "sensors.tip_position"}};
-  for (const auto& [ch, key] : recorded) {
+  for (const auto& [ch, key] : channels) {
     const std::string k(key);
     non_negative(ch->resolution, (k + ".resolution").c_str());
     non_negative(ch->noise, (k + ".noise").c_str());
@@ -184,7 +180,13 @@ void validate(const ModelSpec& s, const std::string& src) {
 BodyInertia make_tip_body(const Model& m, double mass, double inertia) {
   const int i = m.nseg - 1;
   const double li = m.seg_length[i], mi = m.seg_mass[i];
-  return {mi + mass, mi * 0.5 * li + mass * li, m.seg_inertia[i] + mi * 0.25 * li * li + inertia + mass * li * li};
+  // The segment about its joint (parallel axis), the hub on a one-segment arm, then the payload at the tip.
+  BodyInertia b{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
+  if (i == 0) b.inertia += m.spec.hub_inertia;
+  b.mass += mass;
+  b.first += mass * li;
+  b.inertia += inertia + mass * li * li;
+  return b;
 }
 
 Model make_model(const ModelSpec& spec, const std::string& source) {
@@ -209,18 +211,15 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     m.seg_inertia.push_back(mi * (li * li + b.thickness * b.thickness) / 12.0);
   }
 
-  // Body inertias about each joint axis: segment (parallel axis), hub on body 0, payload at the tip of body N-1.
-  for (int i = 0; i < n; ++i) {
+  // Body inertias about each joint axis: segment (parallel axis), hub on body 0, payload at the tip of body N-1
+  // (make_tip_body, which payload events use too).
+  for (int i = 0; i < n - 1; ++i) {
     const double li = m.seg_length[i], mi = m.seg_mass[i];
     BodyInertia bi{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
     if (i == 0) bi.inertia += spec.hub_inertia;
-    if (i == n - 1) {
-      bi.mass += spec.payload_mass;
-      bi.first += spec.payload_mass * li;
-      bi.inertia += spec.payload_inertia + spec.payload_mass * li * li;
-    }
     m.body.push_back(bi);
   }
+  m.body.push_back(make_tip_body(m, spec.payload_mass, spec.payload_inertia));
 
   // Joint springs and dampers scale as reference_cell / l (k = kappa EI / l).
   const double scale = spec.joints.reference_cell / m.cell;

@@ -52,21 +52,18 @@ struct NotchSpec {
   double omega_z[2] = {0.0, 0.0}; // rad/s; 0 = place at the computed closed-loop resonances
 };
 
-// One measured channel: quantised to `resolution`, with Gaussian noise and a delay in samples.
+// One measured channel: sampled and held at `rate`, quantised to `resolution`, with Gaussian noise
+// and a delay in controller samples (kernel/sensors.hpp).
 struct ChannelSpec {
   double resolution = 0.0;        // quantum, in the channel's unit; 0 = none
   double noise = 0.0;             // standard deviation, in the channel's unit; 0 = none
   int delay = 0;                  // controller samples
+  double rate = 0.0;              // sample rate, Hz; must divide controller.rate; 0 = controller.rate
 };
 
 // A recorded channel (off by default): written to the trace at every controller sample, not fed back.
-// Sampled and held at `rate`, then quantised, noisy and delayed like ChannelSpec.
-struct RecordedChannelSpec {
+struct RecordedChannelSpec : ChannelSpec {
   bool enabled = false;
-  double resolution = 0.0;        // quantum, in the channel's unit; 0 = none
-  double noise = 0.0;             // standard deviation, in the channel's unit; 0 = none
-  int delay = 0;                  // controller samples
-  double rate = 0.0;              // sample rate, Hz; must divide controller.rate; 0 = controller.rate
 };
 
 // Strain gauge at a beam joint: the elastic bending moment k_i q_i + k3_i q_i^3 (N·m) and the tip
@@ -226,7 +223,7 @@ struct Model {
   double rigid_inertia = 0.0;            // the straight arm's inertia about the hub axis, M_00(q = 0), kg·m^2
 };
 
-// The tip body (last segment with a payload of `mass`, `inertia`) in its joint frame.
+// The tip body (last segment with a payload of `mass`, `inertia`; with the hub when N = 1) in its joint frame.
 BodyInertia make_tip_body(const Model& m, double mass, double inertia);
 
 // Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.

@@ -378,6 +378,24 @@ TEST(ModelIo, SensorRateNotDividingTheControllerRateIsRejected) {
                   "must divide controller.rate");
 }
 
+TEST(ModelIo, ControllerSensorRatesParse) {
+  const ff::Model m =
+      ff::parse_model(YAML::Load(with_sensors("{hub_angle: {rate: 250, delay: 1}, hub_rate: {rate: 500}}")), "good.yaml");
+  EXPECT_DOUBLE_EQ(m.spec.sensors.hub_angle.rate, 250.0);
+  EXPECT_EQ(m.spec.sensors.hub_angle.delay, 1);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.hub_rate.rate, 500.0);
+}
+
+TEST(ModelIo, ControllerSensorRateNotDividingTheControllerRateIsRejected) {
+  expect_rejected(with_sensors("{hub_angle: {rate: 300}}"), 12, "sensors.hub_angle.rate",
+                  "must divide controller.rate = 1000 Hz a whole number of times, got 300 Hz");
+  expect_rejected(with_sensors("{hub_rate: {rate: -250}}"), 12, "sensors.hub_rate.rate", ">= 0");
+}
+
+TEST(ModelIo, EnabledKeyBelongsToTheRecordedSensorsOnly) {
+  expect_rejected(with_sensors("{hub_angle: {enabled: true}}"), 12, "sensors.hub_angle.enabled", "unknown key");
+}
+
 TEST(ModelIo, NegativeRecordedDelayIsRejected) {
   expect_rejected(with_sensors("{strain_gauge: {delay: -1}}"), 12, "sensors.strain_gauge.delay", "between 0 and 10000");
 }
