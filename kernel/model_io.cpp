@@ -59,6 +59,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   payload.required("mass", s.payload_mass);
   payload.required("inertia", s.payload_inertia);
   for (auto& ev : payload.sequence("events")) {
+    ev.only({"time", "mass", "inertia"});  // a misspelt key is unknown, not a missing one
     PayloadEvent e;
     ev.required("time", e.time);
     ev.required("mass", e.mass);
@@ -195,10 +196,15 @@ Model parse_model(const YAML::Node& doc, const std::string& source) {
   try {
     return make_model(spec, source);
   } catch (const ConfigError& e) {
-    // Point a range error at the line of its key.
+    // Point a range error at the line of its key, or of the nearest block above it that the file has
+    // (a key left at its default has no line: friction.coulomb -> friction).
     if (e.line() > 0) throw;
-    auto it = lines.find(e.key());
-    const int line = it != lines.end() ? it->second : 0;
+    int line = 0;
+    for (std::string key = e.key(); !key.empty() && line == 0;) {
+      if (auto it = lines.find(key); it != lines.end()) line = it->second;
+      const auto dot = key.find_last_of(".[");
+      key.resize(dot == std::string::npos ? 0 : dot);
+    }
     throw ConfigError(source, line, e.key(), e.message());
   }
 }
