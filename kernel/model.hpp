@@ -35,7 +35,8 @@ struct ControllerSpec {
   double ki = 0.0;                // N·m/(rad·s)
   double kd = 3.0e4;              // N·m·s/rad, acts on the measured hub rate
   double torque_limit = 0.0;      // |tau| bound, N·m; 0 = unlimited
-  double load_compensation = 0.0; // gain on the measured root bending moment fed forward (seed, "load compensation")
+  double load_compensation = 0.0; // gain on the root bending moment fed forward (seed, "load compensation"): the model's
+                                  // true k1 q1 + k3_1 q1^3 + c1 q1', not a sensor reading (or the pressure signal)
   double feedforward = 0.0;       // gain f on the model-based feed-forward f (J_rigid r'' + kd r') (1 = full)
   std::string load_signal = "moment";  // load compensation from the root bending "moment" or the hydraulic "pressure" (n D dp)
 };
