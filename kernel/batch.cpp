@@ -31,6 +31,10 @@ NotchDesign make_notch_design(const Model& m) {
   return d;
 }
 
+int calc_sensor_hold(const ChannelSpec& ch, double controller_rate) {
+  return ch.rate > 0 ? static_cast<int>(std::lround(controller_rate / ch.rate)) : 1;
+}
+
 BatchModel make_batch(std::span<const Model> models) {
   if (models.empty()) throw std::invalid_argument("make_batch: no models");
   if (models.size() > static_cast<std::size_t>(kMaxLanes)) throw std::invalid_argument("make_batch: more than kMaxLanes lanes");
@@ -98,9 +102,11 @@ BatchModel make_batch(std::span<const Model> models) {
     for (int c = 0; c < 2; ++c) {
       bm.sensor_resolution[c].push_back(ch[c]->resolution);
       bm.sensor_noise[c].push_back(ch[c]->noise);
+      const int hold = calc_sensor_hold(*ch[c], m.spec.controller.rate);
       bm.sensor_delay[c].push_back(ch[c]->delay);
+      bm.sensor_hold[c].push_back(hold);
       bm.sensor_key[c].push_back(calc_variant_seed(m.spec.simulation.seed, static_cast<std::uint64_t>(c)));
-      bm.sensor_history = std::max(bm.sensor_history, ch[c]->delay + 1);
+      bm.sensor_history = std::max(bm.sensor_history, ch[c]->delay + hold);
     }
   }
   for (const auto& m : models) {
@@ -108,7 +114,7 @@ BatchModel make_batch(std::span<const Model> models) {
     const RecordedChannelSpec* ch[kRecordedChannels] = {&ss.strain_gauge, &ss.tip_accelerometer, &ss.tip_position};
     for (int c = 0; c < kRecordedChannels; ++c) {
       bm.rec_enabled[c] = ch[c]->enabled;
-      const int hold = ch[c]->rate > 0 ? static_cast<int>(std::lround(m.spec.controller.rate / ch[c]->rate)) : 1;
+      const int hold = calc_sensor_hold(*ch[c], m.spec.controller.rate);
       bm.rec_resolution[c].push_back(ch[c]->resolution);
       bm.rec_noise[c].push_back(ch[c]->noise);
       bm.rec_delay[c].push_back(ch[c]->delay);

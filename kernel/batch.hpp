@@ -48,11 +48,12 @@ struct BatchModel {
   std::vector<char> notch_feedback; // (W) 1: the notch filters the measured hub angle, 0: the reference
   // Hub friction (W each): viscous b, Coulomb Fc, Stribeck excess Fs - Fc, 1/vs, 1/eps.
   std::vector<double> fric_b, fric_c, fric_s, fric_inv_vs, fric_inv_eps;
-  // Sensors, per channel (0 hub angle, 1 hub rate) and lane: quantum, noise std, delay, noise key.
+  // Sensors, per channel (0 hub angle, 1 hub rate) and lane: quantum, noise std, delay (samples),
+  // hold (controller samples per sensor sample), noise key.
   std::vector<double> sensor_resolution[2], sensor_noise[2];  // (W)
-  std::vector<int> sensor_delay[2];                           // (W), samples
+  std::vector<int> sensor_delay[2], sensor_hold[2];           // (W)
   std::vector<std::uint64_t> sensor_key[2];                   // (W)
-  int sensor_history = 1;           // ring length: the largest delay + 1
+  int sensor_history = 1;           // ring length: the largest delay + hold
   // Recorded sensors: which ones the lanes have (the same in every lane), then per channel and lane:
   // quantum, noise std, delay (samples), hold (controller samples per sensor sample), noise key.
   bool rec_enabled[kRecordedChannels] = {};
@@ -70,6 +71,9 @@ struct BatchModel {
 // hub drive parts, recorded sensors enabled)
 // into lanes. Throws std::invalid_argument when shapes differ.
 BatchModel make_batch(std::span<const Model> models);
+
+// Controller samples per sample of a sensor channel: controller.rate / rate (1 when rate = 0).
+int calc_sensor_hold(const ChannelSpec& ch, double controller_rate);
 
 // The continuous notch filter (seed eq. 6) a model asks for, with its zeros in place.
 NotchDesign make_notch_design(const Model& m);

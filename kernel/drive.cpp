@@ -162,7 +162,8 @@ double lane_drive(const BatchModel& bm, int l, const double* q, const double* v,
   if (L.shaft >= 0) {
     // Gear n, free play and compliance between shaft and hub; efficiency loses power in either direction.
     const double ts = calc_transmission_torque(p, th_p / p.n - th_h, w_p / p.n - w_h);
-    const double driving = 0.5 * (1.0 + std::tanh(ts * w_p / p.n));  // 1 when the shaft powers the load (1 W scale)
+    // s = 1/2 (1 + tanh(P / 1 W)), P = tau_s w_p / n the power to the load: 1 driving, 0 driven, 1/2 at rest.
+    const double driving = 0.5 * (1.0 + std::tanh(ts * w_p / p.n));
     const double reaction = ts / p.n * (driving / p.eta + (1.0 - driving) * p.eta);
     set(L.shaft, w_p);
     set(L.shaft + 1, (tau_p - reaction) / p.ja);

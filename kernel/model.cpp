@@ -82,6 +82,11 @@ void validate(const ModelSpec& s, const std::string& src) {
     throw ConfigError(src, 0, "notch.omega_z", "give both zero frequencies or neither");
   if (s.notch.placement != "reference" && s.notch.placement != "feedback")
     throw ConfigError(src, 0, "notch.placement", "unknown placement '" + s.notch.placement + "' (reference, feedback)");
+  non_negative(s.shaper.frequency, "shaper.frequency");
+  if (!(s.shaper.damping < 1.0) || !std::isfinite(s.shaper.damping))
+    throw ConfigError(src, 0, "shaper.damping", "must be < 1 (negative = the resonance's), got " + std::to_string(s.shaper.damping));
+  if (!(s.shaper.vtol > 0.0 && s.shaper.vtol < 0.5))
+    throw ConfigError(src, 0, "shaper.vtol", "must be in (0, 0.5), got " + std::to_string(s.shaper.vtol));
   positive(s.trajectory.move_time, "trajectory.move_time");
   double previous = 0.0;
   for (std::size_t j = 0; j < s.trajectory.moves.size(); ++j) {
@@ -103,18 +108,14 @@ void validate(const ModelSpec& s, const std::string& src) {
     throw ConfigError(src, 0, "friction.stiction", "must be >= friction.coulomb (or 0 for no Stribeck peak)");
   positive(s.friction.stribeck_velocity, "friction.stribeck_velocity");
   positive(s.friction.smoothing, "friction.smoothing");
-  for (const auto& [ch, key] : {std::pair{&s.sensors.hub_angle, "sensors.hub_angle"}, {&s.sensors.hub_rate, "sensors.hub_rate"}}) {
-    non_negative(ch->resolution, (std::string(key) + ".resolution").c_str());
-    non_negative(ch->noise, (std::string(key) + ".noise").c_str());
-    if (ch->delay < 0 || ch->delay > 10000)
-      throw ConfigError(src, 0, std::string(key) + ".delay", "must be between 0 and 10000 samples");
-  }
-  // Recorded sensors: every value checked, enabled or not; the rate must divide controller.rate.
-  const std::pair<const RecordedChannelSpec*, const char*> recorded[] = {
+  // Every sensor's values checked, recorded ones enabled or not; a rate must divide controller.rate.
+  const std::pair<const ChannelSpec*, const char*> channels[] = {
+      {&s.sensors.hub_angle, "sensors.hub_angle"},
+      {&s.sensors.hub_rate, "sensors.hub_rate"},
       {&s.sensors.strain_gauge, "sensors.strain_gauge"},
       {&s.sensors.tip_accelerometer, "sensors.tip_accelerometer"},
       {&s.sensors.tip_position, "sensors.tip_position"}};
-  for (const auto& [ch, key] : recorded) {
+  for (const auto& [ch, key] : channels) {
     const std::string k(key);
     non_negative(ch->resolution, (k + ".resolution").c_str());
     non_negative(ch->noise, (k + ".noise").c_str());
@@ -138,17 +139,18 @@ void validate(const ModelSpec& s, const std::string& src) {
   positive(s.simulation.atol, "simulation.atol");
   if (s.friction.model != "static" && s.friction.model != "lugre")
     throw ConfigError(src, 0, "friction.model", "unknown model '" + s.friction.model + "' (static, lugre)");
-  if (s.friction.model == "lugre") {
-    positive(s.friction.coulomb, "friction.coulomb");
-    positive(s.friction.bristle_stiffness, "friction.bristle_stiffness");
-    non_negative(s.friction.bristle_damping, "friction.bristle_damping");
-  }
+  positive(s.friction.bristle_stiffness, "friction.bristle_stiffness");
+  non_negative(s.friction.bristle_damping, "friction.bristle_damping");
+  if (s.friction.model == "lugre" && !(s.friction.coulomb > 0))
+    throw ConfigError(src, 0, "friction.model", "lugre needs friction.coulomb > 0 (the level the bristles slip at), got " +
+                                                    std::to_string(s.friction.coulomb));
   if (s.controller.load_signal != "moment" && s.controller.load_signal != "pressure")
     throw ConfigError(src, 0, "controller.load_signal", "unknown signal '" + s.controller.load_signal + "' (moment, pressure)");
   if (s.controller.load_signal == "pressure" && !s.hydraulics.enabled)
     throw ConfigError(src, 0, "controller.load_signal", "'pressure' needs hydraulics.enabled: true");
+  // The hub drive's values are checked whether its parts are enabled or not (as the recorded sensors').
   const auto& h = s.hydraulics;
-  if (h.enabled) {
+  {
     positive(h.displacement, "hydraulics.displacement");
     positive(h.chamber_volume, "hydraulics.chamber_volume");
     positive(h.bulk_modulus, "hydraulics.bulk_modulus");
@@ -168,7 +170,7 @@ void validate(const ModelSpec& s, const std::string& src) {
     non_negative(h.pressure_gain, "hydraulics.pressure_gain");
   }
   const auto& d = s.drive;
-  if (d.enabled) {
+  {
     positive(d.inertia, "drive.inertia");
     positive(d.ratio, "drive.ratio");
     if (!(d.efficiency > 0 && d.efficiency <= 1)) throw ConfigError(src, 0, "drive.efficiency", "must be in (0, 1]");
@@ -184,7 +186,13 @@ void validate(const ModelSpec& s, const std::string& src) {
 BodyInertia make_tip_body(const Model& m, double mass, double inertia) {
   const int i = m.nseg - 1;
   const double li = m.seg_length[i], mi = m.seg_mass[i];
-  return {mi + mass, mi * 0.5 * li + mass * li, m.seg_inertia[i] + mi * 0.25 * li * li + inertia + mass * li * li};
+  // The segment about its joint (parallel axis), the hub on a one-segment arm, then the payload at the tip.
+  BodyInertia b{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
+  if (i == 0) b.inertia += m.spec.hub_inertia;
+  b.mass += mass;
+  b.first += mass * li;
+  b.inertia += inertia + mass * li * li;
+  return b;
 }
 
 Model make_model(const ModelSpec& spec, const std::string& source) {
@@ -209,18 +217,15 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     m.seg_inertia.push_back(mi * (li * li + b.thickness * b.thickness) / 12.0);
   }
 
-  // Body inertias about each joint axis: segment (parallel axis), hub on body 0, payload at the tip of body N-1.
-  for (int i = 0; i < n; ++i) {
+  // Body inertias about each joint axis: segment (parallel axis), hub on body 0, payload at the tip of body N-1
+  // (make_tip_body, which payload events use too).
+  for (int i = 0; i < n - 1; ++i) {
     const double li = m.seg_length[i], mi = m.seg_mass[i];
     BodyInertia bi{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
     if (i == 0) bi.inertia += spec.hub_inertia;
-    if (i == n - 1) {
-      bi.mass += spec.payload_mass;
-      bi.first += spec.payload_mass * li;
-      bi.inertia += spec.payload_inertia + spec.payload_mass * li * li;
-    }
     m.body.push_back(bi);
   }
+  m.body.push_back(make_tip_body(m, spec.payload_mass, spec.payload_inertia));
 
   // Joint springs and dampers scale as reference_cell / l (k = kappa EI / l).
   const double scale = spec.joints.reference_cell / m.cell;
@@ -281,17 +286,24 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     if (w == 0.0) w = first->omega_n;
     if (z < 0.0) z = first->zeta;
   }
+  // What validate() cannot see (the designs on the computed resonances) the kernels check; their
+  // messages start "<block>: ".
+  auto design_error = [&](const std::string& block, const std::exception& e) {
+    std::string message = e.what();
+    if (message.rfind(block + ": ", 0) == 0) message.erase(0, block.size() + 2);
+    return ConfigError(source, 0, block, message);
+  };
   try {
     m.shaper = make_shaper(kind, w, z, spec.shaper.vtol);
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(source, 0, "shaper", e.what());
+    throw design_error("shaper", e);
   }
 
   if (spec.notch.enabled) {
     try {
       make_notch_sections(make_notch_design(m), m.control_period);
     } catch (const std::invalid_argument& e) {
-      throw ConfigError(source, 0, "notch", e.what());
+      throw design_error("notch", e);
     }
   }
   return m;

@@ -35,7 +35,8 @@ struct ControllerSpec {
   double ki = 0.0;                // N·m/(rad·s)
   double kd = 3.0e4;              // N·m·s/rad, acts on the measured hub rate
   double torque_limit = 0.0;      // |tau| bound, N·m; 0 = unlimited
-  double load_compensation = 0.0; // gain on the measured root bending moment fed forward (seed, "load compensation")
+  double load_compensation = 0.0; // gain on the root bending moment fed forward (seed, "load compensation"): the model's
+                                  // true k1 q1 + k3_1 q1^3 + c1 q1', not a sensor reading (or the pressure signal)
   double feedforward = 0.0;       // gain f on the model-based feed-forward f (J_rigid r'' + kd r') (1 = full)
   std::string load_signal = "moment";  // load compensation from the root bending "moment" or the hydraulic "pressure" (n D dp)
 };
@@ -52,21 +53,18 @@ struct NotchSpec {
   double omega_z[2] = {0.0, 0.0}; // rad/s; 0 = place at the computed closed-loop resonances
 };
 
-// One measured channel: quantised to `resolution`, with Gaussian noise and a delay in samples.
+// One measured channel: sampled and held at `rate`, quantised to `resolution`, with Gaussian noise
+// and a delay in controller samples (kernel/sensors.hpp).
 struct ChannelSpec {
   double resolution = 0.0;        // quantum, in the channel's unit; 0 = none
   double noise = 0.0;             // standard deviation, in the channel's unit; 0 = none
   int delay = 0;                  // controller samples
+  double rate = 0.0;              // sample rate, Hz; must divide controller.rate; 0 = controller.rate
 };
 
 // A recorded channel (off by default): written to the trace at every controller sample, not fed back.
-// Sampled and held at `rate`, then quantised, noisy and delayed like ChannelSpec.
-struct RecordedChannelSpec {
+struct RecordedChannelSpec : ChannelSpec {
   bool enabled = false;
-  double resolution = 0.0;        // quantum, in the channel's unit; 0 = none
-  double noise = 0.0;             // standard deviation, in the channel's unit; 0 = none
-  int delay = 0;                  // controller samples
-  double rate = 0.0;              // sample rate, Hz; must divide controller.rate; 0 = controller.rate
 };
 
 // Strain gauge at a beam joint: the elastic bending moment k_i q_i + k3_i q_i^3 (N·m) and the tip
@@ -226,7 +224,7 @@ struct Model {
   double rigid_inertia = 0.0;            // the straight arm's inertia about the hub axis, M_00(q = 0), kg·m^2
 };
 
-// The tip body (last segment with a payload of `mass`, `inertia`) in its joint frame.
+// The tip body (last segment with a payload of `mass`, `inertia`; with the hub when N = 1) in its joint frame.
 BodyInertia make_tip_body(const Model& m, double mass, double inertia);
 
 // Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.

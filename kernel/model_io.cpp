@@ -59,6 +59,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   payload.required("mass", s.payload_mass);
   payload.required("inertia", s.payload_inertia);
   for (auto& ev : payload.sequence("events")) {
+    ev.only({"time", "mass", "inertia"});  // a misspelt key is unknown, not a missing one
     PayloadEvent e;
     ev.required("time", e.time);
     ev.required("mass", e.mass);
@@ -96,24 +97,25 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   shaper.finish();
 
   auto sensors = top.child("sensors");
-  for (const auto& [name, ch] : {std::pair{"hub_angle", &s.sensors.hub_angle}, {"hub_rate", &s.sensors.hub_rate}}) {
+  // Every channel: resolution, noise, delay, rate; the recorded ones can be enabled, the strain gauge placed.
+  auto& ss = s.sensors;
+  const struct {
+    const char* name;
+    ChannelSpec* ch;
+    bool* enabled;  // recorded sensors only
+  } channels[] = {{"hub_angle", &ss.hub_angle, nullptr},
+                  {"hub_rate", &ss.hub_rate, nullptr},
+                  {"strain_gauge", &ss.strain_gauge, &ss.strain_gauge.enabled},
+                  {"tip_accelerometer", &ss.tip_accelerometer, &ss.tip_accelerometer.enabled},
+                  {"tip_position", &ss.tip_position, &ss.tip_position.enabled}};
+  for (const auto& [name, ch, enabled] : channels) {
     auto c = sensors.child(name);
-    c.optional("resolution", ch->resolution);
-    c.optional("noise", ch->noise);
-    c.optional("delay", ch->delay);
-    c.finish();
-  }
-  const std::pair<const char*, RecordedChannelSpec*> recorded[] = {{"strain_gauge", &s.sensors.strain_gauge},
-                                                                   {"tip_accelerometer", &s.sensors.tip_accelerometer},
-                                                                   {"tip_position", &s.sensors.tip_position}};
-  for (const auto& [name, ch] : recorded) {
-    auto c = sensors.child(name);
-    c.optional("enabled", ch->enabled);
     c.optional("resolution", ch->resolution);
     c.optional("noise", ch->noise);
     c.optional("delay", ch->delay);
     c.optional("rate", ch->rate);
-    if (ch == &s.sensors.strain_gauge) c.optional("joint", s.sensors.strain_gauge.joint);
+    if (enabled) c.optional("enabled", *enabled);
+    if (ch == &ss.strain_gauge) c.optional("joint", ss.strain_gauge.joint);
     c.finish();
   }
   sensors.finish();
@@ -194,10 +196,15 @@ Model parse_model(const YAML::Node& doc, const std::string& source) {
   try {
     return make_model(spec, source);
   } catch (const ConfigError& e) {
-    // Point a range error at the line of its key.
+    // Point a range error at the line of its key, or of the nearest block above it that the file has
+    // (a key left at its default has no line: friction.coulomb -> friction).
     if (e.line() > 0) throw;
-    auto it = lines.find(e.key());
-    const int line = it != lines.end() ? it->second : 0;
+    int line = 0;
+    for (std::string key = e.key(); !key.empty() && line == 0;) {
+      if (auto it = lines.find(key); it != lines.end()) line = it->second;
+      const auto dot = key.find_last_of(".[");
+      key.resize(dot == std::string::npos ? 0 : dot);
+    }
     throw ConfigError(source, line, e.key(), e.message());
   }
 }

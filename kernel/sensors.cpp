@@ -7,24 +7,33 @@
 
 namespace ff {
 
+namespace {
+
+// One channel of lane l at sample k: the reading y = Q(x + sigma n), n ~ N(0, 1) from the counter-based
+// stream `key` at sample k, goes into the ring (H x W); returned is what the channel gives now, the
+// reading of the last sensor sample j = n floor((k - d) / n) <= k - d (delay d, hold n), or the first
+// reading while k < d.
+double sample_channel(double x, double sigma, std::uint64_t key, double quantum, long d, long n, long k, int H, int W,
+                      int l, double* ring) {
+  double y = x;
+  if (sigma > 0.0) y += sigma * CounterRng(key, k).normal();
+  if (quantum > 0.0) y = quantum * std::nearbyint(y / quantum);
+  ring[(k % H) * W + l] = y;
+  const long j = k >= d ? (k - d) / n * n : 0;
+  return ring[(j % H) * W + l];
+}
+
+}  // namespace
+
 void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle, double* hub_rate) {
   const int W = bm.W, H = bm.sensor_history;
   const long k = s.sample;
   const double* truth[2] = {s.q.data(), s.v.data()};  // row 0: the hub
   double* out[2] = {hub_angle, hub_rate};
-  for (int c = 0; c < 2; ++c) {
-    double* ring = s.measured[c].data();
-    for (int l = 0; l < W; ++l) {
-      // y = Q(x + sigma n), n ~ N(0, 1) from the counter-based stream (seed, channel) at sample k.
-      double y = truth[c][l];
-      if (bm.sensor_noise[c][l] > 0.0) y += bm.sensor_noise[c][l] * CounterRng(bm.sensor_key[c][l], k).normal();
-      const double q = bm.sensor_resolution[c][l];
-      if (q > 0.0) y = q * std::nearbyint(y / q);
-      ring[(k % H) * W + l] = y;
-      const int d = bm.sensor_delay[c][l];
-      out[c][l] = ring[(k >= d ? (k - d) % H : 0) * W + l];
-    }
-  }
+  for (int c = 0; c < 2; ++c)
+    for (int l = 0; l < W; ++l)
+      out[c][l] = sample_channel(truth[c][l], bm.sensor_noise[c][l], bm.sensor_key[c][l], bm.sensor_resolution[c][l],
+                                 bm.sensor_delay[c][l], bm.sensor_hold[c][l], k, H, W, l, s.measured[c].data());
 }
 
 const char* recorded_column_name(RecordedColumn c) {
@@ -60,19 +69,9 @@ void compute_recorded_sensors(const BatchModel& bm, BatchState& s, Workspace& ws
     } else {
       compute_tip(bm, q, truth, angle, ws);
     }
-    double* ring = s.recorded[c].data();
-    for (int l = 0; l < W; ++l) {
-      // y = Q(x + sigma n), n ~ N(0, 1) from the counter-based stream (seed, 2 + c) at sample k.
-      double y = truth[l];
-      if (bm.rec_noise[c][l] > 0.0) y += bm.rec_noise[c][l] * CounterRng(bm.rec_key[c][l], k).normal();
-      const double res = bm.rec_resolution[c][l];
-      if (res > 0.0) y = res * std::nearbyint(y / res);
-      ring[(k % H) * W + l] = y;
-      // Delay d, then hold: the reading of the last sensor sample j = n floor((k - d) / n) <= k - d.
-      const long d = bm.rec_delay[c][l], n = bm.rec_hold[c][l];
-      const long j = k >= d ? (k - d) / n * n : 0;
-      y_out[l] = ring[(j % H) * W + l];
-    }
+    for (int l = 0; l < W; ++l)
+      y_out[l] = sample_channel(truth[l], bm.rec_noise[c][l], bm.rec_key[c][l], bm.rec_resolution[c][l],
+                                bm.rec_delay[c][l], bm.rec_hold[c][l], k, H, W, l, s.recorded[c].data());
   }
   if (bm.rec_enabled[kStrainGauge])
     for (int l = 0; l < W; ++l) out[kStrainTipEstimate * W + l] = bm.strain_gain[l] * out[kStrainMoment * W + l];

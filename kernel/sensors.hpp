@@ -1,8 +1,8 @@
-// The controller's sensors: each measured channel (hub angle, hub rate) is the true value plus
-// Gaussian noise, quantised, and delayed by whole controller samples. Noise is a pure function of
-// (the model's seed, channel, sample): runs repeat bit for bit on any machine. The recorded sensors
-// (strain gauge, tip accelerometer, tip position) work alike, sampled and held at their own rate,
-// and go to the trace only.
+// The sensors: each channel is the true value plus Gaussian noise, quantised, sampled and held at its
+// own rate and delayed by whole controller samples. Noise is a pure function of (the model's seed,
+// channel, sample): runs repeat bit for bit on any machine. The controller's sensors (hub angle and
+// rate) feed the controller; the recorded sensors (strain gauge, tip accelerometer, tip position)
+// go to the trace only.
 #pragma once
 
 #include "kernel/batch.hpp"
@@ -10,8 +10,9 @@
 namespace ff {
 
 // Takes this sample's measurement of every lane (s.sample, s.q, s.v), stores it in the ring
-// s.measured, and writes what the controller sees now (W each): the measurement `delay` samples
-// old, or the first one while the run is younger than the delay.
+// s.measured, and writes what the controller sees now (W each): the measurement of sample
+// n floor((k - d) / n) (d = delay, n = hold = controller rate / sensor rate), or the first one while
+// the run is younger than the delay; as the recorded sensors below.
 void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle, double* hub_rate);
 
 // Trace columns of the recorded sensors (rows of compute_recorded_sensors' output), in order.

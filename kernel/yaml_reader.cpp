@@ -1,5 +1,6 @@
 #include "kernel/yaml_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -120,12 +121,21 @@ std::vector<YamlReader> YamlReader::sequence(const std::string& key, bool requir
   return out;
 }
 
-void YamlReader::finish() const {
+template <class Known>
+void YamlReader::reject_unknown(Known known) const {
   if (!node_ || !node_.IsMap()) return;
   for (const auto& kv : node_) {
     const auto key = kv.first.as<std::string>();
-    if (!used_.count(key)) throw ConfigError(file_, line_of(kv.first), full_key(key), "unknown key");
+    if (!known(key)) throw ConfigError(file_, line_of(kv.first), full_key(key), "unknown key");
   }
+}
+
+void YamlReader::finish() const {
+  reject_unknown([&](const std::string& key) { return used_.count(key) > 0; });
+}
+
+void YamlReader::only(std::initializer_list<std::string> known) const {
+  reject_unknown([&](const std::string& key) { return std::find(known.begin(), known.end(), key) != known.end(); });
 }
 
 YAML::Node load_yaml_file(const std::string& path) {

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <initializer_list>
 #include <map>
 #include <set>
 #include <string>
@@ -37,6 +38,9 @@ class YamlReader {
   std::vector<YamlReader> sequence(const std::string& key, bool required = false);
   // Throws for any key that was not read.
   void finish() const;
+  // Throws for any key not in `known`, before they are read: a misspelt required key is then reported
+  // as the unknown key it is rather than as a missing one.
+  void only(std::initializer_list<std::string> known) const;
 
   [[noreturn]] void fail(const std::string& key, const std::string& message) const;
   const std::string& file() const { return file_; }
@@ -46,6 +50,9 @@ class YamlReader {
  private:
   // The value of `key` (marked as read); an absent required key is an error.
   YAML::Node value(const std::string& key, bool required);
+  // Throws "unknown key" for the first key of the map that `known` rejects.
+  template <class Known>
+  void reject_unknown(Known known) const;
   YAML::Node node_;
   std::string file_;
   std::string path_;

@@ -1,5 +1,6 @@
 #include "results/run_metrics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -26,6 +27,15 @@ std::vector<std::string> calc_metric_columns(int nmoves) {
 }
 
 namespace {
+// f() over the samples with t in [from, to], or NaN when the run has none there: a move that the run
+// (simulation.duration) ends before its end is not settled and has no residual vibration, as MATLAB's
+// stepinfo reports a response that has not settled.
+template <class F>
+double over(std::span<const double> t, double from, double to, F f) {
+  const bool any = std::lower_bound(t.begin(), t.end(), from) < std::upper_bound(t.begin(), t.end(), to);
+  return any ? f() : std::nan("");
+}
+
 // Settling time, and "not settled" (NaN) unless the response then stays in the band for `dwell`
 // seconds before the window ends: a response caught inside the band mid-swing is not settled.
 double settled_for(std::span<const double> t, std::span<const double> y, const MoveWindow& w, double dwell) {
@@ -36,24 +46,27 @@ double settled_for(std::span<const double> t, std::span<const double> y, const M
 
 std::vector<double> calc_run_metrics(const Model& model, const Trace& tr) {
   std::vector<double> out;
+  // One column per metric of every move of the model (calc_metric_columns); NaN = "no number".
+  const std::size_t ncols = kMoveMetrics.size() * model.spec.trajectory.moves.size();
   // A run that stopped being finite has no responses: every metric is "no number".
   for (const auto* sig : {&tr.tip_angle, &tr.hub_angle, &tr.tip_deflection, &tr.torque})
     for (double x : *sig)
-      if (!std::isfinite(x))
-        return std::vector<double>(kMoveMetrics.size() * calc_moves(model.spec.trajectory, model.duration).size(),
-                                   std::nan(""));
+      if (!std::isfinite(x)) return std::vector<double>(ncols, std::nan(""));
   // Dwell: one period of the slowest closed-loop resonance.
   const double dwell = model.resonances.empty() ? 0.0 : 2.0 * std::numbers::pi / model.resonances[0];
   for (const auto& mv : calc_moves(model.spec.trajectory, model.duration)) {
     const auto& w = mv.window;
-    out.push_back(settled_for(tr.t, tr.tip_angle, w, dwell));
-    out.push_back(calc_overshoot(tr.t, tr.tip_angle, mv.t_start, w));
-    out.push_back(settled_for(tr.t, tr.hub_angle, w, dwell));
-    out.push_back(calc_overshoot(tr.t, tr.hub_angle, mv.t_start, w));
-    out.push_back(calc_peak_abs(tr.t, tr.tip_deflection, mv.t_start, w.t_window_end));
-    out.push_back(calc_residual_amplitude(tr.t, tr.tip_deflection, w.t_move_end, w.t_window_end));
-    out.push_back(calc_peak_abs(tr.t, tr.torque, mv.t_start, w.t_window_end));
+    const std::span<const double> t = tr.t;
+    const double t0 = mv.t_start, t1 = w.t_move_end, t2 = w.t_window_end;
+    out.push_back(over(t, t1, t2, [&] { return settled_for(t, tr.tip_angle, w, dwell); }));
+    out.push_back(over(t, t0, t2, [&] { return calc_overshoot(t, tr.tip_angle, t0, w); }));
+    out.push_back(over(t, t1, t2, [&] { return settled_for(t, tr.hub_angle, w, dwell); }));
+    out.push_back(over(t, t0, t2, [&] { return calc_overshoot(t, tr.hub_angle, t0, w); }));
+    out.push_back(over(t, t0, t2, [&] { return calc_peak_abs(t, tr.tip_deflection, t0, t2); }));
+    out.push_back(over(t, t1, t2, [&] { return calc_residual_amplitude(t, tr.tip_deflection, t1, t2); }));
+    out.push_back(over(t, t0, t2, [&] { return calc_peak_abs(t, tr.torque, t0, t2); }));
   }
+  out.resize(ncols, std::nan(""));  // moves that start after the run ends (simulation.duration): no number
   return out;
 }
 

@@ -24,7 +24,10 @@ extern const std::vector<std::string> kMoveMetrics;
 // Column names "m1_tip_settling_s", ... for `nmoves` moves.
 std::vector<std::string> calc_metric_columns(int nmoves);
 
-// Values in calc_metric_columns order; all NaN when the trace is not finite (a diverged run).
+// Values in calc_metric_columns order (every move of the model); all NaN when the trace is not finite (a
+// diverged run). A move the run (simulation.duration) ends before its end has no settling times and no
+// residual vibration (NaN: not settled), its overshoot and peaks over the part that ran; a move that
+// starts after the run ends has no numbers at all.
 std::vector<double> calc_run_metrics(const Model& model, const Trace& trace);
 
 // "ok", "not_settled" (a tip settling time is NaN), or the lane's failure.

@@ -136,13 +136,15 @@ std::string format_settling_table_md(const ResultTable& t, const std::vector<std
       "|---|---|---|---|---|---|---|---|---|\n";
   const std::size_t per_move = 7;
   auto settle = [](double x) { return std::isnan(x) ? std::string("not settled") : fmt("%.2f", x); };
+  // "-": no number (a move the run ended before).
+  auto number = [](const char* format, double x) { return std::isnan(x) ? std::string("-") : fmt(format, x); };
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     for (std::size_t j = 0; j < moves[i].size() && (j + 1) * per_move <= r.values.size(); ++j) {
       const double* v = &r.values[j * per_move];
-      out += "| " + r.label + " | " + moves[i][j] + " | " + settle(v[0]) + " | " + fmt("%.1f", v[1]) + " | " +
-             settle(v[2]) + " | " + fmt("%.1f", v[3]) + " | " + fmt("%.1f", 1e3 * v[4]) + " | " +
-             fmt("%.2f", 1e3 * v[5]) + " | " + fmt("%.2f", 1e-3 * v[6]) + " |\n";
+      out += "| " + r.label + " | " + moves[i][j] + " | " + settle(v[0]) + " | " + number("%.1f", v[1]) + " | " +
+             settle(v[2]) + " | " + number("%.1f", v[3]) + " | " + number("%.1f", 1e3 * v[4]) + " | " +
+             number("%.2f", 1e3 * v[5]) + " | " + number("%.2f", 1e-3 * v[6]) + " |\n";
     }
   }
   return out;

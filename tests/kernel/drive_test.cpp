@@ -272,6 +272,48 @@ TEST(LuGre, SticksBelowAndBreaksAwayAtTheStictionTorque) {
   EXPECT_LE(sign_changes, 2);  // the bristles ring out once, then creep one way
 }
 
+TEST(DriveTrain, StuckHubTwistsTheHardeningGearUntilItCarriesTheTransmittedTorque) {
+  // Open loop: a constant demand tau (output side; the shaft gets tau / n) against LuGre friction that
+  // holds the hub (tau far below F_c). Once the transients have died the shaft is at rest, where the
+  // efficiency's switch 1/2 (1 + tanh(tau_s omega_a / n)) sits half way, so the shaft's balance
+  // tau / n = (tau_s / n) (1/eta + eta) / 2 gives the transmitted torque tau_s = 2 eta tau / (1 + eta^2).
+  // The gear then twists to k e + k3 e^3 = tau_s and the bristles carry it, sigma0 z = tau_s.
+  ModelSpec s = test::rig_spec();
+  s.segments = 1;  // a rigid arm without payload (J = 1135 kg m^2): no beam modes to ring out
+  s.payload_mass = s.payload_inertia = 0.0;
+  s.drive.enabled = true;
+  s.drive.ratio = 2.0;
+  s.drive.efficiency = 0.8;
+  s.drive.stiffness = 1e5;           // N m/rad
+  s.drive.cubic_stiffness = 2.5e10;  // N m/rad^3: k3 e^2 ~ 0.6 k at the twist below
+  s.drive.damping = 3.5e3;           // zeta ~ 0.7 for the shaft (n^2 J_a = 20 kg m^2) on the gear spring
+  s.friction.model = "lugre";
+  s.friction.coulomb = 1000.0;
+  s.friction.stiction = 1200.0;
+  s.friction.bristle_stiffness = 1e6;
+  // N m, 0.2 F_s. Small enough that the efficiency switch, whose slope at rest acts on the shaft as a
+  // damper (tau_s / n)^2 (1/eta - eta) / 2, stays within RK4's reach at 0.1 ms.
+  const double tau = 250.0;
+  double e = 0.0, z = 0.0, rate = 1.0, shaft_rate = 1.0;
+  run_drive(s, 8.0, [&](double) { return tau; }, [&](const BatchModel& bm, const BatchState& st) {
+    e = st.z[bm.layout.shaft] / s.drive.ratio - st.q[0];
+    z = st.z[bm.layout.bristle];
+    rate = st.v[0];
+    shaft_rate = st.z[bm.layout.shaft + 1];
+  });
+  const double eta = s.drive.efficiency, k = s.drive.stiffness, k3 = s.drive.cubic_stiffness;
+  const double tau_s = 2.0 * eta * tau / (1.0 + eta * eta);
+  double e_exact = tau_s / k;  // Newton on k e + k3 e^3 = tau_s
+  for (int i = 0; i < 50; ++i) e_exact -= (k * e_exact + k3 * e_exact * e_exact * e_exact - tau_s) / (k + 3 * k3 * e_exact * e_exact);
+  EXPECT_LT(std::abs(rate), 1e-10);        // rad/s: stuck
+  EXPECT_LT(std::abs(shaft_rate), 1e-10);  // rad/s
+  EXPECT_GT(k3 * e_exact * e_exact, 0.5 * k);  // the cubic term matters: a real test of the hardening law
+  EXPECT_NEAR(e, e_exact, 1e-9 * e_exact);
+  EXPECT_NEAR(k * e + k3 * e * e * e, tau_s, 1e-8 * tau_s);
+  EXPECT_NEAR(s.friction.bristle_stiffness * z, tau_s, 1e-8 * tau_s);
+  EXPECT_GT(std::abs(tau_s - eta * tau), 0.01 * tau);  // neither the driving nor the driven law alone
+}
+
 TEST(DriveConfig, BadValuesNameTheirKey) {
   auto key_of = [](const ModelSpec& s) {
     try {
@@ -301,8 +343,8 @@ TEST(DriveConfig, HydraulicRigFileLoads) {
   const Model m = load_model(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb_hydraulic.yaml");
   EXPECT_TRUE(m.spec.hydraulics.enabled);
   EXPECT_EQ(m.spec.controller.kd, 2.0e4);
-  // Oil spring of the whole arm near 5 Hz.
-  EXPECT_NEAR(calc_hydraulic_frequency(m.spec.hydraulics, m.rigid_inertia) / (2 * M_PI), 3.8, 0.5);
+  // Oil spring of the whole arm: 3.76 Hz.
+  EXPECT_NEAR(calc_hydraulic_frequency(m.spec.hydraulics, m.rigid_inertia) / (2 * M_PI), 3.76, 0.005);
 }
 
 }  // namespace

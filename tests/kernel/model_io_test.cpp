@@ -378,6 +378,24 @@ TEST(ModelIo, SensorRateNotDividingTheControllerRateIsRejected) {
                   "must divide controller.rate");
 }
 
+TEST(ModelIo, ControllerSensorRatesParse) {
+  const ff::Model m =
+      ff::parse_model(YAML::Load(with_sensors("{hub_angle: {rate: 250, delay: 1}, hub_rate: {rate: 500}}")), "good.yaml");
+  EXPECT_DOUBLE_EQ(m.spec.sensors.hub_angle.rate, 250.0);
+  EXPECT_EQ(m.spec.sensors.hub_angle.delay, 1);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.hub_rate.rate, 500.0);
+}
+
+TEST(ModelIo, ControllerSensorRateNotDividingTheControllerRateIsRejected) {
+  expect_rejected(with_sensors("{hub_angle: {rate: 300}}"), 12, "sensors.hub_angle.rate",
+                  "must divide controller.rate = 1000 Hz a whole number of times, got 300 Hz");
+  expect_rejected(with_sensors("{hub_rate: {rate: -250}}"), 12, "sensors.hub_rate.rate", ">= 0");
+}
+
+TEST(ModelIo, EnabledKeyBelongsToTheRecordedSensorsOnly) {
+  expect_rejected(with_sensors("{hub_angle: {enabled: true}}"), 12, "sensors.hub_angle.enabled", "unknown key");
+}
+
 TEST(ModelIo, NegativeRecordedDelayIsRejected) {
   expect_rejected(with_sensors("{strain_gauge: {delay: -1}}"), 12, "sensors.strain_gauge.delay", "between 0 and 10000");
 }
@@ -388,6 +406,43 @@ TEST(ModelIo, JointKeyBelongsToTheStrainGaugeOnly) {
 
 TEST(ModelIo, UnknownNotchPlacementIsRejected) {
   expect_rejected(with_line(38, "  placement: sideways"), 38, "notch.placement", "unknown placement 'sideways'");
+}
+
+// ---- review findings: the key's own line, once --------------------------------------------
+
+TEST(ModelIo, ShaperVtolOutsideItsRangeNamesItsLineAndKeyOnce) {
+  // shaper: at line 52, vtol at line 56; the message is the key's, without a repeated "shaper:".
+  expect_rejected(with_line(56, "  vtol: 0.7"), 56, "shaper.vtol", "must be in (0, 0.5), got 0.7");
+  EXPECT_EQ(parse_error(with_line(56, "  vtol: 0.7")).message().find("shaper"), std::string::npos);
+  expect_rejected(with_line(55, "  damping: 1.5"), 55, "shaper.damping", "must be < 1");
+  expect_rejected(with_line(54, "  frequency: -3"), 54, "shaper.frequency", ">= 0");
+}
+
+TEST(ModelIo, LugreWithoutCoulombNamesTheModelLine) {
+  // friction: {model: lugre} and no coulomb: the line that asks for LuGre, naming what it needs.
+  expect_rejected(with_line(12, "friction: {model: lugre}"), 12, "friction.model", "needs friction.coulomb > 0");
+  expect_rejected(with_line(12, "friction:\n  model: lugre\n  coulomb: 0"), 13, "friction.model", "got 0.0");
+}
+
+TEST(ModelIo, AKeyLeftAtItsDefaultIsReportedAtItsBlock) {
+  // omega_z not given, and the closed loop of a rigid arm has no resonances to place the notch at.
+  auto lines = reference_lines();
+  lines[11 - 1] = "segments: 1";
+  lines[34 - 1] = "  enabled: true";
+  const auto e = parse_error(join(lines));
+  EXPECT_EQ(e.key(), "notch.omega_z") << e.what();
+  EXPECT_EQ(e.line(), 33) << e.what();
+}
+
+TEST(ModelIo, MisspeltPayloadEventKeyIsAnUnknownKey) {
+  expect_rejected(with_line(24, "  events: [{time: 2.0, mas: 0.0, inertia: 0.0}]"), 24, "payload.events[0].mas",
+                  "unknown key");
+}
+
+TEST(ModelIo, DisabledDriveAndHydraulicsValuesAreCheckedToo) {
+  // Like the recorded sensors: a value is checked whether its block is enabled or not.
+  expect_rejected(with_line(12, "drive: {enabled: false, ratio: 0}"), 12, "drive.ratio", "> 0");
+  expect_rejected(with_line(12, "hydraulics: {rated_flow: -1}"), 12, "hydraulics.rated_flow", "> 0");
 }
 
 // ---- files -------------------------------------------------------------------------------

@@ -79,6 +79,39 @@ TEST(Sensors, DelayShiftsTheMeasurementByWholeSamples) {
   }
 }
 
+TEST(Sensors, EncoderAtAQuarterOfTheControllerRateHoldsEachReadingFourSamples) {
+  // 250 Hz on a 1 kHz controller, delay 2: at sample k the controller sees the reading of sample
+  // 4 floor((k - 2) / 4), the same rule as the recorded sensors, or the first one while k < 2.
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.hub_angle.rate = 250.0;
+  spec.sensors.hub_angle.delay = 2;
+  Rig rig(spec);
+  for (long k = 0; k < 20; ++k) {
+    const long j = k >= 2 ? (k - 2) / 4 * 4 : 0;
+    EXPECT_DOUBLE_EQ(rig.see(k, 0.1 * static_cast<double>(k)), 0.1 * static_cast<double>(j)) << "sample " << k;
+  }
+}
+
+TEST(Sensors, PdActsOnHubAngleAndRateSampledEveryFourthControllerSample) {
+  // Both controller channels at 250 Hz: the PD torque at sample k is kp (r_k - theta(t_j)) - kd omega(t_j)
+  // with j = 4 floor(k / 4), the true hub angle and rate at those instants, so the measurement changes
+  // only every 4th sample while the reference moves at every one.
+  ModelSpec spec = test::rig_spec(0.5, 1.0);
+  spec.sensors.hub_angle.rate = 250.0;
+  spec.sensors.hub_rate.rate = 250.0;
+  spec.hub_inertia = 500.0;  // the rate loop kd / J_hub stable at 250 Hz
+  const auto tr = test::run_one(make_model(spec)).traces[0];
+  const double kp = spec.controller.kp, kd = spec.controller.kd;
+  int changes = 0;
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    const std::size_t j = k / 4 * 4;
+    ASSERT_DOUBLE_EQ(tr.torque[k], kp * (tr.ref[k] - tr.hub_angle[j]) - kd * tr.hub_rate[j]) << "sample " << k;
+    if (k > 0 && tr.hub_angle[k] != tr.hub_angle[k - 1] && k % 4 != 0)
+      ++changes;  // the true angle moves in between samples the controller never sees
+  }
+  EXPECT_GT(changes, 1000);
+}
+
 TEST(Sensors, ClosedLoopWithCoarseEncoderStillTracks) {
   // A 1 mrad encoder on the hub: the arm still arrives, within about a quantum, at its target.
   ModelSpec spec = test::rig_spec(0.5, 20.0);

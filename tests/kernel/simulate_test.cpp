@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "kernel/errors.hpp"
@@ -167,6 +168,62 @@ TEST(PayloadEvents, NothingChangesBeforeTheEventAndTheArmRespondsAfter) {
     peak_d = std::max(peak_d, std::fabs(dropped.tip_deflection[j]));
   }
   EXPECT_LT(peak_d, 0.5 * peak_c);
+}
+
+TEST(PayloadEvents, PickAtRestGivesTheRigidArmTheHeavierInertia) {
+  // A rigid arm (N = 1) in open loop: +tau for 0.5 s, -tau for 0.5 s brings the empty arm to rest at
+  // theta_1 = tau 0.25 s^2 / J_empty; the payload is picked there at t = 1 s, then +tau turns the loaded
+  // arm: theta = theta_1 + tau (t - 1)^2 / (2 J_loaded), J = the straight arm's inertia about the hub.
+  ModelSpec spec = test::rig_spec(0.5, 2.0);
+  spec.segments = 1;
+  spec.simulation.duration = 2.0;
+  spec.payload_mass = spec.payload_inertia = 0.0;
+  const double J_empty = make_model(spec).rigid_inertia;
+  const PayloadEvent pick{1.0, 328.7, 118.6};
+  ModelSpec loaded = spec;
+  loaded.payload_mass = pick.mass;
+  loaded.payload_inertia = pick.inertia;
+  const double J_loaded = make_model(loaded).rigid_inertia;
+  spec.payload_events = {pick};
+  const Model m = make_model(spec);
+  const double tau = 1000.0;  // N m
+  SampleInputs in;
+  for (int k = 0; k <= 2000; ++k) in.torque.push_back(k < 500 ? tau : k < 1000 ? -tau : tau);
+  const Trace tr = simulate(make_batch(std::span<const Model>(&m, 1)), nullptr, &in).traces[0];
+  EXPECT_LT(std::abs(tr.hub_rate[1000]), 1e-12);  // rad/s: at rest when it picks
+  EXPECT_NEAR(tr.hub_angle[1000], tau * 0.25 / J_empty, 1e-12);
+  for (int k = 1000; k <= 2000; k += 100) {
+    const double t = tr.t[k] - 1.0;
+    EXPECT_NEAR(tr.hub_angle[k], tr.hub_angle[1000] + tau * t * t / (2.0 * J_loaded), 1e-11) << "t " << tr.t[k];
+  }
+  EXPECT_GT(J_loaded, 5.0 * J_empty);  // the pick is no detail: the empty arm would turn 5x as far
+}
+
+TEST(PayloadEvents, PickAtRestIsTheLoadedArmFromThenOn) {
+  // The flexible arm in closed loop, reference held at 0 for 1 s (the arm at rest) and then a cubic move
+  // to 0.5 rad: picking the payload at 0.5 s gives bit for bit the run of the arm loaded from the start,
+  // and differs from the empty arm's.
+  ModelSpec spec = test::rig_spec(0.5, 2.0);
+  spec.simulation.duration = 6.0;
+  spec.simulation.substeps = 1;  // the same step for both payloads (the automatic one follows the modes)
+  SampleInputs in;
+  for (int k = 0; k <= 6000; ++k) {
+    const double u = std::clamp((k * 1e-3 - 1.0) / 3.0, 0.0, 1.0);
+    in.ref.push_back(0.5 * u * u * (3.0 - 2.0 * u));
+  }
+  auto run = [&](const ModelSpec& s) {
+    const Model m = make_model(s);
+    return simulate(make_batch(std::span<const Model>(&m, 1)), nullptr, &in).traces[0];
+  };
+  const auto loaded = run(spec);
+  spec.payload_events = {{0.5, spec.payload_mass, spec.payload_inertia}};
+  spec.payload_mass = spec.payload_inertia = 0.0;
+  const auto picked = run(spec);
+  spec.payload_events.clear();
+  const auto empty = run(spec);
+  EXPECT_EQ(picked.tip_deflection, loaded.tip_deflection);
+  EXPECT_EQ(picked.torque, loaded.torque);
+  EXPECT_GT(max_abs_diff(empty.tip_deflection, loaded.tip_deflection), 0.05);  // m
 }
 
 TEST(PayloadEvents, NeedAFixedStepIntegrator) {

@@ -25,6 +25,28 @@ TEST(RunMetrics, NotchCutsTipSettlingFiveFoldAndUnderThreeSeconds) {
   EXPECT_GE(v_pd[0] / v_notch[0], 5.0);
 }
 
+TEST(RunMetrics, RunEndingMidMoveLeavesTheMoveNotSettled) {
+  // simulation.duration = 2 s cuts the 3 s move: no settling and no residual vibration (NaN, status
+  // not_settled, as MATLAB's stepinfo for a response that has not settled); overshoot and peaks are
+  // those of the part that ran: the arm is still short of the target (overshoot 0).
+  ModelSpec spec = test::rig_spec(0.5, 7.0);
+  spec.trajectory.moves.push_back({0.0, 45.0});
+  spec.simulation.duration = 2.0;
+  const Model m = make_model(spec);
+  const auto run = test::run_one(m);
+  const auto v = calc_run_metrics(m, run.traces[0]);
+  const auto cols = calc_metric_columns(2);
+  ASSERT_EQ(v.size(), cols.size());  // the second move never starts: its columns are there, with no numbers
+  for (std::size_t i = kMoveMetrics.size(); i < v.size(); ++i) EXPECT_TRUE(std::isnan(v[i])) << cols[i];
+  EXPECT_TRUE(std::isnan(v[0]));  // m1_tip_settling_s
+  EXPECT_EQ(v[1], 0.0);           // m1_tip_overshoot_pct
+  EXPECT_TRUE(std::isnan(v[2]));  // m1_hub_settling_s
+  EXPECT_GT(v[4], 0.01);          // m1_peak_tip_deflection_m: the arm bends while it moves
+  EXPECT_TRUE(std::isnan(v[5]));  // m1_residual_vibration_m
+  EXPECT_GT(v[6], 0.0);           // m1_peak_torque_Nm
+  EXPECT_EQ(calc_run_status(LaneStatus::kOk, cols, v), "not_settled");
+}
+
 TEST(RunMetrics, ColumnsNameEveryMoveMetric) {
   const auto cols = calc_metric_columns(2);
   ASSERT_EQ(cols.size(), 2 * kMoveMetrics.size());
