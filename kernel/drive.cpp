@@ -31,17 +31,16 @@ LaneDrive make_lane_drive(const Model& m) {
   p.sigma0 = f.bristle_stiffness;
   p.sigma1 = f.bristle_damping;
   if (h.enabled) {
-    p.D = h.displacement;
+    p.D = calc_displacement(h);
     p.V0 = h.chamber_volume;
     p.beta = h.bulk_modulus;
     p.ps = h.supply_pressure;
     p.pt = h.tank_pressure;
     p.pr = h.relief_pressure > 0 ? h.relief_pressure : 1.1 * h.supply_pressure;
     p.dp_lam = h.laminar_drop;
-    // Q = kv x root(dp): rated flow at full opening and the rated drop.
-    p.kv = h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop);
+    p.kv = calc_valve_coefficient(h);  // Q = kv x root(dp)
     // Relief valves pass the rated flow 10 % above their cracking pressure.
-    p.kr = h.rated_flow / (0.1 * p.pr);
+    p.kr = calc_rated_flow(h) / (0.1 * p.pr);
     p.leak = h.leakage;
     p.wv = 2.0 * M_PI * h.valve_frequency;
     p.zv = h.valve_damping;
@@ -61,6 +60,21 @@ LaneDrive make_lane_drive(const Model& m) {
 
 double calc_orifice_root(double dp, double dp_lam) { return dp / std::sqrt(std::sqrt(dp * dp + dp_lam * dp_lam)); }
 
+double calc_valve_coefficient(const HydraulicSpec& h) {
+  if (h.discharge_coefficient > 0)  // Q = C_d w x_max x sqrt(2 dp / rho)
+    return h.discharge_coefficient * h.port_width * h.spool_stroke * std::sqrt(2.0 / h.oil_density);
+  return h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop);  // the rated flow at full opening
+}
+
+double calc_rated_flow(const HydraulicSpec& h) {
+  if (h.discharge_coefficient > 0) return calc_valve_coefficient(h) * calc_orifice_root(h.rated_drop, h.laminar_drop);
+  return h.rated_flow;
+}
+
+double calc_displacement(const HydraulicSpec& h) {
+  return h.piston_area > 0 ? h.piston_area * h.pinion_radius : h.displacement;
+}
+
 double calc_transmission_torque(const LaneDrive& p, double d, double dd) {
   if (p.b == 0.0) return (p.k + p.k3 * d * d) * d + p.c * dd;
   // Free play: no torque inside +-b; in contact the gear teeth push, never pull.
@@ -71,13 +85,15 @@ double calc_transmission_torque(const LaneDrive& p, double d, double dd) {
 }
 
 double calc_hydraulic_damping(const HydraulicSpec& h) {
-  const double kv = h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop);
-  const double kq = kv * calc_orifice_root(0.5 * (h.supply_pressure - h.tank_pressure), h.laminar_drop);
-  return h.displacement * h.displacement * h.supply_pressure / (h.pressure_gain * kq);
+  const double kq =
+      calc_valve_coefficient(h) * calc_orifice_root(0.5 * (h.supply_pressure - h.tank_pressure), h.laminar_drop);
+  const double D = calc_displacement(h);
+  return D * D * h.supply_pressure / (h.pressure_gain * kq);
 }
 
 double calc_hydraulic_frequency(const HydraulicSpec& h, double inertia) {
-  return std::sqrt(4.0 * h.bulk_modulus * h.displacement * h.displacement / (2.0 * h.chamber_volume * inertia));
+  const double D = calc_displacement(h);
+  return std::sqrt(4.0 * h.bulk_modulus * D * D / (2.0 * h.chamber_volume * inertia));
 }
 
 double calc_drive_rate(const Model& m) {

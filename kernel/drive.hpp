@@ -59,6 +59,20 @@ void compute_actuator_torque(const BatchModel& bm, const double* q, const double
 // sqrt|dp| sign(dp) for |dp| >> dp_lam and linear through zero.
 double calc_orifice_root(double dp, double dp_lam);
 
+// The valve coefficient k_v of Q = k_v x root(dp) (x the normalised spool travel), m^3/(s Pa^1/2):
+// C_d w x_max sqrt(2 / rho) when the physical form is given, else rated_flow / root(rated_drop).
+// The one place k_v comes from (the lanes' flows, the modes' loop damping).
+double calc_valve_coefficient(const HydraulicSpec& h);
+
+// The flow through one land at full opening and the rated drop, m^3/s, which sizes the relief
+// valves: rated_flow, or k_v root(rated_drop) in the physical form (where a file keeps rated_drop
+// at its default, 3.5 MPa).
+double calc_rated_flow(const HydraulicSpec& h);
+
+// The actuator's displacement D, m^3/rad: piston_area x pinion_radius when given, else displacement.
+// The one place D comes from (the lanes, the modes, the oil-spring frequency).
+double calc_displacement(const HydraulicSpec& h);
+
 // Transmitted torque of the drive train at output twist d (rad) and twist rate dd (rad/s), N·m.
 double calc_transmission_torque(const LaneDrive& p, double d, double dd);
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
+#include <string>
+#include <utility>
 
 #include "kernel/errors.hpp"
 #include "kernel/batch.hpp"
@@ -168,6 +171,24 @@ void validate(const ModelSpec& s, const std::string& src) {
     positive(h.valve_frequency, "hydraulics.valve_frequency");
     positive(h.valve_damping, "hydraulics.valve_damping");
     non_negative(h.pressure_gain, "hydraulics.pressure_gain");
+    // The physical forms of k_v and D (0 = not given): all of a group or none, named at the first given.
+    auto whole = [&](std::initializer_list<std::pair<double, const char*>> group, const char* law) {
+      const char* given = nullptr;
+      std::string missing;
+      for (const auto& [x, key] : group) {
+        non_negative(x, key);
+        if (x > 0 && !given) given = key;
+        if (x == 0) missing += std::string(missing.empty() ? "" : ", ") + key;
+      }
+      if (given && !missing.empty())
+        throw ConfigError(src, 0, given, std::string("needs ") + missing + " too (" + law + ": all of them or none)");
+    };
+    whole({{h.discharge_coefficient, "hydraulics.discharge_coefficient"},
+           {h.port_width, "hydraulics.port_width"},
+           {h.spool_stroke, "hydraulics.spool_stroke"},
+           {h.oil_density, "hydraulics.oil_density"}},
+          "k_v = C_d w x_max sqrt(2 / rho)");
+    whole({{h.piston_area, "hydraulics.piston_area"}, {h.pinion_radius, "hydraulics.pinion_radius"}}, "D = A r");
   }
   const auto& d = s.drive;
   {

@@ -104,6 +104,9 @@ struct FrictionSpec {
 struct HydraulicSpec {
   bool enabled = false;
   double displacement = 2.5e-3;   // D = piston area x pinion radius, m^3/rad (torque D dp, flow D w)
+  // D in physical terms (both or neither; 0 = not given): D = A r (calc_displacement).
+  double piston_area = 0.0;       // A, m^2
+  double pinion_radius = 0.0;     // r, m
   double chamber_volume = 4.5e-3; // V0, each chamber with the rack centred (lines included), m^3
   double bulk_modulus = 1.4e9;    // beta, Pa
   double supply_pressure = 21e6;  // p_s, Pa
@@ -111,6 +114,12 @@ struct HydraulicSpec {
   double relief_pressure = 0.0;   // p_r, Pa: relief valves open above it; 0 = 1.1 p_s
   double rated_flow = 1.6e-3;     // Q_r through one land at full opening and the rated drop, m^3/s
   double rated_drop = 3.5e6;      // that drop, Pa
+  // The valve coefficient in physical terms (all four or none; 0 = not given), from the orifice
+  // flow Q = C_d w x sqrt(2 dp / rho): k_v = C_d w x_max sqrt(2 / rho) (calc_valve_coefficient).
+  double discharge_coefficient = 0.0;  // C_d
+  double port_width = 0.0;        // w, orifice area per metre of spool travel, m
+  double spool_stroke = 0.0;      // x_max, spool travel at full opening, m
+  double oil_density = 0.0;       // rho, kg/m^3
   double laminar_drop = 0.1e6;    // below this drop the orifice flow turns linear (smooth zero crossing), Pa
   double leakage = 1.0e-12;       // cross-port leakage a -> b, m^3/(s·Pa)
   double valve_frequency = 200.0; // spool natural frequency, Hz

@@ -1,6 +1,9 @@
 #include "kernel/model_io.hpp"
 
 #include <cmath>
+#include <initializer_list>
+#include <string>
+#include <utility>
 
 #include "kernel/errors.hpp"
 #include "kernel/yaml_reader.hpp"
@@ -135,6 +138,8 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   auto& h = s.hydraulics;
   hy.optional("enabled", h.enabled);
   hy.optional("displacement", h.displacement);
+  hy.optional("piston_area", h.piston_area);
+  hy.optional("pinion_radius", h.pinion_radius);
   hy.optional("chamber_volume", h.chamber_volume);
   hy.optional("bulk_modulus", h.bulk_modulus);
   hy.optional("supply_pressure", h.supply_pressure);
@@ -142,11 +147,31 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   hy.optional("relief_pressure", h.relief_pressure);
   hy.optional("rated_flow", h.rated_flow);
   hy.optional("rated_drop", h.rated_drop);
+  hy.optional("discharge_coefficient", h.discharge_coefficient);
+  hy.optional("port_width", h.port_width);
+  hy.optional("spool_stroke", h.spool_stroke);
+  hy.optional("oil_density", h.oil_density);
   hy.optional("laminar_drop", h.laminar_drop);
   hy.optional("leakage", h.leakage);
   hy.optional("valve_frequency", h.valve_frequency);
   hy.optional("valve_damping", h.valve_damping);
   hy.optional("pressure_gain", h.pressure_gain);
+  // k_v and D in one form each: a physical key given (> 0) next to a rated one in the file is named.
+  auto one_form = [&](std::initializer_list<std::pair<const char*, double>> physical,
+                      std::initializer_list<const char*> rated, const std::string& forms) {
+    for (const auto& [key, x] : physical)
+      for (const char* r : rated)
+        if (x > 0 && hy.has(r)) hy.fail(key, std::string("given with hydraulics.") + r + ": " + forms + ", not both");
+  };
+  one_form({{"discharge_coefficient", h.discharge_coefficient},
+            {"port_width", h.port_width},
+            {"spool_stroke", h.spool_stroke},
+            {"oil_density", h.oil_density}},
+           {"rated_flow", "rated_drop"},
+           "k_v comes from rated_flow and rated_drop or from discharge_coefficient, port_width, spool_stroke and "
+           "oil_density");
+  one_form({{"piston_area", h.piston_area}, {"pinion_radius", h.pinion_radius}}, {"displacement"},
+           "D is displacement or piston_area times pinion_radius");
   hy.finish();
 
   auto dr = top.child("drive");

@@ -140,11 +140,83 @@ TEST(Hydraulics, ReliefValveCapsTheChamberPressure) {
   // Stalled, the valve's inflow kv root(p_s - p) leaves through the relief, k_r (p - p_r): p settles
   // where the two meet, above p_r by the valve flow over the relief gain (rated flow at 1.1 p_r).
   const HydraulicSpec h;
-  const double kv = h.rated_flow / calc_orifice_root(h.rated_drop, h.laminar_drop), kr = h.rated_flow / (0.1 * 12e6);
+  const double kv = calc_valve_coefficient(h), kr = calc_rated_flow(h) / (0.1 * 12e6);
   double p = 12e6;
   for (int i = 0; i < 50; ++i) p = 12e6 + kv * calc_orifice_root(ps - p, h.laminar_drop) / kr;
   EXPECT_GT(capped, 12e6);
   EXPECT_LT(capped, 1.05 * p);  // the peak of the first transient
+}
+
+TEST(Hydraulics, ValveCoefficientAndDisplacementFollowTheirPhysicalForms) {
+  // The rated defaults: k_v = Q_r / root(dp_r) with the laminar core, a little above Q_r / sqrt(dp_r).
+  const HydraulicSpec rated;
+  EXPECT_DOUBLE_EQ(calc_valve_coefficient(rated), 8.554104586691028e-07);
+  EXPECT_GT(calc_valve_coefficient(rated), 1.6e-3 / std::sqrt(3.5e6));
+  EXPECT_EQ(calc_rated_flow(rated), 1.6e-3);
+  EXPECT_EQ(calc_displacement(rated), 2.5e-3);
+  // A servo valve's land: C_d 0.61, a 20 mm wide port (m^2 of opening per m of travel), 1 mm stroke,
+  // 850 kg/m^3 oil; a 125 cm^2 piston on a 0.2 m pinion.
+  HydraulicSpec h;
+  h.discharge_coefficient = 0.61;
+  h.port_width = 0.02;
+  h.spool_stroke = 1.0e-3;
+  h.oil_density = 850.0;
+  h.piston_area = 0.0125;
+  h.pinion_radius = 0.2;
+  const double kv = 0.61 * 0.02 * 1.0e-3 * std::sqrt(2.0 / 850.0);
+  EXPECT_DOUBLE_EQ(calc_valve_coefficient(h), kv);
+  EXPECT_NEAR(calc_valve_coefficient(h), 5.9178e-7, 1e-10);
+  EXPECT_DOUBLE_EQ(calc_rated_flow(h), kv * calc_orifice_root(3.5e6, 1e5));  // sized at the default rated drop
+  EXPECT_DOUBLE_EQ(calc_displacement(h), 2.5e-3);
+  // The lanes, the loop damping and the oil spring all take them from there.
+  ModelSpec s = test::rig_spec();
+  s.hydraulics = h;
+  s.hydraulics.enabled = true;
+  s.hydraulics.pinion_radius = 0.1;  // D = 1.25e-3
+  const Model m = make_model(s);
+  const LaneDrive p = make_lane_drive(m);
+  EXPECT_DOUBLE_EQ(p.kv, kv);
+  EXPECT_DOUBLE_EQ(p.D, 1.25e-3);
+  EXPECT_DOUBLE_EQ(p.kr, calc_rated_flow(h) / (0.1 * 1.1 * 21e6));
+  HydraulicSpec rated_equal = rated;
+  rated_equal.displacement = 1.25e-3;
+  rated_equal.rated_flow = calc_rated_flow(h);
+  EXPECT_DOUBLE_EQ(calc_hydraulic_frequency(s.hydraulics, 100.0), calc_hydraulic_frequency(rated_equal, 100.0));
+  EXPECT_NEAR(calc_hydraulic_damping(s.hydraulics), calc_hydraulic_damping(rated_equal),
+              1e-12 * calc_hydraulic_damping(rated_equal));
+  EXPECT_NEAR(calc_hydraulic_frequency(s.hydraulics, 100.0), std::sqrt(4.0 * 1.4e9 * 1.25e-3 * 1.25e-3 / (9e-3 * 100.0)),
+              1e-9);
+}
+
+TEST(Hydraulics, PhysicalFormEqualToTheRatedDefaultsRunsBitIdentically) {
+  // Values whose products are exact in binary: C_d = 1/2, rho = 2048 (sqrt(2 / rho) = 1/32),
+  // x_max = 2^-10 m, w = k_v 2^16 m, so C_d w x_max sqrt(2 / rho) = k_v; A = 4 D, r = 1/4 m.
+  ModelSpec rated = test::rig_spec(0.5, 1.0);
+  rated.hydraulics.enabled = true;
+  rated.hydraulics.relief_pressure = 18e6;  // the relief's sizing in the loop too
+  const double kv = calc_valve_coefficient(rated.hydraulics);
+  ModelSpec physical = rated;
+  auto& h = physical.hydraulics;
+  h.discharge_coefficient = 0.5;
+  h.oil_density = 2048.0;
+  h.spool_stroke = std::ldexp(1.0, -10);
+  h.port_width = std::ldexp(kv, 16);
+  h.piston_area = 4.0 * rated.hydraulics.displacement;
+  h.pinion_radius = 0.25;
+  h.displacement = 1.0;  // not used once the physical form is given
+  h.rated_flow = 1.0;
+  ASSERT_EQ(calc_valve_coefficient(h), kv);
+  ASSERT_EQ(calc_rated_flow(h), rated.hydraulics.rated_flow);
+  ASSERT_EQ(calc_displacement(h), 2.5e-3);
+  const BatchRun a = test::run_one(make_model(rated)), b = test::run_one(make_model(physical));
+  ASSERT_GT(a.traces[0].t.size(), 3000u);
+  EXPECT_EQ(a.traces[0].hub_angle, b.traces[0].hub_angle);
+  EXPECT_EQ(a.traces[0].torque, b.traces[0].torque);
+  EXPECT_EQ(a.traces[0].tip_deflection, b.traces[0].tip_deflection);
+  ASSERT_EQ(a.traces[0].extra.size(), b.traces[0].extra.size());
+  for (std::size_t c = 0; c < a.traces[0].extra.size(); ++c)
+    EXPECT_EQ(a.traces[0].extra[c].second, b.traces[0].extra[c].second) << a.traces[0].extra[c].first;
+  EXPECT_GT(std::abs(a.traces[0].hub_angle.back()), 0.4);  // the arm moved: a real run
 }
 
 TEST(DriveTrain, TransmitsNothingInsideTheFreePlayAndNeverPulls) {

@@ -445,6 +445,43 @@ TEST(ModelIo, DisabledDriveAndHydraulicsValuesAreCheckedToo) {
   expect_rejected(with_line(12, "hydraulics: {rated_flow: -1}"), 12, "hydraulics.rated_flow", "> 0");
 }
 
+TEST(ModelIo, HydraulicPhysicalFormsParse) {
+  const auto m = ff::parse_model(
+      YAML::Load(with_line(12, "hydraulics: {discharge_coefficient: 0.61, port_width: 0.02, spool_stroke: 1.0e-3, "
+                               "oil_density: 850, piston_area: 0.0125, pinion_radius: 0.2}")),
+      "ok.yaml");
+  const auto& h = m.spec.hydraulics;
+  EXPECT_EQ(h.discharge_coefficient, 0.61);
+  EXPECT_EQ(h.port_width, 0.02);
+  EXPECT_EQ(h.spool_stroke, 1.0e-3);
+  EXPECT_EQ(h.oil_density, 850.0);
+  EXPECT_EQ(h.piston_area, 0.0125);
+  EXPECT_EQ(h.pinion_radius, 0.2);
+  // Zero is "not given": next to the rated form it is no second form.
+  EXPECT_NO_THROW(
+      ff::parse_model(YAML::Load(with_line(12, "hydraulics: {rated_flow: 1.0e-3, oil_density: 0}")), "ok.yaml"));
+}
+
+TEST(ModelIo, PartOfAPhysicalGroupNamesTheKeyGivenAndWhatIsMissing) {
+  expect_rejected(with_line(12, "hydraulics: {port_width: 0.02, discharge_coefficient: 0.61}"), 12,
+                  "hydraulics.discharge_coefficient", "needs hydraulics.spool_stroke, hydraulics.oil_density too");
+  expect_rejected(with_line(12, "hydraulics:\n  enabled: false\n  pinion_radius: 0.1"), 14, "hydraulics.pinion_radius",
+                  "needs hydraulics.piston_area too (D = A r");
+  expect_rejected(with_line(12, "hydraulics:\n  piston_area: 0.01\n  pinion_radius: -0.25"), 14,
+                  "hydraulics.pinion_radius", ">= 0");
+}
+
+TEST(ModelIo, BothFormsOfAHydraulicQuantityAreRejectedAtThePhysicalKey) {
+  expect_rejected(with_line(12, "hydraulics:\n  rated_flow: 1.6e-3\n  discharge_coefficient: 0.61\n  port_width: 0.02\n"
+                                "  spool_stroke: 1.0e-3\n  oil_density: 850"),
+                  14, "hydraulics.discharge_coefficient", "given with hydraulics.rated_flow: k_v comes from");
+  expect_rejected(with_line(12, "hydraulics:\n  discharge_coefficient: 0.61\n  port_width: 0.02\n"
+                                "  spool_stroke: 1.0e-3\n  oil_density: 850\n  rated_drop: 3.5e6"),
+                  13, "hydraulics.discharge_coefficient", "given with hydraulics.rated_drop");
+  expect_rejected(with_line(12, "hydraulics: {displacement: 2.5e-3, piston_area: 0.01, pinion_radius: 0.25}"), 12,
+                  "hydraulics.piston_area", "given with hydraulics.displacement: D is displacement or piston_area");
+}
+
 // ---- files -------------------------------------------------------------------------------
 
 TEST(ModelIo, BadIndentationNamesTheFileAndLine) {

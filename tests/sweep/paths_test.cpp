@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
+#include "kernel/drive.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/model_io.hpp"
 
@@ -273,6 +275,39 @@ TEST(ApplyAssignment, SensorAndNotchPlacementParametersAreSweepable) {
   EXPECT_EQ(m.spec.sensors.tip_position.delay, 12);
   EXPECT_DOUBLE_EQ(m.spec.sensors.tip_position.resolution, 1e-4);
   EXPECT_EQ(m.spec.notch.placement, "feedback");
+}
+
+TEST(ApplyAssignment, HydraulicPhysicalParametersAreSweepable) {
+  // Every physical key by path; a part of a group, or a second form, is reported at --set.
+  const auto file = YAML::LoadFile(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml");
+  std::vector<ff::Assignment> set;
+  for (const char* a : {"hydraulics.enabled=true", "hydraulics.discharge_coefficient=0.5", "hydraulics.port_width=0.04",
+                        "hydraulics.spool_stroke=1e-3", "hydraulics.oil_density=2048", "hydraulics.piston_area=0.01",
+                        "hydraulics.pinion_radius=0.1"})
+    set.push_back(ff::parse_assignment(a));
+  const ff::Model m = ff::make_model_with(YAML::Clone(file), "fbtb.yaml", set);
+  // k_v = 0.5 x 0.04 x 1e-3 x sqrt(2 / 2048) = 6.25e-7 and D = 1e-3: the values reached the model.
+  EXPECT_DOUBLE_EQ(ff::calc_valve_coefficient(m.spec.hydraulics), 6.25e-7);
+  EXPECT_DOUBLE_EQ(ff::calc_displacement(m.spec.hydraulics), 1e-3);
+  auto error_of = [&](const std::vector<std::string>& texts) {
+    std::vector<ff::Assignment> s;
+    for (const auto& t : texts) s.push_back(ff::parse_assignment(t));
+    try {
+      ff::make_model_with(YAML::Clone(file), "fbtb.yaml", s);
+    } catch (const ff::ConfigError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "accepted";
+    return ff::ConfigError("", 0, "", "");
+  };
+  auto e = error_of({"hydraulics.pinion_radius=0.1"});
+  EXPECT_EQ(e.file(), "--set");
+  EXPECT_EQ(e.key(), "hydraulics.pinion_radius");
+  EXPECT_NE(e.message().find("needs hydraulics.piston_area"), std::string::npos) << e.what();
+  e = error_of({"hydraulics.displacement=2.5e-3", "hydraulics.piston_area=0.01", "hydraulics.pinion_radius=0.25"});
+  EXPECT_EQ(e.file(), "--set");
+  EXPECT_EQ(e.key(), "hydraulics.piston_area");
+  EXPECT_NE(e.message().find("given with hydraulics.displacement"), std::string::npos) << e.what();
 }
 
 }  // namespace
