@@ -27,6 +27,12 @@ std::vector<std::string> split_list(const std::vector<std::string>& items) {
   return out;
 }
 
+constexpr const char* kRefitHelp =
+    "existing parameters re-fitted with the baseline and with every effect: none, auto (for each effect the at most two "
+    "the residual is most sensitive to, among hub.inertia, payload.mass, payload.inertia, friction.viscous, "
+    "friction.coulomb, joints.stiffness, joints.damping, hub.torque_offset where nonzero, never one the effect fits), "
+    "or paths, comma separated, e.g. hub.inertia,friction.viscous";
+
 ReplayMode mode_of(const std::string& name) {
   try {
     return parse_replay_mode(name);
@@ -43,7 +49,7 @@ void add_diagnose_verb(CLI::App& app) {
                   "least squares, rank them by delta BIC and say which one is missing (or none)");
   struct Args {
     std::string model, data, json, mode = "closed-loop";
-    std::vector<std::string> sets, effects, refit;
+    std::vector<std::string> sets, effects, refit = {"none"};
     int iterations = 25, samples = 1500;
   };
   auto a = std::make_shared<Args>();
@@ -53,8 +59,7 @@ void add_diagnose_verb(CLI::App& app) {
   cmd->add_option("--mode", a->mode, "closed-loop (ref drives the model's controller), open-loop (hub_torque "
                                      "drives the plant) or inverse-dynamics")->capture_default_str();
   cmd->add_option("--effects", a->effects, "only these effects, comma separated (default: every one that applies)");
-  cmd->add_option("--refit", a->refit, "existing parameters (paths) re-fitted with the baseline and with every effect, "
-                                       "comma separated, e.g. hub.inertia,friction.viscous");
+  cmd->add_option("--refit", a->refit, kRefitHelp)->capture_default_str();
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
@@ -81,7 +86,7 @@ void add_calibrate_verb(CLI::App& app) {
                    "and record both versions and their fit in a model ledger (SQLite) with a plot of the error");
   struct Args {
     std::string model, data, add, out, ledger, mode = "closed-loop";
-    std::vector<std::string> sets, refit;
+    std::vector<std::string> sets, refit = {"none"};
     int iterations = 25, samples = 1500;
   };
   auto a = std::make_shared<Args>();
@@ -91,7 +96,7 @@ void add_calibrate_verb(CLI::App& app) {
   cmd->add_option("--out", a->out, "the new model YAML")->required();
   cmd->add_option("--ledger", a->ledger, "model ledger (default: ledger.sqlite beside --out)");
   cmd->add_option("--mode", a->mode, "closed-loop, open-loop or inverse-dynamics")->capture_default_str();
-  cmd->add_option("--refit", a->refit, "existing parameters re-fitted with the effect, comma separated");
+  cmd->add_option("--refit", a->refit, kRefitHelp)->capture_default_str();
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();

@@ -96,6 +96,7 @@ BatchModel make_batch(std::span<const Model> models) {
     bm.fric_s.push_back(f.stiction > 0 ? f.stiction - f.coulomb : 0.0);
     bm.fric_inv_vs.push_back(1.0 / f.stribeck_velocity);
     bm.fric_inv_eps.push_back(1.0 / f.smoothing);
+    bm.hub_offset.push_back(m.spec.hub_torque_offset);
   }
   for (const auto& m : models) {
     const ChannelSpec* ch[2] = {&m.spec.sensors.hub_angle, &m.spec.sensors.hub_rate};

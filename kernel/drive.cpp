@@ -198,7 +198,7 @@ double lane_drive(const BatchModel& bm, int l, const double* q, const double* v,
   } else {
     tau_hub += calc_hub_friction(bm, l, w_h);
   }
-  return tau_hub;
+  return tau_hub - bm.hub_offset[l];  // the constant load torque (hub.torque_offset)
 }
 
 }  // namespace

@@ -51,6 +51,7 @@ void validate(const ModelSpec& s, const std::string& src) {
   non_negative(s.joints.cubic_stiffness, "joints.cubic_stiffness");
   positive(s.joints.reference_cell, "joints.reference_cell");
   non_negative(s.hub_inertia, "hub.inertia");
+  if (!std::isfinite(s.hub_torque_offset)) throw ConfigError(src, 0, "hub.torque_offset", "must be finite");
   non_negative(s.payload_mass, "payload.mass");
   non_negative(s.payload_inertia, "payload.inertia");
   double last = 0.0;

@@ -189,6 +189,9 @@ struct ModelSpec {
   int segments = 6;               // N >= 2
   JointSpec joints;
   double hub_inertia = 50.0;      // kg·m^2, actuator + pinion + base frame
+  // A constant load torque on the hub, signed (the drive must supply it to hold still): cable drag, an
+  // unbalanced axis, amplifier bias; N·m. The hub gets tau_drive + tau_friction - hub_torque_offset.
+  double hub_torque_offset = 0.0;
   double payload_mass = 328.7;    // kg, at the tip point
   double payload_inertia = 118.6; // kg·m^2 about its own centre of mass
   std::vector<PayloadEvent> payload_events;  // in time order

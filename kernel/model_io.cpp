@@ -56,6 +56,7 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
 
   auto hub = top.child("hub", true);
   hub.required("inertia", s.hub_inertia);
+  hub.optional("torque_offset", s.hub_torque_offset);
   hub.finish();
 
   auto payload = top.child("payload", true);

@@ -58,7 +58,13 @@ AxesText axes_text(const LinePlot& p) {
 
 Axes line_plot_axes(const LinePlot& p, const Style& st) {
   const auto [x, y] = data_ranges(p);
-  return layout_axes({p.width, p.height}, x, y, axes_text(p), st);
+  AxesOptions opt;
+  if (!p.x_ticks.empty()) {
+    double step = 1.0;
+    for (std::size_t i = 1; i < p.x_ticks.size(); ++i) step = std::min(step, std::abs(p.x_ticks[i] - p.x_ticks[i - 1]));
+    opt.x_ticks = Ticks{p.x_ticks, step, {}};
+  }
+  return layout_axes({p.width, p.height}, x, y, axes_text(p), st, opt);
 }
 
 Stroke series_stroke(const Series& s, int colour, const Style& st) {

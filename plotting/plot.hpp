@@ -56,6 +56,7 @@ struct LinePlot {
   int width = 1400, height = 800;               // px, at least 320 × 240
   // optional fixed ranges; NaN = automatic from data with a small margin
   double x_min = NAN, x_max = NAN, y_min = NAN, y_max = NAN;
+  std::vector<double> x_ticks;                  // fixed x ticks (e.g. version numbers); empty = automatic
 };
 
 // Where the data lands in the image: the plot area is the pixels [left, left + width) ×

@@ -46,6 +46,9 @@ YAML::Node number_node(const std::string& path, double x) {
   return YAML::Node(x);
 }
 
+// A singular value of the Jacobian below this fraction of the largest is a null direction.
+constexpr double kIdentifiableSv = 1e-6;
+
 // A trial model needing more fixed steps per control period than this is refused (too stiff).
 constexpr int kMaxFitSubsteps = 64;
 
@@ -102,12 +105,18 @@ double sum_squares(const std::vector<double>& r) {
   return s;
 }
 
-// The effect's model for log-parameters theta (and the grid value, if any).
+// A parameter's value from its fitted coordinate theta, and back: log(value) for a positive
+// parameter, value / scale for a signed (linear) one.
+double param_value(const EffectParam& p, double theta) { return p.linear ? theta * p.scale : std::exp(theta); }
+double param_theta(const EffectParam& p, double value) { return p.linear ? value / p.scale : std::log(value); }
+
+// The effect's model for fitted coordinates theta (and the grid value, if any).
 std::vector<Assignment> effect_assignments(const Effect& e, const double* theta, double grid_value) {
   std::vector<Assignment> a;
   for (const auto& [path, value] : e.set) a.push_back(assign(path, YAML::Load(value)));
   if (!e.grid_path.empty()) a.push_back(assign(e.grid_path, number_node(e.grid_path, grid_value)));
-  for (std::size_t i = 0; i < e.params.size(); ++i) a.push_back(assign(e.params[i].path, YAML::Node(std::exp(theta[i]))));
+  for (std::size_t i = 0; i < e.params.size(); ++i)
+    a.push_back(assign(e.params[i].path, YAML::Node(param_value(e.params[i], theta[i]))));
   return a;
 }
 
@@ -164,7 +173,8 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std:
   f.switches = e.set;
   double grid_value = 0.0;
   std::vector<double> theta;
-  for (const auto& p : e.params) theta.push_back(std::log(p.initial));
+  for (const auto& p : e.params) theta.push_back(param_theta(p, p.initial));
+  for (std::size_t j = e.params.size() - shared; j < e.params.size(); ++j) f.refit.push_back(e.params[j].path);
   try {
     if (!e.grid_path.empty()) {
       std::vector<Model> models;
@@ -182,14 +192,15 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std:
       f.rss = best;
     }
     if (!e.params.empty()) {
-      // Multi-start: every starting value scaled together by 1/30 .. 30, run as lanes; the best starts.
+      // Multi-start: every positive starting value scaled together by 1/30 .. 30, run as lanes; the best starts.
       std::vector<double> factors;
       for (int i = -6; i <= 6; ++i) factors.push_back(std::pow(30.0, i / 6.0));
       std::vector<Model> starts;
       std::vector<double> used;
       for (double fct : factors) {
         std::vector<double> t = theta;
-        for (double& x : t) x += std::log(fct);
+        for (std::size_t j = 0; j < t.size(); ++j)
+          if (!e.params[j].linear) t[j] += std::log(fct);
         try {
           starts.push_back(build_model(*sc.src, effect_assignments(e, t.data(), grid_value)));
           used.push_back(fct);
@@ -204,18 +215,21 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std:
             best = sum_squares(r[i]);
             pick = used[i];
           }
-        for (double& x : theta) x += std::log(pick);
+        for (std::size_t j = 0; j < theta.size(); ++j)
+          if (!e.params[j].linear) theta[j] += std::log(pick);
       }
       ceres::Problem problem;
       auto* cost = new ReplayCost(sc, e, grid_value);
       problem.AddResidualBlock(cost, nullptr, theta.data());
       // Within a factor 1000 of the start either way: far enough for any plausible value, and a
-      // bound on the stiffness (and so the substeps) a trial step can ask for.
+      // bound on the stiffness (and so the substeps) a trial step can ask for. Signed: within ±scale.
       for (std::size_t j = 0; j < theta.size(); ++j) {
-        const double t0 = std::log(e.params[j].initial);
-        problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), t0 - std::log(1e3));
-        problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), t0 + std::log(1e3));
-        theta[j] = std::clamp(theta[j], t0 - std::log(1e3), t0 + std::log(1e3));
+        const auto& pj = e.params[j];
+        const double lo = pj.linear ? -1.0 : std::log(pj.initial) - std::log(1e3);
+        const double hi = pj.linear ? 1.0 : std::log(pj.initial) + std::log(1e3);
+        problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), lo);
+        problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), hi);
+        theta[j] = std::clamp(theta[j], lo, hi);
       }
       ceres::Solver::Options o;
       o.linear_solver_type = ceres::DENSE_QR;
@@ -225,19 +239,37 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std:
       o.function_tolerance = 1e-8;
       ceres::Solver::Summary summary;
       ceres::Solve(o, &problem, &summary);
-      // Standard errors from the Jacobian at the optimum: cov = s^2 (J^T J)^-1, s^2 = RSS / (n - k).
+      // Standard errors from the Jacobian at the optimum: cov = s^2 (J^T J)^+, s^2 = RSS / (n - k), by
+      // the SVD J = U S V^T. A parameter with weight in a (near-)null direction is not identifiable:
+      // the record cannot tell it from the others; its standard error is NaN.
       const int p = static_cast<int>(theta.size());
       std::vector<double> res(sc.size()), jac(static_cast<std::size_t>(sc.size()) * p);
       const double* params[] = {theta.data()};
       double* jacs[] = {jac.data()};
       if (!cost->Evaluate(params, res.data(), jacs)) throw std::runtime_error("the fitted model failed to run");
       f.rss = sum_squares(res);
-      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jac.data(), sc.size(), p);
-      const Eigen::MatrixXd cov = (J.transpose() * J).inverse() * (f.rss / std::max(1, n - p));
+      const Eigen::MatrixXd J =
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jac.data(), sc.size(), p);
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
+      const Eigen::VectorXd& sv = svd.singularValues();
+      const Eigen::MatrixXd& V = svd.matrixV();
+      Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(p, p);
+      std::vector<bool> null(p, false);
+      for (int k = 0; k < sv.size(); ++k) {
+        if (sv(k) > kIdentifiableSv * sv(0)) {
+          cov += V.col(k) * V.col(k).transpose() / (sv(k) * sv(k));
+        } else {
+          for (int j = 0; j < p; ++j) null[j] = null[j] || std::abs(V(j, k)) > 0.1;
+        }
+      }
+      cov *= f.rss / std::max(1, n - p);
       for (int j = 0; j < p; ++j) {
-        const double value = std::exp(theta[j]);
-        f.params[e.params[j].path] = value;
-        f.stderr_[e.params[j].path] = cov(j, j) >= 0 ? value * std::sqrt(cov(j, j)) : NAN;
+        const auto& pj = e.params[j];
+        const double value = param_value(pj, theta[j]);
+        const double unit = pj.linear ? pj.scale : value;  // d value / d theta
+        f.params[pj.path] = value;
+        f.stderr_[pj.path] = null[j] ? NAN : std::abs(unit) * std::sqrt(std::max(cov(j, j), 0.0));
+        if (null[j]) f.unidentifiable.push_back(pj.path);
       }
     }
     f.k = static_cast<int>(e.params.size()) - shared + (e.grid_path.empty() ? 0 : 1);
@@ -290,18 +322,28 @@ EffectScales make_scales(const Model& base, const Record& r, ReplayMode mode) {
   return s;
 }
 
-// `--refit auto`: of the model's existing parameters that no candidate effect fits (the beam's joint
-// stiffness and damping), the ones whose 1 % change moves the residual by more than a tenth of the
-// most sensitive one's, at most two; one batch of lanes.
-std::vector<std::string> pick_sensitive(const Scorer& sc, const ModelSource& src, const YAML::Node& doc) {
+// `--refit auto`: the model's existing parameters that are plausible calibration targets (nonzero),
+// most sensitive first: those whose 1 % change moves the normalised residual by more than a tenth of
+// what the most sensitive one's does. One batch of lanes.
+std::vector<std::string> rank_sensitive(const Scorer& sc, const ModelSource& src, const Model& base) {
+  const auto& s = base.spec;
+  const bool beam = base.nseg > 1;
+  const std::pair<const char*, double> targets[] = {
+      {"hub.inertia", s.hub_inertia},           {"payload.mass", s.payload_mass},
+      {"payload.inertia", s.payload_inertia},   {"friction.viscous", s.friction.viscous},
+      {"friction.coulomb", s.friction.coulomb}, {"joints.stiffness", beam ? s.joints.stiffness : 0.0},
+      {"joints.damping", beam ? s.joints.damping : 0.0}, {"hub.torque_offset", s.hub_torque_offset}};
   std::vector<std::string> paths, out;
-  for (const char* p : {"joints.stiffness", "joints.damping"}) {
-    const YAML::Node v = get_path(doc, p);
-    if (v && v.as<double>() > 0 && build_model(src).nseg > 1) paths.push_back(p);
+  std::vector<Model> models = {base};
+  for (const auto& [p, x] : targets) {
+    if (x == 0.0) continue;
+    try {
+      models.push_back(build_model(src, {assign(p, YAML::Node(1.01 * x))}));
+      paths.push_back(p);
+    } catch (const std::exception&) {  // e.g. stiction below a raised Coulomb level: not a target
+    }
   }
   if (paths.empty()) return out;
-  std::vector<Model> models = {build_model(src)};
-  for (const auto& p : paths) models.push_back(build_model(src, {assign(p, YAML::Node(1.01 * get_path(doc, p).as<double>()))}));
   const auto r = sc.residuals(models);
   std::vector<std::pair<double, std::string>> sens;
   for (std::size_t j = 0; j < paths.size(); ++j) {
@@ -312,8 +354,16 @@ std::vector<std::string> pick_sensitive(const Scorer& sc, const ModelSource& src
   }
   std::sort(sens.rbegin(), sens.rend());
   for (const auto& [v, p] : sens)
-    if (out.size() < 2 && v > 0.1 * sens[0].first) out.push_back(p);
+    if (v > 0.1 * sens[0].first) out.push_back(p);
   return out;
+}
+
+// Does the effect fit (or search) this path itself?
+bool fits_path(const Effect& e, const std::string& path) {
+  if (e.grid_path == path) return true;
+  for (const auto& p : e.params)
+    if (p.path == path) return true;
+  return false;
 }
 
 }  // namespace
@@ -352,7 +402,8 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
   d.base_rss = sum_squares(r0[0]);
   d.base_fit = sc.fit_percent(base);
-  auto effects = make_candidate_effects(base, opt.mode, make_scales(base, r, opt.mode));
+  const EffectScales scales = make_scales(base, r, opt.mode);
+  auto effects = make_candidate_effects(base, opt.mode, scales);
   for (const auto& name : opt.only) {
     bool known = false;
     for (const auto& n : effect_names()) known |= n == name;
@@ -364,50 +415,91 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
                                    return std::find(opt.only.begin(), opt.only.end(), e.name) == opt.only.end();
                                  }),
                   effects.end());
-  // Re-fitted existing parameters: the baseline fits them alone, every effect with its own.
-  std::vector<EffectParam> refit;
-  if (!opt.refit.empty()) {
-    YAML::Node doc = YAML::Clone(src.doc);
-    for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
-    const std::vector<std::string> paths =
-        opt.refit == std::vector<std::string>{"auto"} ? pick_sensitive(sc, src, doc) : opt.refit;
-    d.refit = paths;
-    for (const auto& path : paths) {
-      const YAML::Node v = get_path(doc, path);
-      double x = 0.0;
-      try {
-        x = v ? v.as<double>() : 0.0;
-      } catch (const YAML::Exception&) {
-        throw std::invalid_argument("--refit: '" + path + "' is not a number in the model");
-      }
-      if (!v) throw std::invalid_argument("--refit: the model does not set '" + path + "'");
-      refit.push_back({path, x > 0 ? x : 1.0});
+  // Re-fitted existing parameters. Named (--refit a,b): the same for the baseline and every effect,
+  // which then drops them from its own. `auto`: for each effect the (at most two) most sensitive
+  // existing parameters it does not fit itself, its Delta BIC taken against the baseline re-fitted
+  // with the same ones. "none" (or nothing): no re-fit.
+  const bool automatic = opt.refit == std::vector<std::string>{"auto"};
+  const bool named = !automatic && !opt.refit.empty() && opt.refit != std::vector<std::string>{"none"};
+  YAML::Node doc = YAML::Clone(src.doc);
+  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+  auto refit_param = [&](const std::string& path) {
+    const YAML::Node v = get_path(doc, path);
+    if (!v) throw std::invalid_argument("--refit: the model does not set '" + path + "'");
+    try {
+      return make_effect_param(path, v.as<double>(), scales);
+    } catch (const YAML::Exception&) {
+      throw std::invalid_argument("--refit: '" + path + "' is not a number in the model");
     }
-    Effect baseline{"baseline", "the model as it is, its re-fitted parameters fitted", {}, refit, "", {}, ""};
-    const EffectFit b = fit_one(sc, baseline, d.base_rss, d.base_fit, d.n, opt.max_iterations);
-    if (!b.ok) throw std::runtime_error("the baseline re-fit failed: " + b.note);
-    d.base_rss = b.rss;
-    d.base_fit = b.fit_percent;
-    d.base_params = b.params;
-    for (auto& p : refit) p.initial = b.params.at(p.path);
-  }
-  for (auto& e : effects) {
-    e.params.erase(std::remove_if(e.params.begin(), e.params.end(),
-                                  [&](const EffectParam& p) {
-                                    for (const auto& q : refit)
-                                      if (q.path == p.path) return true;
-                                    return false;
-                                  }),
-                   e.params.end());
-  }
+  };
+  const std::vector<std::string> pool = automatic ? rank_sensitive(sc, src, base) : named ? opt.refit : std::vector<std::string>{};
+  auto refit_of = [&](const Effect& e) {
+    std::vector<std::string> out;
+    for (const auto& p : pool)
+      if (named || (out.size() < 2 && !fits_path(e, p))) out.push_back(p);
+    return out;
+  };
+  if (named)
+    for (auto& e : effects)
+      e.params.erase(std::remove_if(e.params.begin(), e.params.end(),
+                                    [&](const EffectParam& p) {
+                                      return std::find(pool.begin(), pool.end(), p.path) != pool.end();
+                                    }),
+                     e.params.end());
   effects.erase(std::remove_if(effects.begin(), effects.end(),
                                [](const Effect& e) { return e.params.empty() && e.grid_path.empty(); }),
                 effects.end());
-  for (auto& e : effects) e.params.insert(e.params.end(), refit.begin(), refit.end());
+  // One baseline fit per distinct re-fit set: the reported one (d.refit) and those effects need.
+  std::map<std::vector<std::string>, EffectFit> baselines;
+  d.refit = refit_of(Effect{});
+  baselines[d.refit];
+  for (const auto& e : effects) baselines[refit_of(e)];
+  std::vector<std::vector<std::string>> sets;
+  for (const auto& [set, fit] : baselines) sets.push_back(set);
+  std::vector<EffectFit> fitted(sets.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    if (sets[i].empty()) {
+      fitted[i].ok = true;
+      fitted[i].rss = d.base_rss;
+      fitted[i].fit_percent = d.base_fit;
+      continue;
+    }
+    Effect baseline{"baseline", "the model as it is, its re-fitted parameters fitted", {}, {}, "", {}, ""};
+    try {
+      for (const auto& p : sets[i]) baseline.params.push_back(refit_param(p));
+    } catch (const std::exception& ex) {
+      fitted[i].note = ex.what();
+      continue;
+    }
+    fitted[i] = fit_one(sc, baseline, d.base_rss, d.base_fit, d.n, opt.max_iterations);
+  }
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    if (!fitted[i].ok) {
+      if (fitted[i].effect.empty()) throw std::invalid_argument(fitted[i].note);
+      throw std::runtime_error("the baseline re-fit failed: " + fitted[i].note);
+    }
+    baselines[sets[i]] = fitted[i];
+  }
+  const EffectFit& reported = baselines.at(d.refit);
+  d.base_rss = reported.rss;
+  d.base_fit = reported.fit_percent;
+  d.base_params = reported.params;
+  // Each effect: its own parameters, then its re-fitted ones starting where its baseline put them.
+  std::vector<std::vector<std::string>> refits;
+  for (auto& e : effects) refits.push_back(refit_of(e));
+  for (std::size_t i = 0; i < effects.size(); ++i)
+    for (const auto& p : refits[i]) {
+      EffectParam q = refit_param(p);
+      q.initial = baselines.at(refits[i]).params.at(p);
+      effects[i].params.push_back(q);
+    }
   d.ranking.resize(effects.size());
 #pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t i = 0; i < effects.size(); ++i)
-    d.ranking[i] = fit_one(sc, effects[i], d.base_rss, d.base_fit, d.n, opt.max_iterations, static_cast<int>(refit.size()));
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    const EffectFit& b = baselines.at(refits[i]);
+    d.ranking[i] = fit_one(sc, effects[i], b.rss, b.fit_percent, d.n, opt.max_iterations, static_cast<int>(refits[i].size()));
+  }
   std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
     return a.delta_bic < b.delta_bic;
@@ -437,10 +529,32 @@ std::string json_number(double x) {
   std::snprintf(buf, sizeof buf, "%.10g", x);
   return buf;
 }
+// A JSON string literal: quotes, backslashes and control characters escaped.
+std::string json_string(const std::string& x) {
+  std::string out = "\"";
+  for (unsigned char c : x) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
 std::string json_map(const std::map<std::string, double>& m) {
   std::string out = "{";
-  for (const auto& [k, v] : m) out += (out.size() > 1 ? ", " : "") + ("\"" + k + "\": " + json_number(v));
+  for (const auto& [k, v] : m) out += (out.size() > 1 ? ", " : "") + (json_string(k) + ": " + json_number(v));
   return out + "}";
+}
+std::string json_list(const std::vector<std::string>& v) {
+  std::string out = "[";
+  for (const auto& x : v) out += (out.size() > 1 ? ", " : "") + json_string(x);
+  return out + "]";
 }
 }  // namespace
 
@@ -448,17 +562,18 @@ std::string format_diagnosis_json(const Diagnosis& d) {
   std::string out = "{\n  \"mode\": \"" + std::string(replay_mode_name(d.mode)) + "\",\n";
   out += "  \"samples\": " + std::to_string(d.n) + ",\n";
   out += "  \"baseline\": {\"fit_percent\": " + json_map(d.base_fit) + ", \"params\": " + json_map(d.base_params) +
-         ", \"rss\": " + json_number(d.base_rss) + "},\n";
+         ", \"refit\": " + json_list(d.refit) + ", \"rss\": " + json_number(d.base_rss) + "},\n";
   out += "  \"ranking\": [\n";
   for (std::size_t i = 0; i < d.ranking.size(); ++i) {
     const auto& f = d.ranking[i];
-    out += "    {\"effect\": \"" + f.effect + "\", \"params\": " + json_map(f.params) + ", \"stderr\": " +
-           json_map(f.stderr_) + ", \"fit_percent\": " + json_map(f.fit_percent) +
-           ", \"delta_bic\": " + json_number(f.delta_bic) + ", \"significant\": " + (f.significant ? "true" : "false") +
-           ", \"ok\": " + (f.ok ? "true" : "false") + (f.note.empty() ? "" : ", \"note\": \"" + f.note + "\"") + "}" +
+    out += "    {\"effect\": " + json_string(f.effect) + ", \"params\": " + json_map(f.params) + ", \"stderr\": " +
+           json_map(f.stderr_) + ", \"unidentifiable\": " + json_list(f.unidentifiable) + ", \"refit\": " +
+           json_list(f.refit) + ", \"fit_percent\": " + json_map(f.fit_percent) + ", \"delta_bic\": " +
+           json_number(f.delta_bic) + ", \"significant\": " + (f.significant ? "true" : "false") +
+           ", \"ok\": " + (f.ok ? "true" : "false") + (f.note.empty() ? "" : ", \"note\": " + json_string(f.note)) + "}" +
            (i + 1 < d.ranking.size() ? "," : "") + "\n";
   }
-  out += "  ],\n  \"verdict\": \"" + d.verdict + "\"\n}\n";
+  out += "  ],\n  \"verdict\": " + json_string(d.verdict) + "\n}\n";
   return out;
 }
 
@@ -468,6 +583,13 @@ std::string format_diagnosis_text(const Diagnosis& d) {
   for (const auto& [c, v] : d.base_fit) {
     std::snprintf(buf, sizeof buf, " %s %.2f %%", c.c_str(), v);
     out += buf;
+  }
+  if (!d.refit.empty()) {
+    out += "\n  re-fitted:";
+    for (const auto& [p, v] : d.base_params) {
+      std::snprintf(buf, sizeof buf, " %s = %.4g", p.c_str(), v);
+      out += buf;
+    }
   }
   out += "\n\n  rank  effect                      delta BIC   fit % after      parameters\n";
   int rank = 0;
@@ -479,8 +601,9 @@ std::string format_diagnosis_text(const Diagnosis& d) {
     }
     for (const auto& [p, v] : f.params) {
       const double se = f.stderr_.count(p) ? f.stderr_.at(p) : NAN;
-      std::snprintf(buf, sizeof buf, std::isfinite(se) ? "%s%s = %.4g ± %.2g" : "%s%s = %.4g", params.empty() ? "" : ", ",
-                    p.c_str(), v, se);
+      const bool unid = std::find(f.unidentifiable.begin(), f.unidentifiable.end(), p) != f.unidentifiable.end();
+      std::snprintf(buf, sizeof buf, unid ? "%s%s = %.4g (unidentifiable)" : std::isfinite(se) ? "%s%s = %.4g ± %.2g" : "%s%s = %.4g",
+                    params.empty() ? "" : ", ", p.c_str(), v, se);
       params += buf;
     }
     std::snprintf(buf, sizeof buf, "  %4d  %-26s %10.1f%s  %-15s  %s\n", ++rank, f.effect.c_str(), f.delta_bic,

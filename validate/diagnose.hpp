@@ -41,6 +41,8 @@ struct EffectFit {
   std::vector<std::pair<std::string, std::string>> switches;  // fixed settings the effect needs (path -> YAML)
   std::map<std::string, double> params;       // fitted values by path
   std::map<std::string, double> stderr_;      // their standard errors (NaN when not identifiable)
+  std::vector<std::string> unidentifiable;    // fitted paths the record cannot tell apart from the others
+  std::vector<std::string> refit;             // the existing parameters re-fitted with it (also in params)
   std::map<std::string, double> fit_percent;  // per scored channel
   double rss = NAN;                            // normalised residual sum of squares
   int k = 0;                                   // parameters fitted (a grid search counts one)
@@ -58,7 +60,7 @@ struct Diagnosis {
   double base_rss = NAN;
   std::map<std::string, double> base_fit;      // fit % per channel of the base model (after its re-fit)
   std::map<std::string, double> base_params;   // the re-fitted existing parameters of the baseline
-  std::vector<std::string> refit;              // their paths (as given, or as `auto` chose them)
+  std::vector<std::string> refit;              // their paths (as given, or as `auto` chose them for no effect)
   std::vector<EffectFit> ranking;              // best (lowest Delta BIC) first
   std::string verdict = "none";                // the best significant effect, or "none"
 };
@@ -66,8 +68,11 @@ struct Diagnosis {
 struct DiagnoseOptions {
   ReplayMode mode = ReplayMode::kClosedLoop;
   std::vector<std::string> only;               // effects to try (empty = all that apply)
-  std::vector<std::string> refit;              // existing parameters re-fitted with the baseline and every effect;
-                                               // {"auto"}: the beam's joint stiffness and damping, by sensitivity
+  // Existing parameters re-fitted with the baseline and every effect (paths); {"auto"}: for each
+  // effect the (at most two) existing parameters the residual is most sensitive to that the effect
+  // does not fit itself; {} or {"none"}: none (the default: with `auto` by default the hidden-effect
+  // acceptance of docs/validation.md fell to 68 % first, 89 % among the first three).
+  std::vector<std::string> refit;
   int max_iterations = 25;
   int max_samples = 1500;                      // per channel: the record is decimated to at most this
 };

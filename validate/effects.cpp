@@ -6,9 +6,15 @@
 namespace ff {
 
 std::vector<std::string> effect_names() {
-  return {"coulomb_friction", "viscous_friction", "stribeck_friction", "backlash", "drive_compliance",
+  return {"coulomb_friction", "viscous_friction", "stribeck_friction", "torque_offset", "backlash", "drive_compliance",
           "hydraulic_compressibility", "torque_saturation", "joint_stiffening", "sensor_delay.hub_angle",
           "sensor_delay.hub_rate", "sensor_quantization", "extra_mode", "payload", "hub_inertia"};
+}
+
+EffectParam make_effect_param(const std::string& path, double value, const EffectScales& sc) {
+  if (path == "hub.torque_offset")
+    return {path, value, true, 2.0 * std::max({std::abs(value), sc.torque_rms, 1e-6})};
+  return {path, value > 0 ? value : 1.0, false, 1.0};
 }
 
 std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& sc) {
@@ -23,9 +29,11 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
                  {{"friction.viscous", start(s.friction.viscous, 0.05 * tau / w)}}, "", {}, ""});
   out.push_back({"stribeck_friction", "Coulomb friction with a Stribeck (stiction) peak", {},
                  {{"friction.coulomb", start(s.friction.coulomb, 0.05 * tau)},
-                  {"friction.stiction", start(s.friction.stiction, 0.1 * tau)},
+                  {"friction.stiction", start(s.friction.stiction, std::max(0.1 * tau, 2.0 * s.friction.coulomb))},
                   {"friction.stribeck_velocity", std::max(s.friction.stribeck_velocity, 0.05 * w)}},
                  "", {}, "coulomb_friction"});
+  out.push_back({"torque_offset", "a constant load torque on the hub (cable drag, an unbalanced axis, amplifier bias)",
+                 {}, {make_effect_param("hub.torque_offset", s.hub_torque_offset, sc)}, "", {}, ""});
   if (!inverse) {
     out.push_back({"backlash", "free play in the drive train", {{"drive.enabled", "true"}},
                    {{"drive.backlash", start(s.drive.backlash, 1e-3)}}, "", {}, ""});

@@ -11,10 +11,13 @@
 
 namespace ff {
 
-// A continuous parameter, fitted as log(value) (every one is positive).
+// A continuous parameter. Positive ones are fitted as log(value), within x/÷ 1000 of the start;
+// signed ones (`linear`: a constant torque) as value / scale, within ±scale.
 struct EffectParam {
   std::string path;      // model path, e.g. "friction.coulomb"
-  double initial = 1.0;  // starting value, > 0
+  double initial = 1.0;  // starting value, > 0 unless linear
+  bool linear = false;   // signed and fitted linearly
+  double scale = 1.0;    // linear only: the bound on |value| and its unit in the fit, > 0
 };
 
 struct Effect {
@@ -37,6 +40,10 @@ struct EffectScales {
   double rate_rms = 1.0;    // rad/s
   double torque_max = 1.0;  // N·m
 };
+
+// The parameter at `path` starting at `value`: signed (linear, bounded by twice the larger of
+// |value| and the torque RMS) when the path is a signed one (hub.torque_offset), else positive.
+EffectParam make_effect_param(const std::string& path, double value, const EffectScales& scales);
 
 // The candidates that apply to `mode` on `base` (plant effects everywhere; controller-side
 // effects - sensors, saturation - only in closed loop).

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <stdexcept>
 
@@ -40,10 +41,12 @@ struct Ledger {
     db.exec("CREATE TABLE IF NOT EXISTS fits (version INTEGER, channel TEXT, fit_percent REAL, rmse REAL, "
             "PRIMARY KEY (version, channel))");
   }
-  // The latest version of a model file, or 0.
-  long find(const std::string& model) {
-    sqlite3_stmt* st = db.prepare("SELECT MAX(version) FROM versions WHERE model = ?");
+  // The latest version of a model file fitted to this record in this mode, or 0.
+  long find(const std::string& model, const std::string& record, const std::string& mode) {
+    sqlite3_stmt* st = db.prepare("SELECT MAX(version) FROM versions WHERE model = ? AND record = ? AND mode = ?");
     sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 2, record.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 3, mode.c_str(), -1, SQLITE_TRANSIENT);
     long v = 0;
     if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) v = sqlite3_column_int64(st, 0);
     sqlite3_finalize(st);
@@ -88,7 +91,7 @@ std::string record_calibration(const std::string& ledger_path, const std::string
                                const Record& r, ReplayMode mode) {
   Ledger led(ledger_path);
   led.db.exec("BEGIN");
-  long parent = led.find(before_path);
+  long parent = led.find(before_path, r.source, replay_mode_name(mode));
   if (parent == 0) parent = led.add(before_path, 0, "base", "", r.source, replay_mode_name(mode), fits_of(before, r, mode));
   std::string params;
   for (const auto& [p, v] : fit.params) {
@@ -99,11 +102,16 @@ std::string record_calibration(const std::string& ledger_path, const std::string
   led.add(after_path, parent, fit.effect, params, r.source, replay_mode_name(mode), fits_of(after, r, mode));
   led.db.exec("COMMIT");
 
-  // Read the whole ledger back: a text table and the plot of fit % by version.
+  // Read back the versions fitted to this record in this mode: a text table and the plot of the
+  // error (100 - fit %) per channel by version.
   sqlite3_stmt* st = led.db.prepare(
       "SELECT v.version, v.model, v.effect, f.channel, f.fit_percent, f.rmse FROM versions v JOIN fits f "
-      "ON f.version = v.version ORDER BY v.version, f.channel");
-  std::string text = "ledger " + ledger_path + ":\n  version  effect                     channel          fit %        RMSE  model\n";
+      "ON f.version = v.version WHERE v.record = ? AND v.mode = ? ORDER BY v.version, f.channel");
+  sqlite3_bind_text(st, 1, r.source.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(st, 2, replay_mode_name(mode), -1, SQLITE_TRANSIENT);
+  std::string text = "ledger " + ledger_path + ", " + r.source + " (" + replay_mode_name(mode) +
+                     "):\n  version  effect                     channel          fit %        RMSE  model\n";
+  std::vector<double> versions;
   std::map<std::string, Series> lines;
   while (sqlite3_step(st) == SQLITE_ROW) {
     const long v = sqlite3_column_int64(st, 0);
@@ -118,13 +126,17 @@ std::string record_calibration(const std::string& ledger_path, const std::string
     auto& s = lines[channel];
     s.label = channel;
     s.x.push_back(static_cast<double>(v));
-    s.y.push_back(pct);
+    s.y.push_back(100.0 - pct);
+    if (versions.empty() || versions.back() != static_cast<double>(v)) versions.push_back(static_cast<double>(v));
   }
   sqlite3_finalize(st);
   LinePlot plot;
-  plot.title = "fit of each model version to its record";
+  plot.title = "error of each model version on " + std::filesystem::path(r.source).filename().string() + " (" +
+               replay_mode_name(mode) + ")";
   plot.x_label = "model version";
-  plot.y_label = "fit (%)";
+  plot.y_label = "error: 100 - fit (%)";
+  plot.x_ticks = versions;
+  plot.y_min = 0.0;
   for (auto& [c, s] : lines) plot.series.push_back(s);
   render_line_plot(plot, ledger_path + ".png");
   return text + "plot: " + ledger_path + ".png\n";

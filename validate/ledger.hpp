@@ -15,7 +15,8 @@ std::string format_calibrated_model(const ModelSource& src, const EffectFit& fit
 
 // Adds `before` (if the ledger does not know its file yet) and `after` (child of before) to the
 // ledger at `ledger_path`, with each one's fit % and RMSE per channel on the record, and redraws
-// ledger_path + ".png" (fit % per channel against version). Returns the ledger as a text table.
+// ledger_path + ".png": the error (100 - fit %) per channel against version, of the versions fitted
+// to this record in this mode. Returns those versions as a text table.
 std::string record_calibration(const std::string& ledger_path, const std::string& before_path, const Model& before,
                                const std::string& after_path, const Model& after, const EffectFit& fit,
                                const Record& r, ReplayMode mode);

@@ -26,6 +26,17 @@ std::vector<std::string> split(const std::string& line) {
   return cells;
 }
 
+// The first sample at which x's running swing (max - min so far) exceeds `limit`, or x.size().
+std::size_t first_swing_over(const std::vector<double>& x, double limit) {
+  double lo = x.empty() ? 0.0 : x[0], hi = lo;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    lo = std::min(lo, x[k]);
+    hi = std::max(hi, x[k]);
+    if (hi - lo > limit) return k;
+  }
+  return x.size();
+}
+
 }  // namespace
 
 Record read_record_csv(const std::string& path, const std::vector<std::string>& required) {
@@ -46,6 +57,7 @@ Record read_record_csv(const std::string& path, const std::vector<std::string>& 
     if (std::find(header.begin(), header.end(), name) == header.end())
       throw ConfigError(path, 1, name, "missing column '" + name + "', needed here");
   std::vector<std::vector<double>> cols(header.size());
+  std::vector<int> lines;  // each sample's line in the file
   int line_no = 1;
   while (std::getline(in, line)) {
     ++line_no;
@@ -63,25 +75,49 @@ Record read_record_csv(const std::string& path, const std::vector<std::string>& 
       if (!std::isfinite(x)) throw ConfigError(path, line_no, header[c], "'" + cells[c] + "' is not finite");
       cols[c].push_back(x);
     }
+    lines.push_back(line_no);
     const auto& t = cols[tcol];
     if (t.size() > 1 && !(t.back() > t[t.size() - 2]))
       throw ConfigError(path, line_no, "t", "time does not increase (" + cells[tcol] + " after " +
                                                 std::to_string(t[t.size() - 2]) + ")");
   }
   if (cols[tcol].size() < kMinRecordSamples)
-    throw ConfigError(path, line_no, "", "only " + std::to_string(cols[tcol].size()) + " samples; at least " +
-                                             std::to_string(kMinRecordSamples) + " are needed");
+    throw ConfigError(path, line_no, "t", "the record ends here after only " + std::to_string(cols[tcol].size()) +
+                                              " samples (rows); at least " + std::to_string(kMinRecordSamples) +
+                                              " are needed");
   r.t = std::move(cols[tcol]);
   for (std::size_t c = 0; c < header.size(); ++c)
     if (static_cast<int>(c) != tcol) r.columns[header[c]] = std::move(cols[c]);
-  // Angles in radians: a swing beyond 2 pi in a record of an arm that turns less than a turn is degrees.
+  // Angles in radians: a swing beyond 2 pi in a record of an arm that turns less than a turn is
+  // degrees. The error names the sample where the swing first passes 2 pi.
   for (const char* name : {"ref", "hub_angle", "tip_angle"}) {
     if (!r.has(name)) continue;
     const auto& x = r.at(name);
-    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
-    if (*hi - *lo > 2.0 * M_PI)
-      throw ConfigError(path, 0, name,
-                        "swings over " + std::to_string(*hi - *lo) + ": looks like degrees; the record must be in radians");
+    const std::size_t k = first_swing_over(x, 2.0 * M_PI);
+    if (k < x.size())
+      throw ConfigError(path, lines[k], name,
+                        "swings over 2 pi by here (" + std::to_string(x[k]) +
+                            "): looks like degrees; the record must be in radians");
+  }
+  // Rates in rad/s: the rate's integral must swing no more than 2 pi, nor much more than the hub
+  // angle does (deg/s would make it 57 times the angle's swing).
+  if (r.has("hub_rate")) {
+    const auto& w = r.at("hub_rate");
+    std::vector<double> integral(w.size(), 0.0);
+    for (std::size_t k = 1; k < w.size(); ++k) integral[k] = integral[k - 1] + 0.5 * (w[k] + w[k - 1]) * (r.t[k] - r.t[k - 1]);
+    double limit = 2.0 * M_PI;
+    bool by_angle = false;
+    if (r.has("hub_angle")) {
+      const auto [lo, hi] = std::minmax_element(r.at("hub_angle").begin(), r.at("hub_angle").end());
+      by_angle = 10.0 * std::max(*hi - *lo, 0.01) < limit;
+      if (by_angle) limit = 10.0 * std::max(*hi - *lo, 0.01);
+    }
+    const std::size_t k = first_swing_over(integral, limit);
+    if (k < w.size())
+      throw ConfigError(path, lines[k], "hub_rate",
+                        "its integral swings over " + std::to_string(limit) + " rad by here" +
+                            (by_angle ? " (ten times the hub angle's swing)" : "") +
+                            ": looks like degrees per second; the record must be in rad/s");
   }
   return r;
 }

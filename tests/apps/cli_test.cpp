@@ -286,6 +286,40 @@ TEST_F(Cli, CompareRecordWithNanCellNamesFileLineAndColumnAndWritesNothing) {
   EXPECT_EQ(tree(work).size(), 3u) << "compare writes nothing";  // configs/, configs/fbtb.yaml, rec.csv
 }
 
+TEST_F(Cli, BadRecordStopsDiagnoseAndCalibrateToo) {
+  write("rec.csv", record_text(6, "nan"));
+  for (const std::string verb : {"compare --out out", "diagnose --json out.json",
+                                 "calibrate --add coulomb_friction --out out/model.yaml"}) {
+    const auto r = run(verb.substr(0, verb.find(' ')) + " --model configs/fbtb.yaml --data rec.csv" +
+                       verb.substr(verb.find(' ')));
+    EXPECT_EQ(r.exit_code, 2) << verb << ": " << r.output;
+    expect_one_error_line(r, "rec.csv:7: hub_angle: 'nan' is not finite");
+    EXPECT_EQ(tree(work).size(), 3u) << verb << " writes nothing";  // configs/, configs/fbtb.yaml, rec.csv
+  }
+}
+
+TEST_F(Cli, DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict) {
+  const std::string emps = " --data " + quote(kSource + "/tests/data/emps/emps_estimation.csv") +
+                           " --mode inverse-dynamics --samples 300 --refit auto --effects coulomb_friction,payload";
+  const auto r = run("diagnose --model " + quote(kSource + "/configs/emps.yaml") + emps + " --json d.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string json = read_text(work / "d.json");
+  EXPECT_NE(json.find("\"baseline\": {\"fit_percent\": {\"hub_torque\": 30."), std::string::npos) << json;
+  EXPECT_NE(json.find("\"refit\": [\"hub.inertia\"]"), std::string::npos) << json;
+  const auto first = json.find("{\"effect\": \"coulomb_friction\", \"params\": {\"friction.coulomb\": ");
+  const auto second = json.find("{\"effect\": \"payload\"");
+  ASSERT_NE(first, std::string::npos) << json;
+  ASSERT_NE(second, std::string::npos) << json;
+  EXPECT_LT(first, second);  // ranked: Coulomb friction first
+  for (const char* key : {"\"stderr\": {", "\"fit_percent\": {", "\"delta_bic\": -", "\"significant\": true"})
+    EXPECT_NE(json.find(key, first), std::string::npos) << key;
+  // The payload on a one-body axis: its mass, inertia and the hub's are one number; not identifiable.
+  EXPECT_NE(json.find("\"unidentifiable\": [\"payload.mass\", \"payload.inertia\"]", second), std::string::npos) << json;
+  EXPECT_NE(json.find("\"payload.mass\": null", second), std::string::npos) << json;
+  const std::string end = "  ],\n  \"verdict\": \"coulomb_friction\"\n}\n";
+  EXPECT_EQ(json.substr(json.size() - end.size()), end);
+}
+
 TEST_F(Cli, CompareRecordMissingAColumnTheModeNeedsWritesNothing) {
   write("rec.csv", record_text());
   const auto r = run("compare --model configs/fbtb.yaml --data rec.csv --mode open-loop --out out");

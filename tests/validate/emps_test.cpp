@@ -1,25 +1,35 @@
-// A real record (tests/data/emps, the EMPS benchmark): its known missing effect, Coulomb friction,
-// is seen by compare, found by diagnose and, once added, cuts the inverse-dynamics error.
+// A real record (tests/data/emps, the EMPS benchmark) on a rigid one-axis model without friction
+// (configs/emps.yaml): compare sees the residual step at zero velocity, diagnose ranks Coulomb
+// friction first, and the loop through the command line - calibrate, diagnose again, calibrate -
+// adds Coulomb friction, viscous friction and the constant offset, the error falling version by
+// version to the benchmark's least squares (relative error RMSE / RMS(F) about 6 %).
 #include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
+#include "kernel/model_io.hpp"
 #include "validate/compare.hpp"
 #include "validate/diagnose.hpp"
 
 namespace ff {
 namespace {
 
+namespace fs = std::filesystem;
+
 const std::string kSource = FLEXFARM_SOURCE_DIR;
+const std::string kRecord = kSource + "/tests/data/emps/emps_estimation.csv";
+constexpr double kForceRms = 54.11;  // RMS of the record's measured force, N
 
 struct Emps : ::testing::Test {
   ModelSource src = load_model_source(kSource + "/configs/emps.yaml", {});
-  Record rec = read_record_csv(kSource + "/tests/data/emps/emps_estimation.csv", replay_inputs(ReplayMode::kInverseDynamics));
-  DiagnoseOptions opt;
-  void SetUp() override {
-    opt.mode = ReplayMode::kInverseDynamics;
-    opt.refit = {"hub.inertia", "friction.viscous"};
-  }
+  Record rec = read_record_csv(kRecord, replay_inputs(ReplayMode::kInverseDynamics));
 };
 
 TEST_F(Emps, CompareShowsTheResidualStepAtZeroVelocity) {
@@ -33,19 +43,99 @@ TEST_F(Emps, CompareShowsTheResidualStepAtZeroVelocity) {
   EXPECT_NE(words.find("friction-like"), std::string::npos) << words;
 }
 
-TEST_F(Emps, DiagnoseRanksCoulombFrictionFirstAndCalibrationCutsTheError) {
+TEST_F(Emps, DiagnoseRanksCoulombFrictionFirst) {
+  DiagnoseOptions opt;
+  opt.mode = ReplayMode::kInverseDynamics;
+  opt.refit = {"auto"};  // the mass, the model's only (and so most sensitive) parameter
   const Diagnosis d = diagnose(src, rec, opt);
   ASSERT_FALSE(d.ranking.empty());
+  EXPECT_EQ(d.refit, std::vector<std::string>{"hub.inertia"});
   EXPECT_EQ(d.verdict, "coulomb_friction");
   const EffectFit& f = d.ranking[0];
-  // The benchmark's own least-squares values: Fc = 20.39 N, M = 95.11 kg, Fv = 203.5 N s/m.
-  EXPECT_NEAR(f.params.at("friction.coulomb"), 20.39, 1.5);
-  EXPECT_NEAR(f.params.at("hub.inertia"), 95.11, 2.0);
-  EXPECT_NEAR(f.params.at("friction.viscous"), 203.5, 10.0);
-  // Without Coulomb friction (mass and viscous friction re-fitted) the force misses by ~19 %
-  // (the benchmark: ~17 %); with it by ~9 % (the benchmark, which also fits an offset: ~5 %).
-  EXPECT_LT(d.base_fit.at("hub_torque"), 84.0);
-  EXPECT_GT(f.fit_percent.at("hub_torque"), 89.0);
+  // Alone, Coulomb friction takes on the viscous part too: 36.5 N (the benchmark's Fc: 20.4 N).
+  EXPECT_NEAR(f.params.at("friction.coulomb"), 36.5, 1.0);
+  EXPECT_NEAR(f.params.at("hub.inertia"), 95.4, 1.0);  // the benchmark: 95.11 kg
+  EXPECT_NEAR(d.base_fit.at("hub_torque"), 30.5, 0.5);  // the mass alone
+  EXPECT_NEAR(f.fit_percent.at("hub_torque"), 83.2, 0.5);
+}
+
+// `flexfarm ARGS` from the source tree: exit code and output.
+std::pair<int, std::string> flexfarm(const std::string& args) {
+  const std::string cmd = "cd '" + kSource + "' && '" FLEXFARM_BINARY "' " + args + " 2>&1";
+  std::string out;
+  FILE* p = popen(cmd.c_str(), "r");
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::string verdict_of(const fs::path& json) {
+  std::ifstream in(json);
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str(), key = "\"verdict\": \"";
+  const auto a = text.find(key);
+  return a == std::string::npos ? "" : text.substr(a + key.size(), text.find('"', a + key.size()) - a - key.size());
+}
+
+TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
+  const fs::path dir = fs::temp_directory_path() / ("ff_emps_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string common = " --data " + kRecord + " --mode inverse-dynamics --samples 1000 --refit auto";
+  // version 1 is the model as it is; each round: diagnose names the effect, calibrate adds it.
+  std::string model = kSource + "/configs/emps.yaml";
+  const char* expected[] = {"coulomb_friction", "viscous_friction", "torque_offset"};
+  for (int v = 0; v < 3; ++v) {
+    const fs::path json = dir / ("diagnosis" + std::to_string(v + 1) + ".json");
+    const auto d = flexfarm("diagnose --model " + model + common + " --json " + json.string());
+    ASSERT_EQ(d.first, 0) << d.second;
+    EXPECT_EQ(verdict_of(json), expected[v]) << d.second;
+    const std::string next = (dir / ("v" + std::to_string(v + 2) + ".yaml")).string();
+    const auto c = flexfarm("calibrate --model " + model + common + " --add " + expected[v] + " --out " + next);
+    ASSERT_EQ(c.first, 0) << c.second;
+    model = next;
+  }
+  // The last model has all three, near the benchmark's least squares (Fc 20.4 N, Fv 203.5 N s/m, offset -3.16 N).
+  const Model last = load_model(model);
+  EXPECT_NEAR(last.spec.friction.coulomb, 20.5, 0.5);
+  EXPECT_NEAR(last.spec.friction.viscous, 201.0, 5.0);
+  EXPECT_NEAR(last.spec.hub_torque_offset, -3.2, 0.2);
+  EXPECT_NEAR(last.spec.hub_inertia, 95.4, 0.5);
+  // The ledger: one row per version, its fit on the record; relative error RMSE / RMS(F) falls
+  // 69 % -> 17 % -> 8.6 % -> 6.2 % (least squares on the record with sign(v): 6.1 %; the benchmark: about 5 %).
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "ledger.sqlite").string().c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(db,
+                     "SELECT v.version, v.effect, f.fit_percent, f.rmse FROM versions v JOIN fits f ON f.version = "
+                     "v.version WHERE f.channel = 'hub_torque' ORDER BY v.version",
+                     -1, &st, nullptr);
+  std::vector<std::string> effects;
+  std::vector<double> fit, relative;
+  while (sqlite3_step(st) == SQLITE_ROW) {
+    effects.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st, 1)));
+    fit.push_back(sqlite3_column_double(st, 2));
+    relative.push_back(100.0 * sqlite3_column_double(st, 3) / kForceRms);
+  }
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  ASSERT_EQ(effects, (std::vector<std::string>{"base", "coulomb_friction", "viscous_friction", "torque_offset"}));
+  const double want_fit[] = {30.5, 83.2, 91.4, 93.8}, want_rel[] = {69.4, 16.7, 8.6, 6.2};
+  for (int v = 0; v < 4; ++v) {
+    EXPECT_NEAR(fit[v], want_fit[v], 0.5) << "version " << v + 1;
+    EXPECT_NEAR(relative[v], want_rel[v], 0.4) << "version " << v + 1;
+  }
+  EXPECT_TRUE(fs::exists(dir / "ledger.sqlite.png"));
+  // Compare on the written YAML: the fit the ledger recorded, the step at zero velocity gone.
+  const auto after = flexfarm("compare --model " + model + " --data " + kRecord + " --mode inverse-dynamics --out " +
+                              (dir / "compare").string());
+  ASSERT_EQ(after.first, 0) << after.second;
+  const auto row = after.second.find("| hub_torque | N m | ");
+  ASSERT_NE(row, std::string::npos) << after.second;
+  EXPECT_NEAR(std::atof(after.second.c_str() + row + 20), fit[3], 0.01) << after.second;
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Measurement records (validate/record.cpp): bad records get one clear error naming file, line, column.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -74,8 +75,11 @@ TEST_F(Records, NanAndEmptyCellsNameLineAndColumn) {
   EXPECT_NE(e.message().find("empty"), std::string::npos);
 }
 
-TEST_F(Records, TooFewSamplesAreRefused) {
-  EXPECT_NE(error_of(write(5)).message().find("only 5 samples"), std::string::npos);
+TEST_F(Records, TooFewSamplesAreRefusedAtTheLastLine) {
+  const auto e = error_of(write(5));
+  EXPECT_NE(e.message().find("only 5 samples"), std::string::npos);
+  EXPECT_EQ(e.line(), 6);  // the header and five rows
+  EXPECT_EQ(e.key(), "t");
 }
 
 TEST_F(Records, DegreesWhereRadiansAreExpectedAreRefused) {
@@ -86,7 +90,28 @@ TEST_F(Records, DegreesWhereRadiansAreExpectedAreRefused) {
   out.close();
   const auto e = error_of(path);
   EXPECT_EQ(e.key(), "hub_angle");
+  EXPECT_EQ(e.line(), 15);  // sample 13: 6.5 "rad" from 0, the first swing beyond 2 pi
   EXPECT_NE(e.message().find("degrees"), std::string::npos);
+}
+
+TEST_F(Records, HubRateInDegreesPerSecondIsRefused) {
+  // A hub turning at 0.02 rad/s (0 .. 0.098 rad over the record), its rate written in deg/s (1.15):
+  // the rate's integral swings 57 times as far as the angle.
+  const auto path = (dir / "rate.csv").string();
+  std::ofstream out(path);
+  out << "t,hub_angle,hub_rate\n";
+  for (int k = 0; k < 50; ++k) out << k / 10.0 << "," << 0.002 * k << "," << 0.02 * 180.0 / M_PI << "\n";
+  out.close();
+  const auto e = error_of(path);
+  EXPECT_EQ(e.key(), "hub_rate");
+  EXPECT_EQ(e.line(), 11);  // the integral passes 10 x 0.098 rad at t = 0.9 s (sample 9: 1.03)
+  EXPECT_NE(e.message().find("degrees per second"), std::string::npos);
+  // The same rate in rad/s is fine.
+  std::ofstream good(path);
+  good << "t,hub_angle,hub_rate\n";
+  for (int k = 0; k < 50; ++k) good << k / 10.0 << "," << 0.002 * k << "," << 0.02 << "\n";
+  good.close();
+  EXPECT_EQ(read_record_csv(path, {"hub_rate"}).size(), 50u);
 }
 
 TEST_F(Records, RaggedRowIsRefused) {
