@@ -62,7 +62,7 @@ Axes line_plot_axes(const LinePlot& p, const Style& st) {
   if (!p.x_ticks.empty()) {
     double step = 1.0;
     for (std::size_t i = 1; i < p.x_ticks.size(); ++i) step = std::min(step, std::abs(p.x_ticks[i] - p.x_ticks[i - 1]));
-    opt.x_ticks = Ticks{p.x_ticks, step, {}};
+    opt.x_ticks = Ticks{p.x_ticks, step, p.x_tick_labels};
   }
   return layout_axes({p.width, p.height}, x, y, axes_text(p), st, opt);
 }

@@ -57,6 +57,7 @@ struct LinePlot {
   // optional fixed ranges; NaN = automatic from data with a small margin
   double x_min = NAN, x_max = NAN, y_min = NAN, y_max = NAN;
   std::vector<double> x_ticks;                  // fixed x ticks (e.g. version numbers); empty = automatic
+  std::vector<std::string> x_tick_labels;       // their text (e.g. "2 +coulomb"); empty = the numbers
 };
 
 // Where the data lands in the image: the plot area is the pixels [left, left + width) ×

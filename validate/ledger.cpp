@@ -112,6 +112,7 @@ std::string record_calibration(const std::string& ledger_path, const std::string
   std::string text = "ledger " + ledger_path + ", " + r.source + " (" + replay_mode_name(mode) +
                      "):\n  version  effect                     channel          fit %        RMSE  model\n";
   std::vector<double> versions;
+  std::vector<std::string> version_labels;  // "2 +coulomb_friction": the effect each version added
   std::map<std::string, Series> lines;
   while (sqlite3_step(st) == SQLITE_ROW) {
     const long v = sqlite3_column_int64(st, 0);
@@ -127,7 +128,11 @@ std::string record_calibration(const std::string& ledger_path, const std::string
     s.label = channel;
     s.x.push_back(static_cast<double>(v));
     s.y.push_back(100.0 - pct);
-    if (versions.empty() || versions.back() != static_cast<double>(v)) versions.push_back(static_cast<double>(v));
+    s.marker = Series::Marker::kDot;
+    if (versions.empty() || versions.back() != static_cast<double>(v)) {
+      versions.push_back(static_cast<double>(v));
+      version_labels.push_back(std::to_string(v) + (effect == "base" ? " base" : " +" + effect));
+    }
   }
   sqlite3_finalize(st);
   LinePlot plot;
@@ -136,6 +141,7 @@ std::string record_calibration(const std::string& ledger_path, const std::string
   plot.x_label = "model version";
   plot.y_label = "error: 100 - fit (%)";
   plot.x_ticks = versions;
+  plot.x_tick_labels = version_labels;
   plot.y_min = 0.0;
   for (auto& [c, s] : lines) plot.series.push_back(s);
   render_line_plot(plot, ledger_path + ".png");

@@ -52,6 +52,8 @@ const std::vector<Hidden> kHidden = {
     {"payload", {"payload.mass=250", "payload.inertia=80"}},
     {"hub_inertia", {"hub.inertia=300"}},
     {"hub_inertia", {"hub.inertia=1000"}},
+    {"torque_offset", {"hub.torque_offset=150"}},
+    {"torque_offset", {"hub.torque_offset=-500"}},
 };
 
 const std::vector<std::string> kShortRun = {"trajectory.moves=[{target: 0.5, hold: 3}]"};
