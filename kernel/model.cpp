@@ -205,12 +205,21 @@ void validate(const ModelSpec& s, const std::string& src) {
 
 }  // namespace
 
-BodyInertia make_tip_body(const Model& m, double mass, double inertia) {
-  const int i = m.nseg - 1;
+namespace {
+// Body i without payload, in its joint frame: the segment about its joint (parallel axis), plus the
+// hub on body 0.
+BodyInertia make_segment_body(const Model& m, int i) {
   const double li = m.seg_length[i], mi = m.seg_mass[i];
-  // The segment about its joint (parallel axis), the hub on a one-segment arm, then the payload at the tip.
   BodyInertia b{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
   if (i == 0) b.inertia += m.spec.hub_inertia;
+  return b;
+}
+}  // namespace
+
+BodyInertia make_tip_body(const Model& m, double mass, double inertia) {
+  // The last segment (with the hub on a one-segment arm), then the payload at its tip.
+  const double li = m.seg_length[m.nseg - 1];
+  BodyInertia b = make_segment_body(m, m.nseg - 1);
   b.mass += mass;
   b.first += mass * li;
   b.inertia += inertia + mass * li * li;
@@ -241,12 +250,7 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
 
   // Body inertias about each joint axis: segment (parallel axis), hub on body 0, payload at the tip of body N-1
   // (make_tip_body, which payload events use too).
-  for (int i = 0; i < n - 1; ++i) {
-    const double li = m.seg_length[i], mi = m.seg_mass[i];
-    BodyInertia bi{mi, mi * 0.5 * li, m.seg_inertia[i] + mi * 0.25 * li * li};
-    if (i == 0) bi.inertia += spec.hub_inertia;
-    m.body.push_back(bi);
-  }
+  for (int i = 0; i < n - 1; ++i) m.body.push_back(make_segment_body(m, i));
   m.body.push_back(make_tip_body(m, spec.payload_mass, spec.payload_inertia));
 
   // Joint springs and dampers scale as reference_cell / l (k = kappa EI / l).
