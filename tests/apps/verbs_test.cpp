@@ -7,26 +7,16 @@
 #include <sstream>
 #include <string>
 
+#include "tests/cli_support.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code;
-  std::string output;
-};
+using Result = ff::test::CliResult;
 
 // Runs flexfarm with `args` from the source tree, stdout and stderr together.
-Result flexfarm(const std::string& args) {
-  const std::string cmd = "cd '" FLEXFARM_SOURCE_DIR "' && '" FLEXFARM_BINARY "' " + args + " 2>&1";
-  Result r{0, {}};
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) r.output += buf;
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+Result flexfarm(const std::string& args) { return ff::test::run_flexfarm(args); }
 
 class Verbs : public ::testing::Test {
  protected:

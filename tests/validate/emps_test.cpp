@@ -5,7 +5,6 @@
 // version to the benchmark's least squares (relative error RMSE / RMS(F) about 6 %).
 #include <gtest/gtest.h>
 #include <sqlite3.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -15,6 +14,7 @@
 #include <sstream>
 
 #include "kernel/model_io.hpp"
+#include "tests/cli_support.hpp"
 #include "validate/compare.hpp"
 #include "validate/diagnose.hpp"
 
@@ -59,17 +59,6 @@ TEST_F(Emps, DiagnoseRanksCoulombFrictionFirst) {
   EXPECT_NEAR(f.fit_percent.at("hub_torque"), 83.2, 0.5);
 }
 
-// `flexfarm ARGS` from the source tree: exit code and output.
-std::pair<int, std::string> flexfarm(const std::string& args) {
-  const std::string cmd = "cd '" + kSource + "' && '" FLEXFARM_BINARY "' " + args + " 2>&1";
-  std::string out;
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
 std::string verdict_of(const fs::path& json) {
   std::ifstream in(json);
   std::stringstream s;
@@ -89,12 +78,12 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
   const char* expected[] = {"coulomb_friction", "viscous_friction", "torque_offset"};
   for (int v = 0; v < 3; ++v) {
     const fs::path json = dir / ("diagnosis" + std::to_string(v + 1) + ".json");
-    const auto d = flexfarm("diagnose --model " + model + common + " --json " + json.string());
-    ASSERT_EQ(d.first, 0) << d.second;
-    EXPECT_EQ(verdict_of(json), expected[v]) << d.second;
+    const auto d = test::run_flexfarm("diagnose --model " + model + common + " --json " + json.string());
+    ASSERT_EQ(d.exit_code, 0) << d.output;
+    EXPECT_EQ(verdict_of(json), expected[v]) << d.output;
     const std::string next = (dir / ("v" + std::to_string(v + 2) + ".yaml")).string();
-    const auto c = flexfarm("calibrate --model " + model + common + " --add " + expected[v] + " --out " + next);
-    ASSERT_EQ(c.first, 0) << c.second;
+    const auto c = test::run_flexfarm("calibrate --model " + model + common + " --add " + expected[v] + " --out " + next);
+    ASSERT_EQ(c.exit_code, 0) << c.output;
     model = next;
   }
   // The last model has all three, near the benchmark's least squares (Fc 20.4 N, Fv 203.5 N s/m, offset -3.16 N).
@@ -129,12 +118,12 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
   }
   EXPECT_TRUE(fs::exists(dir / "ledger.sqlite.png"));
   // Compare on the written YAML: the fit the ledger recorded, the step at zero velocity gone.
-  const auto after = flexfarm("compare --model " + model + " --data " + kRecord + " --mode inverse-dynamics --out " +
+  const auto after = test::run_flexfarm("compare --model " + model + " --data " + kRecord + " --mode inverse-dynamics --out " +
                               (dir / "compare").string());
-  ASSERT_EQ(after.first, 0) << after.second;
-  const auto row = after.second.find("| hub_torque | N m | ");
-  ASSERT_NE(row, std::string::npos) << after.second;
-  EXPECT_NEAR(std::atof(after.second.c_str() + row + 20), fit[3], 0.01) << after.second;
+  ASSERT_EQ(after.exit_code, 0) << after.output;
+  const auto row = after.output.find("| hub_torque | N m | ");
+  ASSERT_NE(row, std::string::npos) << after.output;
+  EXPECT_NEAR(std::atof(after.output.c_str() + row + 20), fit[3], 0.01) << after.output;
   fs::remove_all(dir);
 }
 
