@@ -1,0 +1,662 @@
+// The truth simulator (truth_sim.hpp; equations in README.md). Nothing here comes from kernel/.
+#include "tests/validate/truth/truth_sim.hpp"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace ff::truth {
+
+// ---------------------------------------------------------------------------------------------
+// The field table: the one place names map to TruthRig members.
+
+namespace {
+
+template <class Rig, class F>
+void visit_fields(Rig& r, F&& f) {
+  f("beam.length", r.beam.length, "m");
+  f("beam.height", r.beam.height, "m");
+  f("beam.thickness", r.beam.thickness, "m");
+  f("beam.density", r.beam.density, "kg/m^3");
+  f("beam.youngs_modulus", r.beam.youngs_modulus, "Pa");
+  f("segments", r.segments, "");
+  f("joint.stiffness", r.joint.stiffness, "N m/rad");
+  f("joint.damping", r.joint.damping, "N m s/rad");
+  f("joint.reference_cell", r.joint.reference_cell, "m");
+  f("joint.stiffening", r.joint.stiffening, "");
+  f("joint.stiffening_angle", r.joint.stiffening_angle, "rad");
+  f("hub_inertia", r.hub_inertia, "kg m^2");
+  f("payload.mass", r.payload.mass, "kg");
+  f("payload.inertia", r.payload.inertia, "kg m^2");
+  f("controller.rate", r.controller.rate, "Hz");
+  f("controller.kp", r.controller.kp, "N m/rad");
+  f("controller.kd", r.controller.kd, "N m s/rad");
+  f("controller.ki", r.controller.ki, "N m/(rad s)");
+  f("controller.torque_limit", r.controller.torque_limit, "N m");
+  f("trajectory.move_time", r.trajectory.move_time, "s");
+  f("trajectory.moves", r.trajectory.moves, "rad:s,...");
+  f("friction.viscous", r.friction.viscous, "N m s/rad");
+  f("friction.coulomb", r.friction.coulomb, "N m");
+  f("friction.stiction", r.friction.stiction, "N m");
+  f("friction.stribeck_velocity", r.friction.stribeck_velocity, "rad/s");
+  f("friction.smoothing", r.friction.smoothing, "rad/s");
+  f("torque_offset", r.torque_offset, "N m");
+  f("drive.enabled", r.drive.enabled, "");
+  f("drive.inertia", r.drive.inertia, "kg m^2");
+  f("drive.ratio", r.drive.ratio, "");
+  f("drive.stiffness", r.drive.stiffness, "N m/rad");
+  f("drive.cubic_stiffness", r.drive.cubic_stiffness, "N m/rad^3");
+  f("drive.damping", r.drive.damping, "N m s/rad");
+  f("drive.backlash", r.drive.backlash, "rad");
+  f("drive.backlash_smoothing", r.drive.backlash_smoothing, "rad");
+  f("sensors.hub_angle.noise", r.sensors.hub_angle.noise, "rad");
+  f("sensors.hub_angle.delay", r.sensors.hub_angle.delay, "samples");
+  f("sensors.hub_angle.quantize", r.sensors.hub_angle.quantize, "");
+  f("sensors.hub_angle.encoder_bits", r.sensors.hub_angle.encoder_bits, "bits");
+  f("sensors.hub_rate.noise", r.sensors.hub_rate.noise, "rad/s");
+  f("sensors.hub_rate.delay", r.sensors.hub_rate.delay, "samples");
+  f("sensors.hub_rate.recorded", r.sensors.hub_rate.recorded, "");
+  f("sensors.hub_torque.noise", r.sensors.hub_torque.noise, "N m");
+  f("sensors.hub_torque.delay", r.sensors.hub_torque.delay, "samples");
+  f("sensors.tip_deflection.noise", r.sensors.tip_deflection.noise, "m");
+  f("sensors.tip_deflection.delay", r.sensors.tip_deflection.delay, "samples");
+  f("record.decimate", r.record.decimate, "samples");
+  f("record.as_seen", r.record.as_seen, "");
+  f("seed", r.seed, "");
+  f("duration", r.duration, "s");
+  f("initial.joint_angle", r.initial.joint_angle, "rad");
+  f("solver.rtol", r.solver.rtol, "");
+  f("solver.atol", r.solver.atol, "");
+  f("solver.max_steps", r.solver.max_steps, "");
+}
+
+[[noreturn]] void bad_value(const std::string& key, const std::string& value, const char* what) {
+  throw std::invalid_argument(key + ": '" + value + "' is not " + what);
+}
+
+double parse_double(const std::string& key, const std::string& s) {
+  std::size_t used = 0;
+  double x = 0.0;
+  try {
+    x = std::stod(s, &used);
+  } catch (const std::exception&) {
+    bad_value(key, s, "a number");
+  }
+  if (used != s.size() || !std::isfinite(x)) bad_value(key, s, "a finite number");
+  return x;
+}
+
+long long parse_integer(const std::string& key, const std::string& s) {
+  std::size_t used = 0;
+  long long x = 0;
+  try {
+    x = std::stoll(s, &used);
+  } catch (const std::exception&) {
+    bad_value(key, s, "a whole number");
+  }
+  if (used != s.size()) bad_value(key, s, "a whole number");
+  return x;
+}
+
+// "target:hold,target:hold", rad and s.
+std::vector<TruthMove> parse_moves(const std::string& key, const std::string& s) {
+  std::vector<TruthMove> moves;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto colon = item.find(':');
+    if (colon == std::string::npos) bad_value(key, s, "a list target:hold,target:hold (rad, s)");
+    moves.push_back({parse_double(key, item.substr(0, colon)), parse_double(key, item.substr(colon + 1))});
+  }
+  if (moves.empty()) bad_value(key, s, "a list target:hold,target:hold (rad, s)");
+  return moves;
+}
+
+template <class T>
+void parse_into(const std::string& key, const std::string& s, T& x) {
+  if constexpr (std::is_same_v<T, double>) {
+    x = parse_double(key, s);
+  } else if constexpr (std::is_same_v<T, bool>) {
+    if (s == "true" || s == "1") x = true;
+    else if (s == "false" || s == "0") x = false;
+    else bad_value(key, s, "true, false, 1 or 0");
+  } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+    if (s.empty() || s[0] == '-') bad_value(key, s, "a whole number >= 0");
+    x = static_cast<std::uint64_t>(parse_integer(key, s));
+  } else if constexpr (std::is_integral_v<T>) {
+    const long long v = parse_integer(key, s);
+    if (v < static_cast<long long>(std::numeric_limits<T>::min()) || v > static_cast<long long>(std::numeric_limits<T>::max()))
+      bad_value(key, s, "in range");
+    x = static_cast<T>(v);
+  } else {
+    x = parse_moves(key, s);
+  }
+}
+
+template <class T>
+std::string format_value(const T& x) {
+  if constexpr (std::is_same_v<T, bool>) {
+    return x ? "true" : "false";
+  } else if constexpr (std::is_same_v<T, double>) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", x);
+    return buf;
+  } else if constexpr (std::is_integral_v<T>) {
+    return std::to_string(x);
+  } else {
+    std::string out;
+    for (const auto& m : x) out += (out.empty() ? "" : ",") + format_value(m.target) + ":" + format_value(m.hold);
+    return out;
+  }
+}
+
+}  // namespace
+
+void set_truth_field(TruthRig& rig, const std::string& key, const std::string& value) {
+  bool found = false;
+  visit_fields(rig, [&](const char* name, auto& member, const char*) {
+    if (key != name) return;
+    parse_into(key, value, member);
+    found = true;
+  });
+  if (!found) throw std::invalid_argument("unknown key '" + key + "'");
+}
+
+std::vector<TruthFieldInfo> list_truth_fields(const TruthRig& rig) {
+  std::vector<TruthFieldInfo> out;
+  visit_fields(rig, [&](const char* name, const auto& member, const char* unit) {
+    out.push_back({name, unit, format_value(member)});
+  });
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Checks: one message naming the field.
+
+namespace {
+
+void require(bool ok, const char* key, const char* what, double got) {
+  if (ok) return;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "%s: must be %s, got %g", key, what, got);
+  throw std::invalid_argument(buf);
+}
+
+void validate(const TruthRig& r) {
+  auto positive = [](const char* key, double x) { require(x > 0 && std::isfinite(x), key, "> 0", x); };
+  auto non_negative = [](const char* key, double x) { require(x >= 0 && std::isfinite(x), key, ">= 0", x); };
+  positive("beam.length", r.beam.length);
+  positive("beam.height", r.beam.height);
+  positive("beam.thickness", r.beam.thickness);
+  non_negative("beam.density", r.beam.density);
+  positive("beam.youngs_modulus", r.beam.youngs_modulus);
+  require(r.segments >= 1 && r.segments <= 1000, "segments", "between 1 and 1000", r.segments);
+  positive("joint.stiffness", r.joint.stiffness);
+  non_negative("joint.damping", r.joint.damping);
+  positive("joint.reference_cell", r.joint.reference_cell);
+  non_negative("joint.stiffening", r.joint.stiffening);
+  positive("joint.stiffening_angle", r.joint.stiffening_angle);
+  non_negative("hub_inertia", r.hub_inertia);
+  non_negative("payload.mass", r.payload.mass);
+  non_negative("payload.inertia", r.payload.inertia);
+  positive("controller.rate", r.controller.rate);
+  non_negative("controller.kp", r.controller.kp);
+  non_negative("controller.kd", r.controller.kd);
+  non_negative("controller.ki", r.controller.ki);
+  non_negative("controller.torque_limit", r.controller.torque_limit);
+  positive("trajectory.move_time", r.trajectory.move_time);
+  for (const auto& m : r.trajectory.moves) {
+    require(std::isfinite(m.target), "trajectory.moves", "finite targets", m.target);
+    non_negative("trajectory.moves (hold)", m.hold);
+  }
+  non_negative("friction.viscous", r.friction.viscous);
+  non_negative("friction.coulomb", r.friction.coulomb);
+  non_negative("friction.stiction", r.friction.stiction);
+  require(r.friction.stiction == 0 || r.friction.stiction >= r.friction.coulomb, "friction.stiction",
+          ">= friction.coulomb (or 0 for no peak)", r.friction.stiction);
+  positive("friction.stribeck_velocity", r.friction.stribeck_velocity);
+  positive("friction.smoothing", r.friction.smoothing);
+  require(std::isfinite(r.torque_offset), "torque_offset", "finite", r.torque_offset);
+  positive("drive.inertia", r.drive.inertia);
+  positive("drive.ratio", r.drive.ratio);
+  positive("drive.stiffness", r.drive.stiffness);
+  non_negative("drive.cubic_stiffness", r.drive.cubic_stiffness);
+  non_negative("drive.damping", r.drive.damping);
+  non_negative("drive.backlash", r.drive.backlash);
+  positive("drive.backlash_smoothing", r.drive.backlash_smoothing);
+  const std::pair<const TruthChannel*, const char*> channels[] = {{&r.sensors.hub_angle, "sensors.hub_angle"},
+                                                                  {&r.sensors.hub_rate, "sensors.hub_rate"},
+                                                                  {&r.sensors.hub_torque, "sensors.hub_torque"},
+                                                                  {&r.sensors.tip_deflection, "sensors.tip_deflection"}};
+  for (const auto& [ch, name] : channels) {
+    const std::string n(name);
+    non_negative((n + ".noise").c_str(), ch->noise);
+    require(ch->delay >= 0 && ch->delay <= 1000000, (n + ".delay").c_str(), "between 0 and 1e6 samples", ch->delay);
+  }
+  require(r.sensors.hub_angle.encoder_bits >= 1 && r.sensors.hub_angle.encoder_bits <= 52,
+          "sensors.hub_angle.encoder_bits", "between 1 and 52", r.sensors.hub_angle.encoder_bits);
+  require(r.record.decimate >= 1, "record.decimate", ">= 1", r.record.decimate);
+  non_negative("duration", r.duration);
+  require(std::isfinite(r.initial.joint_angle), "initial.joint_angle", "finite", r.initial.joint_angle);
+  positive("solver.rtol", r.solver.rtol);
+  positive("solver.atol", r.solver.atol);
+  require(r.solver.max_steps >= 1, "solver.max_steps", ">= 1", static_cast<double>(r.solver.max_steps));
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The chain: segments, joints, and the mass-matrix coefficients.
+
+TruthChain make_truth_chain(const TruthRig& r) {
+  TruthChain ch;
+  const int n = r.segments;
+  ch.n = n;
+  // Joints at the centres of N-1 equal cells l = L/(N-1): end segments l/2 (reference-rig.md).
+  const double cell = n > 1 ? r.beam.length / (n - 1) : r.beam.length;
+  ch.length.assign(n, cell);
+  if (n > 1) ch.length.front() = ch.length.back() = 0.5 * cell;
+  // k and c scale as reference_cell / l; k3 from the secant stiffening at the stiffening angle.
+  const double scale = r.joint.reference_cell / cell;
+  const double k = r.joint.stiffness * scale;
+  ch.k.assign(n, k);
+  ch.c.assign(n, r.joint.damping * scale);
+  ch.k3.assign(n, r.joint.stiffening * k / (r.joint.stiffening_angle * r.joint.stiffening_angle));
+  ch.k[0] = ch.c[0] = ch.k3[0] = 0.0;
+
+  // Segment i: mass m_i = rho h t L_i, centroidal inertia m_i (L_i^2 + t^2)/12; mass beyond it
+  // (outboard segments and the payload) B_i.
+  std::vector<double> m(n), ic(n), beyond(n);
+  for (int i = 0; i < n; ++i) {
+    m[i] = r.beam.density * r.beam.height * r.beam.thickness * ch.length[i];
+    ic[i] = m[i] * (ch.length[i] * ch.length[i] + r.beam.thickness * r.beam.thickness) / 12.0;
+  }
+  beyond[n - 1] = r.payload.mass;
+  for (int i = n - 2; i >= 0; --i) beyond[i] = beyond[i + 1] + m[i + 1];
+  // T = 1/2 sum_jk a_jk cos(phi_j - phi_k) w_j w_k:
+  //   a_jj = Ic_j + m_j L_j^2/4 + B_j L_j^2 (+ J_hub on j = 0, + J_payload on j = N-1),
+  //   a_jk = L_j (m_k L_k/2 + B_k L_k) for j < k (segment k's and everything beyond it's first moment).
+  ch.a = Eigen::MatrixXd::Zero(n, n);
+  for (int j = 0; j < n; ++j) {
+    const double lj = ch.length[j];
+    ch.a(j, j) = ic[j] + 0.25 * m[j] * lj * lj + beyond[j] * lj * lj;
+    for (int k2 = j + 1; k2 < n; ++k2) {
+      const double lk = ch.length[k2];
+      ch.a(j, k2) = ch.a(k2, j) = lj * (0.5 * m[k2] * lk + beyond[k2] * lk);
+    }
+  }
+  ch.a(0, 0) += r.hub_inertia;
+  ch.a(n - 1, n - 1) += r.payload.inertia;
+  return ch;
+}
+
+Eigen::MatrixXd calc_truth_mass_matrix(const TruthChain& ch, const Eigen::VectorXd& phi) {
+  Eigen::MatrixXd M(ch.n, ch.n);
+  for (int j = 0; j < ch.n; ++j)
+    for (int k = 0; k < ch.n; ++k) M(j, k) = ch.a(j, k) * std::cos(phi[j] - phi[k]);
+  return M;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The plant: chain, hub friction, load, drive train. State y = [phi (N), w (N), theta_a, w_a (drive)].
+
+namespace {
+
+// The commanded hub angle of the cubic moves, rad.
+double calc_ref(const TruthRig::Trajectory& tr, double t) {
+  double r0 = 0.0, t0 = 0.0;
+  for (const auto& mv : tr.moves) {
+    const double u = (t - t0) / tr.move_time;
+    if (u < 1.0) return r0 + (mv.target - r0) * u * u * (3.0 - 2.0 * u);
+    r0 = mv.target;
+    t0 += tr.move_time + mv.hold;
+    if (t < t0) return r0;
+  }
+  return r0;
+}
+
+class Plant {
+ public:
+  explicit Plant(const TruthRig& r)
+      : rig_(r), ch_(make_truth_chain(r)), n_(ch_.n), M_(n_, n_), rhs_(n_), acc_(n_), s_(n_), c_(n_) {}
+
+  int size() const { return 2 * n_ + (rig_.drive.enabled ? 2 : 0); }
+  int segments() const { return n_; }
+
+  // At rest, every beam joint bent by q0, the drive's shaft aligned with the hub (centre of the gap).
+  std::vector<double> initial_state(double q0) const {
+    std::vector<double> y(size(), 0.0);
+    for (int i = 0; i < n_; ++i) y[i] = i * q0;
+    return y;
+  }
+
+  // Hub friction, N m: -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) (2/pi) atan(w/eps)).
+  double friction(double w) const {
+    const auto& f = rig_.friction;
+    const double fs = f.stiction > 0 ? f.stiction : f.coulomb;
+    const double x = w / f.stribeck_velocity;
+    return -(f.viscous * w + (f.coulomb + (fs - f.coulomb) * std::exp(-x * x)) * M_2_PI * std::atan(w / f.smoothing));
+  }
+
+  // The drive's dead zone e = g(d) and its slope g'(d): s(d - b) - s(-d - b) with the smooth ramp
+  // s(x) = (x + sqrt(x^2 + delta^2))/2 (written without cancellation for x < 0); e = d without backlash.
+  void dead_zone(double d, double& e, double& slope) const {
+    const double b = 0.5 * rig_.drive.backlash, delta = rig_.drive.backlash_smoothing;
+    if (b == 0.0) {
+      e = d;
+      slope = 1.0;
+      return;
+    }
+    auto ramp = [&](double x) {
+      const double h = std::hypot(x, delta);
+      return x >= 0 ? 0.5 * (x + h) : 0.5 * delta * delta / (h - x);
+    };
+    auto ramp_slope = [&](double x) { return 0.5 * (1.0 + x / std::hypot(x, delta)); };
+    e = ramp(d - b) - ramp(-d - b);
+    slope = ramp_slope(d - b) + ramp_slope(-d - b);
+  }
+
+  // Mesh torque on the hub, N m: k e + k3 e^3 + c de/dt; with backlash the teeth push, never pull.
+  double mesh_torque(const double* y) const {
+    const auto& dr = rig_.drive;
+    const double d = y[2 * n_] / dr.ratio - y[0], dd = y[2 * n_ + 1] / dr.ratio - y[n_];
+    double e, slope;
+    dead_zone(d, e, slope);
+    const double t = (dr.stiffness + dr.cubic_stiffness * e * e) * e + dr.damping * slope * dd;
+    if (dr.backlash == 0.0) return t;
+    return e > 0 ? std::max(t, 0.0) : std::min(t, 0.0);
+  }
+
+  // The actuator's torque on the hub (what a torque sensor reads), N m.
+  double actuator_torque(const double* y) const { return rig_.drive.enabled ? mesh_torque(y) : tau; }
+
+  // ydot = f(y) under the held demand `tau`. False when the result is not finite.
+  bool rhs(const double* y, double* ydot) {
+    const double* phi = y;
+    const double* w = y + n_;
+    // Generalised forces on the absolute angles: joint i's moment m_i = -(k q + k3 q^3 + c q') with
+    // q = phi_i - phi_{i-1} acts +m_i on segment i and -m_i on segment i-1.
+    rhs_.setZero();
+    for (int i = 1; i < n_; ++i) {
+      const double q = phi[i] - phi[i - 1], qd = w[i] - w[i - 1];
+      const double m = -((ch_.k[i] + ch_.k3[i] * q * q) * q + ch_.c[i] * qd);
+      rhs_[i] += m;
+      rhs_[i - 1] -= m;
+    }
+    // Hub (on segment 0): actuator, friction, the constant load.
+    rhs_[0] += actuator_torque(y) + friction(w[0]) - rig_.torque_offset;
+    if (rig_.drive.enabled) {
+      const auto& dr = rig_.drive;
+      ydot[2 * n_] = y[2 * n_ + 1];
+      ydot[2 * n_ + 1] = (tau - mesh_torque(y)) / (dr.ratio * dr.inertia);  // J_a theta_a'' = (tau - tau_s)/n
+    }
+    // Lagrange: sum_k a_jk [cos(phi_j - phi_k) phi_k'' + sin(phi_j - phi_k) w_k^2] = Q_j.
+    for (int i = 0; i < n_; ++i) {
+      s_[i] = std::sin(phi[i]);
+      c_[i] = std::cos(phi[i]);
+    }
+    for (int j = 0; j < n_; ++j)
+      for (int k = 0; k < n_; ++k) {
+        const double cjk = c_[j] * c_[k] + s_[j] * s_[k], sjk = s_[j] * c_[k] - c_[j] * s_[k];
+        M_(j, k) = ch_.a(j, k) * cjk;
+        rhs_[j] -= ch_.a(j, k) * sjk * w[k] * w[k];
+      }
+    acc_ = M_.ldlt().solve(rhs_);
+    for (int i = 0; i < n_; ++i) {
+      ydot[i] = w[i];
+      ydot[n_ + i] = acc_[i];
+    }
+    for (int i = 0; i < size(); ++i)
+      if (!std::isfinite(ydot[i])) return false;
+    return true;
+  }
+
+  double tip_deflection(const double* y) const {
+    double d = 0.0;
+    for (int i = 0; i < n_; ++i) d += ch_.length[i] * std::sin(y[i] - y[0]);
+    return d;
+  }
+
+  double twist(const double* y) const { return rig_.drive.enabled ? y[2 * n_] / rig_.drive.ratio - y[0] : 0.0; }
+
+  // Kinetic energy 1/2 w' M w + 1/2 J_a w_a^2 plus the springs' energy (the drive mesh's exact without backlash), J.
+  double energy(const double* y) const {
+    Eigen::Map<const Eigen::VectorXd> phi(y, n_), w(y + n_, n_);
+    double e = 0.5 * w.dot(calc_truth_mass_matrix(ch_, phi) * w);
+    for (int i = 1; i < n_; ++i) {
+      const double q = y[i] - y[i - 1];
+      e += 0.5 * ch_.k[i] * q * q + 0.25 * ch_.k3[i] * q * q * q * q;
+    }
+    if (rig_.drive.enabled) {
+      const auto& dr = rig_.drive;
+      double ez, slope;
+      dead_zone(twist(y), ez, slope);
+      e += 0.5 * dr.inertia * y[2 * n_ + 1] * y[2 * n_ + 1] + 0.5 * dr.stiffness * ez * ez +
+           0.25 * dr.cubic_stiffness * ez * ez * ez * ez;
+    }
+    return e;
+  }
+
+  double tau = 0.0;  // the held demand of the controller, N m
+
+ private:
+  const TruthRig& rig_;
+  TruthChain ch_;
+  int n_;
+  Eigen::MatrixXd M_;
+  Eigen::VectorXd rhs_, acc_, s_, c_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// CVODE (BDF, Newton with the dense direct solver, finite-difference Jacobian).
+
+class Cvode {
+ public:
+  Cvode(Plant& plant, const TruthRig::Solver& s) : plant_(plant), n_(plant.size()) {
+    if (SUNContext_Create(nullptr, &ctx_) != 0) throw std::runtime_error("truth_sim: SUNContext_Create failed");
+    y_ = N_VNew_Serial(n_, ctx_);
+    mem_ = CVodeCreate(CV_BDF, ctx_);
+    A_ = SUNDenseMatrix(n_, n_, ctx_);
+    ls_ = SUNLinSol_Dense(y_, A_, ctx_);
+    if (!y_ || !mem_ || !A_ || !ls_) throw std::runtime_error("truth_sim: CVODE could not allocate");
+    N_VConst(0.0, y_);
+    check(CVodeInit(mem_, &Cvode::f, 0.0, y_), "CVodeInit");
+    check(CVodeSetErrHandlerFn(mem_, &Cvode::on_error, this), "CVodeSetErrHandlerFn");
+    check(CVodeSetUserData(mem_, &plant_), "CVodeSetUserData");
+    check(CVodeSStolerances(mem_, s.rtol, s.atol), "CVodeSStolerances");
+    check(CVodeSetLinearSolver(mem_, ls_, A_), "CVodeSetLinearSolver");
+    check(CVodeSetMaxNumSteps(mem_, s.max_steps), "CVodeSetMaxNumSteps");
+  }
+  ~Cvode() {
+    CVodeFree(&mem_);
+    SUNLinSolFree(ls_);
+    SUNMatDestroy(A_);
+    N_VDestroy(y_);
+    SUNContext_Free(&ctx_);
+  }
+  Cvode(const Cvode&) = delete;
+  Cvode& operator=(const Cvode&) = delete;
+
+  double* state() { return N_VGetArrayPointer(y_); }
+
+  // A fresh start at t from state(): the held torque has jumped, the history is no good.
+  void restart(double t) { check(CVodeReInit(mem_, t, y_), "CVodeReInit"); }
+
+  // Integrates state() to exactly t_next (stop time: never past the next sample).
+  void advance(double t_next) {
+    check(CVodeSetStopTime(mem_, t_next), "CVodeSetStopTime");
+    double t_reached = 0.0;
+    const int flag = CVode(mem_, t_next, y_, &t_reached, CV_NORMAL);
+    if (flag < 0) {
+      char buf[512];
+      std::snprintf(buf, sizeof buf, "truth_sim: CVODE failed before t = %.6f s (%s)%s%s", t_next,
+                    CVodeGetReturnFlagName(flag), message_.empty() ? "" : ": ", message_.c_str());
+      throw std::runtime_error(buf);
+    }
+  }
+
+  long steps() const {
+    long n = 0;
+    CVodeGetNumSteps(mem_, &n);
+    return n;
+  }
+
+ private:
+  static int f(double, N_Vector y, N_Vector ydot, void* user) {
+    return static_cast<Plant*>(user)->rhs(N_VGetArrayPointer(y), N_VGetArrayPointer(ydot)) ? 0 : 1;  // 1: retry smaller
+  }
+  static void on_error(int code, const char*, const char* function, char* msg, void* self) {
+    if (code < 0) static_cast<Cvode*>(self)->message_ = std::string(function) + ": " + msg;  // warnings: ignored
+  }
+  void check(int flag, const char* what) {
+    if (flag < 0) throw std::runtime_error(std::string("truth_sim: ") + what + " failed: " + message_);
+  }
+
+  Plant& plant_;
+  int n_;
+  SUNContext ctx_ = nullptr;
+  N_Vector y_ = nullptr;
+  void* mem_ = nullptr;
+  SUNMatrix A_ = nullptr;
+  SUNLinearSolver ls_ = nullptr;
+  std::string message_;
+};
+
+// A sensor channel's readings at every controller sample, with its own noise stream.
+class Channel {
+ public:
+  Channel(const TruthChannel& spec, std::uint64_t seed, unsigned id) : spec_(spec) {
+    std::seed_seq s{static_cast<unsigned>(seed & 0xffffffffu), static_cast<unsigned>(seed >> 32), id};
+    rng_.seed(s);
+  }
+
+  // Takes sample k's reading of the true value x (noise, then quantum q if > 0).
+  void read(double x, double quantum = 0.0) {
+    if (spec_.noise > 0) x += spec_.noise * normal_(rng_);
+    if (quantum > 0) x = quantum * std::nearbyint(x / quantum);
+    readings_.push_back(x);
+  }
+  // The reading taken at sample k, and the one `delay` samples before it (the first while k < delay).
+  double now(std::size_t k) const { return readings_[k]; }
+  double delayed(std::size_t k) const {
+    const std::size_t d = static_cast<std::size_t>(spec_.delay);
+    return readings_[k >= d ? k - d : 0];
+  }
+
+ private:
+  const TruthChannel& spec_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_;
+  std::vector<double> readings_;
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The run: controller samples, CVODE in between, the sensors, the record.
+
+std::vector<std::string> truth_record_columns(const TruthRig& rig) {
+  std::vector<std::string> cols = {"ref", "hub_torque", "hub_angle"};
+  if (rig.sensors.hub_rate.recorded) cols.push_back("hub_rate");
+  cols.push_back("tip_deflection");
+  return cols;
+}
+
+TruthRun run_truth(const TruthRig& rig) {
+  validate(rig);
+  double duration = rig.duration;
+  if (duration == 0.0)
+    for (const auto& mv : rig.trajectory.moves) duration += rig.trajectory.move_time + mv.hold;
+  require(duration > 0, "duration", "> 0 (or moves to take it from)", duration);
+  const double T = 1.0 / rig.controller.rate;
+  const long last = std::lround(duration / T);  // samples 0..last
+
+  Plant plant(rig);
+  Cvode cvode(plant, rig.solver);
+  double* y = cvode.state();
+  const auto y0 = plant.initial_state(rig.initial.joint_angle);
+  std::copy(y0.begin(), y0.end(), y);
+  const int n = plant.segments();
+
+  const auto& sn = rig.sensors;
+  Channel angle(sn.hub_angle, rig.seed, 0), rate(sn.hub_rate, rig.seed, 1), torque(sn.hub_torque, rig.seed, 2),
+      tip(sn.tip_deflection, rig.seed, 3);
+  const double quantum = sn.hub_angle.quantize ? 2.0 * M_PI / std::ldexp(1.0, sn.hub_angle.encoder_bits) : 0.0;
+
+  TruthRun run;
+  TruthTrace& tr = run.trace;
+  const auto& ctl = rig.controller;
+  double integral = 0.0, held = NAN;
+  for (long k = 0; k <= last; ++k) {
+    const double t = k * T;
+    // The sensors read the plant at this instant; the controller sees hub angle and rate `delay` late.
+    angle.read(y[0], quantum);
+    rate.read(y[n]);
+    const double seen_angle = angle.delayed(k), seen_rate = rate.delayed(k);
+    // PID, zero-order hold, clamping anti-windup (the integral freezes while saturated in the error's direction).
+    const double r = calc_ref(rig.trajectory, t);
+    const double e = r - seen_angle;
+    const double raw = ctl.kp * e + ctl.ki * integral - ctl.kd * seen_rate;
+    const double lim = ctl.torque_limit > 0 ? ctl.torque_limit : INFINITY;
+    plant.tau = std::clamp(raw, -lim, lim);
+    if (!(raw != plant.tau && e * raw > 0)) integral += e * T;
+    const double hub_torque = plant.actuator_torque(y);
+    torque.read(hub_torque);
+    tip.read(plant.tip_deflection(y));
+
+    tr.t.push_back(t);
+    tr.ref.push_back(r);
+    tr.demand.push_back(plant.tau);
+    tr.hub_torque.push_back(hub_torque);
+    tr.hub_angle.push_back(y[0]);
+    tr.hub_rate.push_back(y[n]);
+    tr.tip_deflection.push_back(plant.tip_deflection(y));
+    tr.root_joint.push_back(n > 1 ? y[1] - y[0] : 0.0);
+    tr.twist.push_back(plant.twist(y));
+    tr.energy.push_back(plant.energy(y));
+    tr.seen_angle.push_back(seen_angle);
+    tr.seen_rate.push_back(seen_rate);
+
+    if (k == last) break;
+    // The plant to the next sample under the held torque; a new torque restarts the BDF history.
+    if (plant.tau != held) cvode.restart(t);
+    held = plant.tau;
+    cvode.advance((k + 1) * T);
+  }
+
+  // The record: every decimate-th sample; recorded channels shifted by their delay.
+  Record& rec = run.record;
+  rec.source = "<truth_sim>";
+  const auto cols = truth_record_columns(rig);
+  for (const auto& c : cols) rec.columns[c];
+  for (long k = 0; k <= last; k += rig.record.decimate) {
+    const auto j = static_cast<std::size_t>(k);
+    rec.t.push_back(tr.t[j]);
+    rec.columns["ref"].push_back(tr.ref[j]);
+    rec.columns["hub_torque"].push_back(torque.delayed(j));
+    rec.columns["hub_angle"].push_back(rig.record.as_seen ? angle.delayed(j) : angle.now(j));
+    if (sn.hub_rate.recorded) rec.columns["hub_rate"].push_back(rig.record.as_seen ? rate.delayed(j) : rate.now(j));
+    rec.columns["tip_deflection"].push_back(tip.delayed(j));
+  }
+  return run;
+}
+
+Record simulate_truth(const TruthRig& rig) { return run_truth(rig).record; }
+
+Record simulate_truth(const TruthRig& rig, double duration) {
+  TruthRig r = rig;
+  r.duration = duration;
+  return run_truth(r).record;
+}
+
+}  // namespace ff::truth

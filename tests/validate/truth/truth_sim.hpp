@@ -1,0 +1,177 @@
+// An independent truth simulator of the reference rig (docs/reference-rig.md) for testing flexfarm's
+// validation tools on records flexfarm did not make. It shares no dynamics code with kernel/: its own
+// formulation (absolute segment angles, the dense mass matrix of the Lagrangian, Eigen LDLT), its own
+// integrator (SUNDIALS CVODE, BDF, dense direct solver, re-initialised at every controller sample),
+// its own regularisations (atan friction, a hyperbolic dead zone) and its own parameterisation of
+// the hidden effects. Equations and the mapping to flexfarm's model paths: README.md next to this file.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "validate/record.hpp"
+
+namespace ff::truth {
+
+// One cubic move r = r0 + (r1 - r0)(3u^2 - 2u^3), u = (t - t_start)/move_time, then a hold.
+struct TruthMove {
+  double target = 0.0;  // r1, rad
+  double hold = 0.0;    // s, after the move ends
+};
+
+// A sensor channel: Gaussian noise (1 sigma, the channel's unit) and a delay in controller samples.
+struct TruthChannel {
+  double noise = 0.0;
+  int delay = 0;
+};
+
+// The rig in physical terms, SI units. Defaults: the reference rig (reference-rig.md) with no hidden
+// effect, moving 0 -> 0.5 rad -> 0 as configs/fbtb.yaml.
+struct TruthRig {
+  struct Beam {
+    double length = 4.1656;         // L, m
+    double height = 0.3048;         // h (vertical), m
+    double thickness = 0.01905;     // t (bends in the horizontal plane), m
+    double density = 7750.0;        // rho, kg/m^3
+    double youngs_modulus = 207e9;  // E, Pa (only the README's k = kappa EI / l note uses it)
+  } beam;
+  // N rigid segments: l/2, (N - 2) x l, l/2 with l = L/(N - 1) (N = 1: one rigid arm of length L).
+  int segments = 6;
+  struct Joint {
+    double stiffness = 39.5e3;      // k at the reference cell, N m/rad; k_N = k (reference_cell / l)
+    double damping = 90.4;          // c at the reference cell, N m s/rad; scales as k
+    double reference_cell = 0.83312;  // m (L/5, the seed's N = 6 cell)
+    // Hardening joints, moment k q + k3 q^3: the secant stiffness M/q rises by the fraction
+    // `stiffening` at |q| = `stiffening_angle`, i.e. k3 = stiffening k / stiffening_angle^2 (per joint).
+    double stiffening = 0.0;        // fraction (0.2 = 20 % stiffer at the angle below); 0 = linear
+    double stiffening_angle = 0.01; // rad
+  } joint;
+  // Hub (actuator, pinion, base frame) rigidly on segment 1, kg m^2. With a drive train: the hub alone,
+  // the actuator's own inertia is drive.inertia.
+  double hub_inertia = 50.0;
+  struct Payload {
+    double mass = 328.7;            // kg, point mass at the tip point
+    double inertia = 118.6;         // kg m^2 about its own centre of mass (the tip point)
+  } payload;
+  // PID on the measured hub angle, derivative on the measured rate, zero-order hold:
+  //   tau = sat(kp (r - theta_m) + ki I - kd omega_m),  I += (r - theta_m) T unless saturated that way.
+  struct Controller {
+    double rate = 1000.0;           // Hz
+    double kp = 1.0e5;              // N m/rad
+    double kd = 3.0e4;              // N m s/rad
+    double ki = 0.0;                // N m/(rad s)
+    double torque_limit = 0.0;      // |tau| bound, N m; 0 = none
+  } controller;
+  struct Trajectory {
+    double move_time = 3.0;         // s, every move
+    std::vector<TruthMove> moves = {{0.5, 7.0}, {0.0, 45.0}};  // from r = 0 at t = 0
+  } trajectory;
+  // Hub friction, tau_f = -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) (2/pi) atan(w/eps)).
+  struct Friction {
+    double viscous = 0.0;           // b, N m s/rad
+    double coulomb = 0.0;           // Fc, N m
+    double stiction = 0.0;          // Fs >= Fc, the breakaway (Stribeck peak), N m; 0 = Fc (no peak)
+    double stribeck_velocity = 0.01;  // vs, rad/s
+    double smoothing = 1e-4;        // eps of the atan regularisation, rad/s
+  } friction;
+  // A constant signed load on the hub, N m: the hub gets tau_actuator + tau_f - torque_offset.
+  double torque_offset = 0.0;
+  // Drive train between actuator and hub (off: the controller's torque acts on the hub). The motor
+  // torque tau/n acts on the actuator shaft (angle theta_a, inertia J_a); the mesh torque on the hub:
+  //   d = theta_a/n - theta_h,  e = g(d) (the dead zone),  tau_s = k e + k3 e^3 + c de/dt,
+  //   J_a theta_a'' = (tau - tau_s)/n,  the hub gets tau_s; with backlash the teeth never pull.
+  struct Drive {
+    bool enabled = false;
+    double inertia = 5.0;           // J_a on the shaft, kg m^2
+    double ratio = 1.0;             // n = shaft angle / hub angle
+    double stiffness = 2.0e7;       // k, N m/rad (at the hub)
+    double cubic_stiffness = 0.0;   // k3, N m/rad^3
+    double damping = 2.0e3;         // c, N m s/rad
+    double backlash = 0.0;          // total gap 2b, rad (at the hub)
+    // delta of the dead zone g(d) = s(d - b) - s(-d - b), s(x) = (x + sqrt(x^2 + delta^2))/2, rad
+    double backlash_smoothing = 1e-6;
+  } drive;
+  // Sensors. The controller reads the hub-angle encoder and the tachometer `delay` samples late; the
+  // record's hub_angle and hub_rate are the readings time-stamped when taken (record.as_seen: as the
+  // controller saw them). hub_torque and tip_deflection are recorded only: their delay shifts the column.
+  struct Sensors {
+    struct Angle : TruthChannel {
+      bool quantize = false;        // encoder: reading = q round((theta + noise)/q), q = 2 pi / 2^bits
+      int encoder_bits = 16;
+    } hub_angle;                    // rad
+    struct Rate : TruthChannel {
+      bool recorded = true;         // write the hub_rate column (the loop always uses the tachometer)
+    } hub_rate;                     // rad/s: true rate + noise
+    TruthChannel hub_torque;        // N m: the actuator's torque on the hub (the mesh torque with a drive)
+    TruthChannel tip_deflection;    // m
+  } sensors;
+  struct RecordSpec {
+    int decimate = 1;               // a record row every `decimate` controller samples (from t = 0)
+    bool as_seen = false;           // hub_angle, hub_rate columns = what the controller used (delayed)
+  } record;
+  std::uint64_t seed = 1;           // noise: std::mt19937_64 per channel, seeded by (seed, channel)
+  double duration = 0.0;            // s; 0 = the end of the last hold
+  struct Initial {
+    double joint_angle = 0.0;       // every beam joint starts bent by this, at rest, hub at 0, rad
+  } initial;
+  struct Solver {
+    double rtol = 1e-9;             // CVODE relative tolerance
+    double atol = 1e-12;            // CVODE absolute tolerance (rad, rad/s)
+    long max_steps = 50000;         // per controller period
+  } solver;
+};
+
+// The chain's constants derived from a rig: segment lengths, joint laws, and the coefficients a_jk of
+// the mass matrix M_jk(phi) = a_jk cos(phi_j - phi_k) (README.md).
+struct TruthChain {
+  int n = 0;                        // N segments
+  std::vector<double> length;       // L_i, m
+  std::vector<double> k, c, k3;     // joint i between segments i-1 and i (entry 0 unused = 0)
+  Eigen::MatrixXd a;                // kg m^2, symmetric
+};
+TruthChain make_truth_chain(const TruthRig& rig);
+Eigen::MatrixXd calc_truth_mass_matrix(const TruthChain& chain, const Eigen::VectorXd& phi);
+
+// The true signals at every controller sample (before that sample's torque acts), for tests.
+struct TruthTrace {
+  std::vector<double> t;              // s
+  std::vector<double> ref;            // rad
+  std::vector<double> demand;         // the controller's torque, N m
+  std::vector<double> hub_torque;     // the actuator's torque on the hub, N m
+  std::vector<double> hub_angle;      // theta_h, rad
+  std::vector<double> hub_rate;       // rad/s
+  std::vector<double> tip_deflection; // sum L_i sin(phi_i - theta_h), m
+  std::vector<double> root_joint;     // q_1 = phi_1 - phi_0, rad (0 when N = 1)
+  std::vector<double> twist;          // drive twist d = theta_a/n - theta_h, rad (0 without a drive)
+  std::vector<double> energy;         // kinetic + elastic (joints, drive mesh without backlash), J
+  std::vector<double> seen_angle;     // what the controller used, rad
+  std::vector<double> seen_rate;      // rad/s
+};
+
+struct TruthRun {
+  Record record;                      // the measurement record (truth_record_columns order)
+  TruthTrace trace;
+};
+
+// Runs the rig for rig.duration (0 = to the end of the last hold). Throws std::invalid_argument on a
+// non-physical rig (naming the field) and std::runtime_error when CVODE fails.
+TruthRun run_truth(const TruthRig& rig);
+// The record alone: t, ref, hub_torque, hub_angle, hub_rate (when recorded), tip_deflection.
+Record simulate_truth(const TruthRig& rig);
+Record simulate_truth(const TruthRig& rig, double duration);
+// The record's columns after t, in file order (write_record_csv's `order`).
+std::vector<std::string> truth_record_columns(const TruthRig& rig);
+
+// The field table: every TruthRig field by its dotted name ("drive.backlash", "sensors.tip_deflection.delay",
+// "trajectory.moves" as "target:hold,target:hold"). Throws std::invalid_argument for an unknown key
+// ("unknown key 'x'") or a value that does not parse.
+void set_truth_field(TruthRig& rig, const std::string& key, const std::string& value);
+struct TruthFieldInfo {
+  std::string name, unit, value;      // value: as in `rig`
+};
+std::vector<TruthFieldInfo> list_truth_fields(const TruthRig& rig);
+
+}  // namespace ff::truth
