@@ -428,6 +428,9 @@ class Plant {
   }
 
   double twist(const double* y) const { return rig_.drive.enabled ? y[2 * n_] / rig_.drive.ratio - y[0] : 0.0; }
+  double twist_rate(const double* y) const {
+    return rig_.drive.enabled ? y[2 * n_ + 1] / rig_.drive.ratio - y[n_] : 0.0;
+  }
 
   // Kinetic energy 1/2 w' M w + 1/2 J_a w_a^2 plus the springs' energy (the drive mesh's exact without backlash), J.
   double energy(const double* y) const {
@@ -623,6 +626,7 @@ TruthRun run_truth(const TruthRig& rig) {
     tr.tip_deflection.push_back(plant.tip_deflection(y));
     tr.root_joint.push_back(n > 1 ? y[1] - y[0] : 0.0);
     tr.twist.push_back(plant.twist(y));
+    tr.twist_rate.push_back(plant.twist_rate(y));
     tr.energy.push_back(plant.energy(y));
     tr.seen_angle.push_back(seen_angle);
     tr.seen_rate.push_back(seen_rate);

@@ -146,6 +146,7 @@ struct TruthTrace {
   std::vector<double> tip_deflection; // sum L_i sin(phi_i - theta_h), m
   std::vector<double> root_joint;     // q_1 = phi_1 - phi_0, rad (0 when N = 1)
   std::vector<double> twist;          // drive twist d = theta_a/n - theta_h, rad (0 without a drive)
+  std::vector<double> twist_rate;     // its rate, rad/s
   std::vector<double> energy;         // kinetic + elastic (joints, drive mesh without backlash), J
   std::vector<double> seen_angle;     // what the controller used, rad
   std::vector<double> seen_rate;      // rad/s
