@@ -155,7 +155,12 @@ std::string format_value(const T& x) {
     return std::to_string(x);
   } else {
     std::string out;
-    for (const auto& m : x) out += (out.empty() ? "" : ",") + format_value(m.target) + ":" + format_value(m.hold);
+    for (const auto& m : x) {
+      if (!out.empty()) out += ',';
+      out += format_value(m.target);
+      out += ':';
+      out += format_value(m.hold);
+    }
     return out;
   }
 }
@@ -328,7 +333,7 @@ double calc_ref(const TruthRig::Trajectory& tr, double t) {
 class Plant {
  public:
   explicit Plant(const TruthRig& r)
-      : rig_(r), ch_(make_truth_chain(r)), n_(ch_.n), M_(n_, n_), rhs_(n_), acc_(n_), s_(n_), c_(n_) {}
+      : rig_(r), ch_(make_truth_chain(r)), n_(ch_.n), M_(n_, n_), llt_(n_), rhs_(n_), acc_(n_), s_(n_), c_(n_) {}
 
   int size() const { return 2 * n_ + (rig_.drive.enabled ? 2 : 0); }
   int segments() const { return n_; }
@@ -411,7 +416,9 @@ class Plant {
         M_(j, k) = ch_.a(j, k) * cjk;
         rhs_[j] -= ch_.a(j, k) * sjk * w[k] * w[k];
       }
-    acc_ = M_.ldlt().solve(rhs_);
+    llt_.compute(M_);  // M is symmetric positive definite (a kinetic energy)
+    acc_ = rhs_;
+    llt_.solveInPlace(acc_);
     for (int i = 0; i < n_; ++i) {
       ydot[i] = w[i];
       ydot[n_ + i] = acc_[i];
@@ -457,6 +464,7 @@ class Plant {
   TruthChain ch_;
   int n_;
   Eigen::MatrixXd M_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
   Eigen::VectorXd rhs_, acc_, s_, c_;
 };
 
@@ -508,10 +516,16 @@ class Cvode {
     }
   }
 
-  long steps() const {
-    long n = 0;
-    CVodeGetNumSteps(mem_, &n);
-    return n;
+  // Counters since the last restart (CVodeReInit zeroes them).
+  void add_stats(TruthSolverStats& s) const {
+    long steps = 0, rhs = 0, jac = 0, fd_rhs = 0;
+    CVodeGetNumSteps(mem_, &steps);
+    CVodeGetNumRhsEvals(mem_, &rhs);
+    CVodeGetNumJacEvals(mem_, &jac);
+    CVodeGetNumLinRhsEvals(mem_, &fd_rhs);  // the finite-difference Jacobian's
+    s.steps += steps;
+    s.rhs_evals += rhs + fd_rhs;
+    s.jacobian_evals += jac;
   }
 
  private:
@@ -633,10 +647,16 @@ TruthRun run_truth(const TruthRig& rig) {
 
     if (k == last) break;
     // The plant to the next sample under the held torque; a new torque restarts the BDF history.
-    if (plant.tau != held) cvode.restart(t);
+    if (plant.tau != held) {
+      if (k > 0) cvode.add_stats(run.stats);
+      cvode.restart(t);
+      ++run.stats.restarts;
+    }
     held = plant.tau;
     cvode.advance((k + 1) * T);
   }
+
+  cvode.add_stats(run.stats);
 
   // The record: every decimate-th sample; recorded channels shifted by their delay.
   Record& rec = run.record;

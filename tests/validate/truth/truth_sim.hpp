@@ -152,9 +152,15 @@ struct TruthTrace {
   std::vector<double> seen_rate;      // rad/s
 };
 
+// What CVODE did over the run.
+struct TruthSolverStats {
+  long steps = 0, rhs_evals = 0, jacobian_evals = 0, restarts = 0;
+};
+
 struct TruthRun {
   Record record;                      // the measurement record (truth_record_columns order)
   TruthTrace trace;
+  TruthSolverStats stats;
 };
 
 // Runs the rig for rig.duration (0 = to the end of the last hold). Throws std::invalid_argument on a
