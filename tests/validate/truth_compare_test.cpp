@@ -49,6 +49,23 @@ TEST(TruthCompare, TheRigsModelExplainsANoisyRecordWithNothingHidden) {
   for (const char* ch : kChannels) EXPECT_GT(fit(exact, ch), 99.999) << ch;
 }
 
+TEST(TruthCompare, TheHydraulicRigsModelExplainsTheHydraulicTruth) {
+  // The truth's actuator (own orifice regularisation, no relief valves) against configs/fbtb_hydraulic.yaml.
+  truth::TruthRig r = short_rig();
+  r.controller.kd = 2.0e4;
+  r.hydraulics.enabled = true;
+  const Record rec = truth::simulate_truth(r);
+  const CompareResult c = compare_record(load_model(FLEXFARM_SOURCE_DIR "/configs/fbtb_hydraulic.yaml"), rec,
+                                         ReplayMode::kClosedLoop);
+  ModelSpec rigid_drive = load_model(kModel).spec;
+  rigid_drive.controller.kd = 2.0e4;
+  const CompareResult without = compare_record(make_model(rigid_drive), rec, ReplayMode::kClosedLoop);
+  for (const char* ch : kChannels) {
+    EXPECT_GT(fit(c, ch), 99.9) << ch;
+    EXPECT_LT(fit(without, ch), 99.0) << ch;
+  }
+}
+
 struct Case {
   const char* name;
   std::vector<std::pair<const char*, const char*>> truth;  // truth field = value

@@ -410,5 +410,67 @@ TEST(TruthSim, RecordToolWritesARecordAndRefusesUnknownKeys) {
   EXPECT_EQ(code, 2);
 }
 
+TEST(TruthSim, HydraulicOilSpringRingsAtItsFrequency) {
+  // A rigid arm (N = 1) on the actuator with the valve held closed and no leakage, under a constant load:
+  // the oil is a spring K = 2 beta D^2 / V0 about the centred rack (dp = -2 beta D theta / V0), so the arm
+  // rings at sqrt(K / J) about theta = -load / K, and D (p_a - p_b) carries the load on average.
+  TruthRig r = free_rig(0.0, 3.0);
+  r.segments = 1;
+  r.hydraulics.enabled = true;
+  r.hydraulics.pressure_gain = 0.0;
+  r.hydraulics.leakage = 0.0;
+  r.torque_offset = 1000.0;
+  const TruthRun run = run_truth(r);
+  const TruthTrace& tr = run.trace;
+  const auto& h = r.hydraulics;
+  const double D = h.piston_area * h.pinion_radius, K = 2.0 * h.bulk_modulus * D * D / h.chamber_volume;
+  const double J = make_truth_chain(r).a(0, 0);
+  const double f = std::sqrt(K / J) / kTwoPi;  // 3.76 Hz (configs/fbtb_hydraulic.yaml)
+  EXPECT_NEAR(f, 3.76, 0.01);
+  const double eq = -r.torque_offset / K;
+  std::vector<double> swing;
+  double torque = 0.0;
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    swing.push_back(tr.hub_angle[k] - eq);
+    torque += tr.hub_torque[k] / tr.t.size();
+  }
+  EXPECT_NEAR(1.0 / mean_period(tr.t, swing), f, 2e-3 * f);
+  EXPECT_NEAR(*std::min_element(tr.hub_angle.begin(), tr.hub_angle.end()), 2.0 * eq, 1e-3 * std::fabs(eq));
+  EXPECT_NEAR(torque, r.torque_offset, 0.03 * r.torque_offset);  // on average the oil holds the load
+  // The record carries both chamber pressures, starting at (p_s + p_t)/2.
+  ASSERT_TRUE(run.record.has("pressure_a") && run.record.has("pressure_b"));
+  EXPECT_EQ(run.record.at("pressure_a")[0], 0.5 * (h.supply_pressure + h.tank_pressure));
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    ASSERT_EQ(run.record.at("pressure_a")[k], tr.pressure_a[k]);
+    ASSERT_NEAR(tr.hub_torque[k], D * (tr.pressure_a[k] - tr.pressure_b[k]), 1e-9 * K);
+  }
+}
+
+TEST(TruthSim, HydraulicTorqueLoopDeliversTheDemandAtRest) {
+  // A rigid arm (N = 1, a well damped PD loop: zeta 0.38 at 0.6 Hz) holding a constant load. At rest the
+  // spool is centred (no flow but the leakage's), so the torque loop u = K (tau - D dp)/(D p_s) ~ 0 holds
+  // D dp at the demand, and the demand at the load.
+  TruthRig r = free_rig(0.0, 10.0);
+  r.segments = 1;
+  r.controller = TruthRig{}.controller;
+  r.controller.kd = 2.0e4;  // configs/fbtb_hydraulic.yaml
+  r.hydraulics.enabled = true;
+  r.torque_offset = 800.0;
+  const TruthTrace tr = run_truth(r).trace;
+  const double demand = tr.demand.back(), delivered = tr.hub_torque.back();
+  // The hub at rest: the actuator carries the load exactly, and the PD's error gives the demand.
+  EXPECT_NEAR(delivered, 800.0, 1e-3);
+  EXPECT_NEAR(tr.hub_angle.back(), -demand / r.controller.kp, 1e-9);
+  // The spool's steady opening x feeds the leakage Q_l = l dp through both lands, k_v x R(p_s - p_a) = Q_l
+  // with p_a = (p_s + p_t)/2 + dp/2; the loop needs the torque error D p_s x / K for it.
+  const auto& h = r.hydraulics;
+  const double D = h.piston_area * h.pinion_radius, dp = 800.0 / D, kv = h.rated_flow / std::sqrt(h.rated_drop);
+  const double drop = 0.5 * (h.supply_pressure - h.tank_pressure) - 0.5 * dp;
+  const double x = h.leakage * dp / (kv * drop / std::sqrt(drop + h.laminar_drop));
+  EXPECT_NEAR(demand - delivered, D * h.supply_pressure * x / h.pressure_gain, 0.01 * (demand - delivered));
+  EXPECT_GT(demand - delivered, 1.0);  // N m
+  EXPECT_NEAR(tr.pressure_a.back() - tr.pressure_b.back(), dp, 1e-6 * dp);
+}
+
 }  // namespace
 }  // namespace ff::truth

@@ -59,6 +59,20 @@ void visit_fields(Rig& r, F&& f) {
   f("drive.damping", r.drive.damping, "N m s/rad");
   f("drive.backlash", r.drive.backlash, "rad");
   f("drive.backlash_smoothing", r.drive.backlash_smoothing, "rad");
+  f("hydraulics.enabled", r.hydraulics.enabled, "");
+  f("hydraulics.piston_area", r.hydraulics.piston_area, "m^2");
+  f("hydraulics.pinion_radius", r.hydraulics.pinion_radius, "m");
+  f("hydraulics.chamber_volume", r.hydraulics.chamber_volume, "m^3");
+  f("hydraulics.bulk_modulus", r.hydraulics.bulk_modulus, "Pa");
+  f("hydraulics.supply_pressure", r.hydraulics.supply_pressure, "Pa");
+  f("hydraulics.tank_pressure", r.hydraulics.tank_pressure, "Pa");
+  f("hydraulics.rated_flow", r.hydraulics.rated_flow, "m^3/s");
+  f("hydraulics.rated_drop", r.hydraulics.rated_drop, "Pa");
+  f("hydraulics.laminar_drop", r.hydraulics.laminar_drop, "Pa");
+  f("hydraulics.leakage", r.hydraulics.leakage, "m^3/(s Pa)");
+  f("hydraulics.valve_frequency", r.hydraulics.valve_frequency, "Hz");
+  f("hydraulics.valve_damping", r.hydraulics.valve_damping, "");
+  f("hydraulics.pressure_gain", r.hydraulics.pressure_gain, "");
   f("sensors.hub_angle.noise", r.sensors.hub_angle.noise, "rad");
   f("sensors.hub_angle.delay", r.sensors.hub_angle.delay, "samples");
   f("sensors.hub_angle.quantize", r.sensors.hub_angle.quantize, "");
@@ -70,6 +84,8 @@ void visit_fields(Rig& r, F&& f) {
   f("sensors.hub_torque.delay", r.sensors.hub_torque.delay, "samples");
   f("sensors.tip_deflection.noise", r.sensors.tip_deflection.noise, "m");
   f("sensors.tip_deflection.delay", r.sensors.tip_deflection.delay, "samples");
+  f("sensors.pressure.noise", r.sensors.pressure.noise, "Pa");
+  f("sensors.pressure.delay", r.sensors.pressure.delay, "samples");
   f("record.decimate", r.record.decimate, "samples");
   f("record.as_seen", r.record.as_seen, "");
   f("seed", r.seed, "");
@@ -239,10 +255,27 @@ void validate(const TruthRig& r) {
   non_negative("drive.damping", r.drive.damping);
   non_negative("drive.backlash", r.drive.backlash);
   positive("drive.backlash_smoothing", r.drive.backlash_smoothing);
+  const auto& h = r.hydraulics;
+  positive("hydraulics.piston_area", h.piston_area);
+  positive("hydraulics.pinion_radius", h.pinion_radius);
+  positive("hydraulics.chamber_volume", h.chamber_volume);
+  positive("hydraulics.bulk_modulus", h.bulk_modulus);
+  positive("hydraulics.supply_pressure", h.supply_pressure);
+  non_negative("hydraulics.tank_pressure", h.tank_pressure);
+  require(h.tank_pressure < h.supply_pressure, "hydraulics.tank_pressure", "below hydraulics.supply_pressure",
+          h.tank_pressure);
+  positive("hydraulics.rated_flow", h.rated_flow);
+  positive("hydraulics.rated_drop", h.rated_drop);
+  positive("hydraulics.laminar_drop", h.laminar_drop);
+  non_negative("hydraulics.leakage", h.leakage);
+  positive("hydraulics.valve_frequency", h.valve_frequency);
+  positive("hydraulics.valve_damping", h.valve_damping);
+  non_negative("hydraulics.pressure_gain", h.pressure_gain);
   const std::pair<const TruthChannel*, const char*> channels[] = {{&r.sensors.hub_angle, "sensors.hub_angle"},
                                                                   {&r.sensors.hub_rate, "sensors.hub_rate"},
                                                                   {&r.sensors.hub_torque, "sensors.hub_torque"},
-                                                                  {&r.sensors.tip_deflection, "sensors.tip_deflection"}};
+                                                                  {&r.sensors.tip_deflection, "sensors.tip_deflection"},
+                                                                  {&r.sensors.pressure, "sensors.pressure"}};
   for (const auto& [ch, name] : channels) {
     const std::string n(name);
     non_negative((n + ".noise").c_str(), ch->noise);
@@ -313,7 +346,8 @@ Eigen::MatrixXd calc_truth_mass_matrix(const TruthChain& ch, const Eigen::Vector
 }
 
 // ---------------------------------------------------------------------------------------------
-// The plant: chain, hub friction, load, drive train. State y = [phi (N), w (N), theta_a, w_a (drive)].
+// The plant: chain, hub friction, load, drive train, hydraulics. State
+// y = [phi (N), w (N), theta_a, w_a (drive), x, x', p_a, p_b (hydraulics, pressures in MPa)].
 
 namespace {
 
@@ -333,15 +367,22 @@ double calc_ref(const TruthRig::Trajectory& tr, double t) {
 class Plant {
  public:
   explicit Plant(const TruthRig& r)
-      : rig_(r), ch_(make_truth_chain(r)), n_(ch_.n), M_(n_, n_), llt_(n_), rhs_(n_), acc_(n_), s_(n_), c_(n_) {}
+      : rig_(r), ch_(make_truth_chain(r)), n_(ch_.n), sh_(rig_.drive.enabled ? 2 * n_ : -1),
+        hy_(rig_.hydraulics.enabled ? 2 * n_ + (sh_ >= 0 ? 2 : 0) : -1), M_(n_, n_), llt_(n_), rhs_(n_), acc_(n_),
+        s_(n_), c_(n_) {
+    const auto& h = rig_.hydraulics;
+    D_ = h.piston_area * h.pinion_radius;
+    kv_ = h.rated_flow / std::sqrt(h.rated_drop);
+  }
 
-  int size() const { return 2 * n_ + (rig_.drive.enabled ? 2 : 0); }
+  int size() const { return 2 * n_ + (sh_ >= 0 ? 2 : 0) + (hy_ >= 0 ? 4 : 0); }
   int segments() const { return n_; }
 
   // At rest, every beam joint bent by q0, the drive's shaft aligned with the hub (centre of the gap).
   std::vector<double> initial_state(double q0) const {
     std::vector<double> y(size(), 0.0);
     for (int i = 0; i < n_; ++i) y[i] = i * q0;
+    if (hy_ >= 0) y[hy_ + 2] = y[hy_ + 3] = 0.5 * (rig_.hydraulics.supply_pressure + rig_.hydraulics.tank_pressure) / kMPa;
     return y;
   }
 
@@ -374,7 +415,7 @@ class Plant {
   // Mesh torque on the hub, N m: k e + k3 e^3 + c de/dt; with backlash the teeth push, never pull.
   double mesh_torque(const double* y) const {
     const auto& dr = rig_.drive;
-    const double d = y[2 * n_] / dr.ratio - y[0], dd = y[2 * n_ + 1] / dr.ratio - y[n_];
+    const double d = y[sh_] / dr.ratio - y[0], dd = y[sh_ + 1] / dr.ratio - y[n_];
     double e, slope;
     dead_zone(d, e, slope);
     const double t = (dr.stiffness + dr.cubic_stiffness * e * e) * e + dr.damping * slope * dd;
@@ -382,8 +423,46 @@ class Plant {
     return e > 0 ? std::max(t, 0.0) : std::min(t, 0.0);
   }
 
+  // The actuator's torque on its pinion (the hub, or the drive's shaft), N m: D (p_a - p_b), or the
+  // demand (through the gear: tau/n).
+  double pinion_torque(const double* y) const {
+    if (hy_ >= 0) return D_ * (y[hy_ + 2] - y[hy_ + 3]) * kMPa;
+    return sh_ >= 0 ? tau / rig_.drive.ratio : tau;
+  }
+
   // The actuator's torque on the hub (what a torque sensor reads), N m.
-  double actuator_torque(const double* y) const { return rig_.drive.enabled ? mesh_torque(y) : tau; }
+  double actuator_torque(const double* y) const { return sh_ >= 0 ? mesh_torque(y) : pinion_torque(y); }
+
+  double pressure_a(const double* y) const { return y[hy_ + 2] * kMPa; }
+  double pressure_b(const double* y) const { return y[hy_ + 3] * kMPa; }
+
+  // The valve's orifice root with a laminar core, R(dp) = dp / sqrt(|dp| + dp_l), Pa^(1/2).
+  double root(double dp) const { return dp / std::sqrt(std::fabs(dp) + rig_.hydraulics.laminar_drop); }
+
+  // Spool and chamber rates (README.md, "Hydraulics"). False when a chamber's volume is gone.
+  bool hydraulics_rhs(const double* y, double* ydot) const {
+    const auto& h = rig_.hydraulics;
+    const double th_p = sh_ >= 0 ? y[sh_] : y[0], w_p = sh_ >= 0 ? y[sh_ + 1] : y[n_];  // the pinion
+    const double x = y[hy_], xd = y[hy_ + 1], pa = pressure_a(y), pb = pressure_b(y);
+    // The amplifier's torque loop and the second-order spool.
+    const double demand = sh_ >= 0 ? tau / rig_.drive.ratio : tau;
+    const double u = std::clamp(h.pressure_gain * (demand - D_ * (pa - pb)) / (D_ * h.supply_pressure), -1.0, 1.0);
+    const double wv = 2.0 * M_PI * h.valve_frequency;
+    ydot[hy_] = xd;
+    ydot[hy_ + 1] = wv * wv * (u - x) - 2.0 * h.valve_damping * wv * xd;
+    // Four lands, critically lapped: x > 0 connects supply to a and b to tank.
+    const double xc = std::clamp(x, -1.0, 1.0), xp = std::max(xc, 0.0), xm = std::max(-xc, 0.0);
+    const double ps = h.supply_pressure, pt = h.tank_pressure;
+    const double qa = kv_ * (xp * root(ps - pa) - xm * root(pa - pt));
+    const double qb = kv_ * (xm * root(ps - pb) - xp * root(pb - pt));
+    const double ql = h.leakage * (pa - pb);
+    // Continuity with compressibility: p' = beta / V (Q_in - dV/dt), V_a,b = V0 +- D theta_p.
+    const double va = h.chamber_volume + D_ * th_p, vb = h.chamber_volume - D_ * th_p;
+    if (!(va > 0 && vb > 0)) return false;
+    ydot[hy_ + 2] = h.bulk_modulus / va * (qa - ql - D_ * w_p) / kMPa;
+    ydot[hy_ + 3] = h.bulk_modulus / vb * (qb + ql + D_ * w_p) / kMPa;
+    return true;
+  }
 
   // ydot = f(y) under the held demand `tau`. False when the result is not finite.
   bool rhs(const double* y, double* ydot) {
@@ -400,11 +479,11 @@ class Plant {
     }
     // Hub (on segment 0): actuator, friction, the constant load.
     rhs_[0] += actuator_torque(y) + friction(w[0]) - rig_.torque_offset;
-    if (rig_.drive.enabled) {
-      const auto& dr = rig_.drive;
-      ydot[2 * n_] = y[2 * n_ + 1];
-      ydot[2 * n_ + 1] = (tau - mesh_torque(y)) / (dr.ratio * dr.inertia);  // J_a theta_a'' = (tau - tau_s)/n
+    if (sh_ >= 0) {  // J_a theta_a'' = tau_pinion - tau_s/n
+      ydot[sh_] = y[sh_ + 1];
+      ydot[sh_ + 1] = (pinion_torque(y) - mesh_torque(y) / rig_.drive.ratio) / rig_.drive.inertia;
     }
+    if (hy_ >= 0 && !hydraulics_rhs(y, ydot)) return false;
     // Lagrange: sum_k a_jk [cos(phi_j - phi_k) phi_k'' + sin(phi_j - phi_k) w_k^2] = Q_j.
     for (int i = 0; i < n_; ++i) {
       s_[i] = std::sin(phi[i]);
@@ -434,12 +513,11 @@ class Plant {
     return d;
   }
 
-  double twist(const double* y) const { return rig_.drive.enabled ? y[2 * n_] / rig_.drive.ratio - y[0] : 0.0; }
-  double twist_rate(const double* y) const {
-    return rig_.drive.enabled ? y[2 * n_ + 1] / rig_.drive.ratio - y[n_] : 0.0;
-  }
+  double twist(const double* y) const { return sh_ >= 0 ? y[sh_] / rig_.drive.ratio - y[0] : 0.0; }
+  double twist_rate(const double* y) const { return sh_ >= 0 ? y[sh_ + 1] / rig_.drive.ratio - y[n_] : 0.0; }
 
-  // Kinetic energy 1/2 w' M w + 1/2 J_a w_a^2 plus the springs' energy (the drive mesh's exact without backlash), J.
+  // Kinetic energy 1/2 w' M w + 1/2 J_a w_a^2 plus the springs' energy (the drive mesh's exact without backlash;
+  // not the oil's), J.
   double energy(const double* y) const {
     Eigen::Map<const Eigen::VectorXd> phi(y, n_), w(y + n_, n_);
     double e = 0.5 * w.dot(calc_truth_mass_matrix(ch_, phi) * w);
@@ -451,7 +529,7 @@ class Plant {
       const auto& dr = rig_.drive;
       double ez, slope;
       dead_zone(twist(y), ez, slope);
-      e += 0.5 * dr.inertia * y[2 * n_ + 1] * y[2 * n_ + 1] + 0.5 * dr.stiffness * ez * ez +
+      e += 0.5 * dr.inertia * y[sh_ + 1] * y[sh_ + 1] + 0.5 * dr.stiffness * ez * ez +
            0.25 * dr.cubic_stiffness * ez * ez * ez * ez;
     }
     return e;
@@ -460,9 +538,12 @@ class Plant {
   double tau = 0.0;  // the held demand of the controller, N m
 
  private:
+  static constexpr double kMPa = 1e6;  // Pa per stored pressure unit
   const TruthRig& rig_;
   TruthChain ch_;
   int n_;
+  int sh_, hy_;                       // first state of the drive's shaft, of the hydraulics; -1 = off
+  double D_ = 0.0, kv_ = 0.0;         // m^3/rad, m^3/(s Pa^1/2)
   Eigen::MatrixXd M_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
   Eigen::VectorXd rhs_, acc_, s_, c_;
@@ -586,6 +667,7 @@ std::vector<std::string> truth_record_columns(const TruthRig& rig) {
   std::vector<std::string> cols = {"ref", "hub_torque", "hub_angle"};
   if (rig.sensors.hub_rate.recorded) cols.push_back("hub_rate");
   cols.push_back("tip_deflection");
+  if (rig.hydraulics.enabled) cols.insert(cols.end(), {"pressure_a", "pressure_b"});
   return cols;
 }
 
@@ -607,7 +689,8 @@ TruthRun run_truth(const TruthRig& rig) {
 
   const auto& sn = rig.sensors;
   Channel angle(sn.hub_angle, rig.seed, 0), rate(sn.hub_rate, rig.seed, 1), torque(sn.hub_torque, rig.seed, 2),
-      tip(sn.tip_deflection, rig.seed, 3);
+      tip(sn.tip_deflection, rig.seed, 3), pa(sn.pressure, rig.seed, 4), pb(sn.pressure, rig.seed, 5);
+  const bool hydraulic = rig.hydraulics.enabled;
   const double quantum = sn.hub_angle.quantize ? 2.0 * M_PI / std::ldexp(1.0, sn.hub_angle.encoder_bits) : 0.0;
 
   TruthRun run;
@@ -630,6 +713,12 @@ TruthRun run_truth(const TruthRig& rig) {
     const double hub_torque = plant.actuator_torque(y);
     torque.read(hub_torque);
     tip.read(plant.tip_deflection(y));
+    if (hydraulic) {
+      pa.read(plant.pressure_a(y));
+      pb.read(plant.pressure_b(y));
+      tr.pressure_a.push_back(plant.pressure_a(y));
+      tr.pressure_b.push_back(plant.pressure_b(y));
+    }
 
     tr.t.push_back(t);
     tr.ref.push_back(r);
@@ -671,6 +760,10 @@ TruthRun run_truth(const TruthRig& rig) {
     rec.columns["hub_angle"].push_back(rig.record.as_seen ? angle.delayed(j) : angle.now(j));
     if (sn.hub_rate.recorded) rec.columns["hub_rate"].push_back(rig.record.as_seen ? rate.delayed(j) : rate.now(j));
     rec.columns["tip_deflection"].push_back(tip.delayed(j));
+    if (hydraulic) {
+      rec.columns["pressure_a"].push_back(pa.delayed(j));
+      rec.columns["pressure_b"].push_back(pb.delayed(j));
+    }
   }
   return run;
 }

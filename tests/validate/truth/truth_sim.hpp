@@ -94,6 +94,30 @@ struct TruthRig {
     // delta of the dead zone g(d) = s(d - b) - s(-d - b), s(x) = (x + sqrt(x^2 + delta^2))/2, rad
     double backlash_smoothing = 1e-6;
   } drive;
+  // Hydraulic rotary actuator (rack and pinion) behind a servo valve, off by default; its pinion is on
+  // the hub (or on the drive's shaft). Torque on the pinion D (p_a - p_b), D = piston_area x pinion_radius.
+  // The amplifier closes a torque loop: spool command u = sat(K (tau/n - D dp) / (D p_s), -1, 1);
+  // spool x'' = wv^2 (u - x) - 2 zv wv x'. Critically lapped four-land valve, x > 0 opening supply -> a:
+  //   Q_a = kv (x+ R(p_s - p_a) - x- R(p_a - p_t)),  Q_b = kv (x- R(p_s - p_b) - x+ R(p_b - p_t)),
+  //   R(dp) = dp / sqrt(|dp| + dp_l) (sqrt with a laminar core), kv = rated_flow / sqrt(rated_drop);
+  // chambers V_a,b = V0 +- D theta_p: p_a' = beta/V_a (Q_a - Q_l - D w_p), p_b' = beta/V_b (Q_b + Q_l + D w_p),
+  // Q_l = leakage (p_a - p_b). No relief or anti-cavitation valves. Both chambers start at (p_s + p_t)/2.
+  struct Hydraulics {
+    bool enabled = false;
+    double piston_area = 1.25e-2;   // A, m^2
+    double pinion_radius = 0.2;     // r, m (D = A r = 2.5e-3 m^3/rad)
+    double chamber_volume = 4.5e-3; // V0 per chamber, rack centred, lines included, m^3
+    double bulk_modulus = 1.4e9;    // beta, Pa
+    double supply_pressure = 21e6;  // p_s, Pa
+    double tank_pressure = 0.2e6;   // p_t, Pa
+    double rated_flow = 1.6e-3;     // one land, full opening, at rated_drop, m^3/s
+    double rated_drop = 3.5e6;      // Pa
+    double laminar_drop = 0.1e6;    // dp_l, Pa
+    double leakage = 1e-12;         // cross-port a -> b, m^3/(s Pa)
+    double valve_frequency = 200.0; // Hz
+    double valve_damping = 0.7;
+    double pressure_gain = 5.0;     // K; 0 = valve held closed
+  } hydraulics;
   // Sensors. The controller reads the hub-angle encoder and the tachometer `delay` samples late; the
   // record's hub_angle and hub_rate are the readings time-stamped when taken (record.as_seen: as the
   // controller saw them). hub_torque and tip_deflection are recorded only: their delay shifts the column.
@@ -107,6 +131,7 @@ struct TruthRig {
     } hub_rate;                     // rad/s: true rate + noise
     TruthChannel hub_torque;        // N m: the actuator's torque on the hub (the mesh torque with a drive)
     TruthChannel tip_deflection;    // m
+    TruthChannel pressure;          // Pa, each chamber (recorded with hydraulics: pressure_a, pressure_b)
   } sensors;
   struct RecordSpec {
     int decimate = 1;               // a record row every `decimate` controller samples (from t = 0)
@@ -150,6 +175,7 @@ struct TruthTrace {
   std::vector<double> energy;         // kinetic + elastic (joints, drive mesh without backlash), J
   std::vector<double> seen_angle;     // what the controller used, rad
   std::vector<double> seen_rate;      // rad/s
+  std::vector<double> pressure_a, pressure_b;  // chamber pressures, Pa (empty without hydraulics)
 };
 
 // What CVODE did over the run.
@@ -166,7 +192,8 @@ struct TruthRun {
 // Runs the rig for rig.duration (0 = to the end of the last hold). Throws std::invalid_argument on a
 // non-physical rig (naming the field) and std::runtime_error when CVODE fails.
 TruthRun run_truth(const TruthRig& rig);
-// The record alone: t, ref, hub_torque, hub_angle, hub_rate (when recorded), tip_deflection.
+// The record alone: t, ref, hub_torque, hub_angle, hub_rate (when recorded), tip_deflection, and with
+// hydraulics pressure_a, pressure_b.
 Record simulate_truth(const TruthRig& rig);
 Record simulate_truth(const TruthRig& rig, double duration);
 // The record's columns after t, in file order (write_record_csv's `order`).
