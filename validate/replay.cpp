@@ -201,10 +201,17 @@ std::vector<Prediction> replay(std::span<const Model> models, const Record& r, R
   SampleInputs in;
   if (mode == ReplayMode::kClosedLoop) in.ref = at_samples(r, r.at("ref"), T, ns);
   if (mode == ReplayMode::kOpenLoop) in.torque = at_samples(r, r.at("hub_torque"), T, ns);
-  if (k_ahead > 0) {
-    in.reset_every = k_ahead;
-    in.hub_angle = at_samples(r, r.at("hub_angle"), T, ns);
-    in.hub_rate = r.has("hub_rate") ? at_samples(r, r.at("hub_rate"), T, ns) : derivative(in.hub_angle, T);
+  std::vector<double> hub_angle, hub_rate;
+  if (k_ahead > 0) {  // every k_ahead samples the hub angle and rate are set to the measured ones
+    hub_angle = at_samples(r, r.at("hub_angle"), T, ns);
+    hub_rate = r.has("hub_rate") ? at_samples(r, r.at("hub_rate"), T, ns) : derivative(hub_angle, T);
+    in.at_sample = [&](BatchState& s) {
+      if (s.sample > 0 && s.sample % k_ahead == 0)
+        for (int l = 0; l < bm.W; ++l) {
+          s.q[l] = hub_angle[s.sample];
+          s.v[l] = hub_rate[s.sample];
+        }
+    };
   }
   const BatchRun run = simulate(bm, nullptr, &in);
   std::vector<Prediction> out;
