@@ -1,5 +1,5 @@
 // flexfarm compare --model M.yaml --data D.csv --out DIR: the model against a measurement record,
-// free-run and k-step-ahead; fit table, failure report and residual plots.
+// free-run and k-step-ahead (from an observer's state estimate); fit table, failure report and residual plots.
 #include <unistd.h>
 
 #include <cstdio>
@@ -8,6 +8,7 @@
 
 #include "apps/verbs.hpp"
 #include "validate/compare.hpp"
+#include "validate/observer.hpp"
 #include "validate/record.hpp"
 #include "validate/replay.hpp"
 
@@ -49,6 +50,7 @@ void add_compare_verb(CLI::App& app) {
   struct Args {
     std::string model, data, out, mode = "closed-loop";
     int k = 10;
+    double process_noise = kDefaultProcessNoise;
     std::vector<std::string> sets;
   };
   auto args = std::make_shared<Args>();
@@ -61,6 +63,11 @@ void add_compare_verb(CLI::App& app) {
   cmd->add_option("--k", args->k, "k-step prediction horizon, controller samples")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  cmd->add_option("--process-noise", args->process_noise,
+                  "the k-step observer's process noise: white acceleration on every joint, rad/s^2 "
+                  "(larger: the estimate follows the measurements more, the model less)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--out", args->out, "output directory (created)")->required();
   cmd->callback([args] {
@@ -70,7 +77,9 @@ void add_compare_verb(CLI::App& app) {
     const Record r = read_record_csv(args->data, replay_inputs(mode));
     std::fprintf(stderr, "comparing %s with %s: %zu samples, %s, k = %d\n", args->model.c_str(), args->data.c_str(),
                  r.size(), replay_mode_name(mode), args->k);
-    const CompareResult result = compare_record(m, r, mode, args->k);
+    ObserverOptions observer;
+    observer.process_noise = args->process_noise;
+    const CompareResult result = compare_record(m, r, mode, args->k, {}, observer);
     const auto files = write_report_into(result, args->out);
     std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_fit_table(result).c_str(),
                 args->out.c_str(), files.size() - 2);

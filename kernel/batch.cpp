@@ -153,6 +153,17 @@ BatchState make_state(const BatchModel& bm) {
   return s;
 }
 
+void copy_lane(const BatchModel& bm, BatchState& s, int from, int to) {
+  const int W = bm.W;
+  // Every per-lane array is (rows x W), lane innermost.
+  auto copy = [&](std::vector<double>& x) {
+    for (std::size_t o = 0; o < x.size(); o += W) x[o + to] = x[o + from];
+  };
+  for (auto* x : {&s.q, &s.v, &s.z, &s.tau, &s.integral, &s.notch_state, &s.measured[0], &s.measured[1]}) copy(*x);
+  for (auto& x : s.recorded) copy(x);
+  s.status[to] = s.status[from];
+}
+
 Workspace make_workspace(const BatchModel& bm) {
   Workspace ws;
   const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;

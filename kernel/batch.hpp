@@ -96,6 +96,13 @@ struct BatchState {
 
 BatchState make_state(const BatchModel& bm);
 
+// Copies everything of lane `from` that changes during a run (plant q, v, drive z, held torque,
+// integral, notch, sensor rings, status) into lane `to`: lane `to` then continues as lane `from`
+// would. Allocates nothing. The integrators' scratch stays the lane's own: RK4 and CVODE carry
+// nothing between samples, SDIRK2 and midpoint their velocity predictor (Workspace::a_prev), so
+// their first step after a copy differs from lane `from`'s at truncation-error level.
+void copy_lane(const BatchModel& bm, BatchState& s, int from, int to);
+
 // Scratch for the articulated-body algorithm and the integrators, sized once: nothing is
 // allocated while stepping.
 struct Workspace {

@@ -99,18 +99,14 @@ void apply_payload_events(BatchModel& live, std::vector<std::size_t>& next, doub
 namespace {
 double at_sample(const std::vector<double>& x, long k) { return x[std::min<std::size_t>(k, x.size() - 1)]; }
 
-// A record's signals at sample k: the reference, and the measured hub state every reset_every samples.
+// A record's signals at sample k: the reference, then the caller's hook on the state.
 void apply_inputs(const SampleInputs& in, long k, BatchState& s, double* ref, double* ref_ff, int W) {
   if (!in.ref.empty())
     for (int l = 0; l < W; ++l) {
       ref[l] = at_sample(in.ref, k);
       ref_ff[l] = 0.0;
     }
-  if (in.reset_every > 0 && k % in.reset_every == 0 && k > 0)
-    for (int l = 0; l < W; ++l) {
-      s.q[l] = at_sample(in.hub_angle, k);
-      s.v[l] = at_sample(in.hub_rate, k);
-    }
+  if (in.at_sample) in.at_sample(s);
 }
 }  // namespace
 

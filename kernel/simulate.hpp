@@ -36,10 +36,12 @@ struct BatchRun {
 struct SampleInputs {
   std::vector<double> ref;        // the reference r_k (rad) instead of the trajectory; no model feed-forward
   std::vector<double> torque;     // the hub torque demand (N·m) instead of the controller's: open loop
-  // Every `reset_every` samples (0 = never) the hub angle and rate are set to these measured values
-  // before the controller acts: the model then predicts at most reset_every samples ahead.
-  int reset_every = 0;
-  std::vector<double> hub_angle, hub_rate;
+  // Called at every controller sample with the state at that instant (s.t, s.sample set), after the
+  // reference is taken and before the sensors read the plant and the controller acts: it may change
+  // any lane's state (validate/observer.cpp corrects an observer's lanes by its measurements and
+  // restarts k-step predictions from them). It runs inside the step loop: it must be deterministic
+  // and should allocate nothing.
+  std::function<void(BatchState&)> at_sample;
 };
 
 // Runs every lane of the batch to bm.duration with the integrator the models ask for.

@@ -203,7 +203,7 @@ std::vector<std::pair<std::string, std::vector<double>>> record_states(const Rec
 }
 
 CompareResult compare_record(const Model& model, const Record& record, ReplayMode mode, int k_ahead,
-                             const ResidualOptions& options) {
+                             const ResidualOptions& options, const ObserverOptions& observer) {
   if (k_ahead < 1) throw std::invalid_argument("compare_record: k must be >= 1 controller sample");
   CompareResult out;
   out.mode = mode;
@@ -214,7 +214,11 @@ CompareResult compare_record(const Model& model, const Record& record, ReplayMod
   out.t = record.t;
   out.options = options;
   const auto free_run = replay(std::span<const Model>(&model, 1), record, mode, 0)[0];
-  const auto k_step = replay(std::span<const Model>(&model, 1), record, mode, k_ahead)[0];
+  const auto k_step = replay(std::span<const Model>(&model, 1), record, mode, k_ahead, observer)[0];
+  if (mode != ReplayMode::kInverseDynamics) {  // the observer replay() ran, designed again for the report
+    out.observed = true;
+    out.observer = design_observer(model, record, mode, observer);
+  }
   out.free_ok = free_run.ok;
   out.k_ok = k_step.ok;
   const auto states = record_states(record);
@@ -247,6 +251,25 @@ CompareResult compare_record(const Model& model, const Record& record, ReplayMod
   return out;
 }
 
+std::string describe_observer(const CompareResult& r) {
+  const ObserverDesign& d = r.observer;
+  std::string s = "The k-step prediction restarts every " + std::to_string(r.k_ahead) +
+                  " samples from the model's full state (joint angles, rates, drive states) estimated from the "
+                  "measurements before that sample by an observer on the model: a steady-state Kalman filter with "
+                  "its gain from the model linearised at rest, measuring ";
+  for (std::size_t c = 0; c < d.channels.size(); ++c) {
+    s += (c == 0 ? "" : c + 1 == d.channels.size() ? " and " : ", ") + std::string("`") + d.channels[c] + "`";
+    if (c < d.noise_std.size()) s += " (noise " + fmt("%.3g", d.noise_std[c]) + " " + channel_unit(d.channels[c]) + ")";
+  }
+  if (d.period > 1) s += " every " + std::to_string(d.period) + " controller samples";
+  s += "; process noise " + fmt("%.3g", d.process_noise) + " rad/s^2 on every joint";
+  // The slowest mode of the linearised estimation error decays as rho^(t / (m T)): time constant -m T / ln rho.
+  if (d.ok && d.pole_radius > 0.0)
+    s += "; the slowest mode of its estimation error decays with a time constant of " +
+         fmt("%.3g", -d.period * r.control_period / std::log(d.pole_radius)) + " s";
+  return s + ".";
+}
+
 std::string format_fit_table(const CompareResult& r) {
   std::string s = "| channel | unit | fit % free run | fit % k-step | RMSE free run | RMSE k-step |\n"
                   "|---|---|---:|---:|---:|---:|\n";
@@ -264,8 +287,12 @@ std::string format_compare_report(const CompareResult& r) {
        std::to_string(r.k_ahead) + " controller samples (" + fmt("%.4g", r.k_ahead * r.control_period) + " s) ahead.\n";
   if (r.mode == ReplayMode::kInverseDynamics)
     s += "\nInverse dynamics follows the measured hub motion in both replays: the k-step columns equal the free run.\n";
+  if (r.observed) s += "\n" + describe_observer(r) + "\n";
   if (!r.free_ok) s += "\n**The free-run replay failed numerically** (its fits are marked `failed`).\n";
-  if (!r.k_ok) s += "\n**The k-step replay failed numerically** (its fits are marked `failed`).\n";
+  if (!r.k_ok)
+    s += "\n**The k-step replay failed" +
+         (r.observed && !r.observer.ok ? ": " + r.observer.message : std::string(" numerically")) +
+         "** (its fits are marked `failed`).\n";
   s += "\n## Fit\n\nFit % = 100 (1 - |y - yhat| / |y - mean(y)|); RMSE in the channel's unit.\n\n" + format_fit_table(r);
   s += "\n## Where the model fails\n";
   for (const auto& c : r.channels) {
@@ -308,6 +335,19 @@ std::string format_compare_json(const CompareResult& r) {
                   ",\n  \"control_period\": " + jnum(r.control_period) + ",\n  \"record\": " + jstr(r.record_source) +
                   ",\n  \"samples\": " + std::to_string(r.t.size()) + ",\n  \"input\": " + jstr(r.input) +
                   ",\n  \"replay_ok\": {\"free_run\": " + jbool(r.free_ok) + ", \"k_step\": " + jbool(r.k_ok) + "}";
+  s += ",\n  \"observer\": ";
+  if (!r.observed) {
+    s += "null";
+  } else {
+    const ObserverDesign& d = r.observer;
+    s += "{\"ok\": " + jbool(d.ok) + ", \"channels\": [";
+    for (std::size_t c = 0; c < d.channels.size(); ++c) s += (c ? ", " : "") + jstr(d.channels[c]);
+    s += "], \"noise_std\": [";
+    for (std::size_t c = 0; c < d.noise_std.size(); ++c) s += (c ? ", " : "") + jnum(d.noise_std[c]);
+    s += "], \"process_noise\": " + jnum(d.process_noise) + ", \"period\": " + std::to_string(d.period) +
+         ", \"pole_radius\": " + (d.ok ? jnum(d.pole_radius) : std::string("null")) +
+         ", \"message\": " + jstr(d.message) + "}";
+  }
   auto per_channel = [&](const char* key, auto value) {
     s += ",\n  \"" + std::string(key) + "\": {";
     for (std::size_t i = 0; i < r.channels.size(); ++i)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "kernel/model.hpp"
+#include "validate/observer.hpp"
 #include "validate/record.hpp"
 #include "validate/replay.hpp"
 #include "validate/residuals.hpp"
@@ -32,6 +33,8 @@ struct CompareResult {
   std::vector<double> t;                // s, the record's times
   std::vector<ChannelCompare> channels; // scored_channels(mode, record), in that order
   ResidualOptions options;
+  bool observed = false;                // the k-step starts from an observer's estimate (not in inverse dynamics)
+  ObserverDesign observer;              // that observer (validate/observer.hpp): channels, noise, gain
 };
 
 // The record's states to bin residuals against, (name, values at its times), those it has:
@@ -40,12 +43,16 @@ struct CompareResult {
 // tip_deflection (m).
 std::vector<std::pair<std::string, std::vector<double>>> record_states(const Record& r);
 
-// Replays free-run and k_ahead samples ahead (k_ahead >= 1; std::invalid_argument otherwise) and
-// analyses both residuals of every scored channel. The record must hold replay_inputs(mode) (as
-// read_record_csv checks). A failed replay is a result: its fits are -inf, its analyses invalid.
+// Replays free-run and k_ahead samples ahead (k_ahead >= 1; std::invalid_argument otherwise; the
+// k-step prediction restarts every k_ahead samples from the observer's state estimate, `observer`
+// its options) and analyses both residuals of every scored channel. The record must hold
+// replay_inputs(mode) (as read_record_csv checks). A failed replay is a result: its fits are -inf,
+// its analyses invalid.
 CompareResult compare_record(const Model& model, const Record& record, ReplayMode mode, int k_ahead = 10,
-                             const ResidualOptions& options = {});
+                             const ResidualOptions& options = {}, const ObserverOptions& observer = {});
 
+// One sentence for report.md: how the k-step start state is estimated (channels, noise, gain).
+std::string describe_observer(const CompareResult& r);
 // The fit table (markdown) printed by `flexfarm compare`.
 std::string format_fit_table(const CompareResult& r);
 // report.md: fit tables and the failure summary in words, per channel.

@@ -8,6 +8,7 @@
 #include "kernel/dynamics.hpp"
 #include "kernel/modes.hpp"
 #include "kernel/simulate.hpp"
+#include "validate/observer.hpp"
 
 namespace ff {
 
@@ -187,10 +188,21 @@ Prediction inverse_dynamics(const Model& model, const Record& r) {
 }  // namespace
 
 std::vector<Prediction> replay(std::span<const Model> models, const Record& r, ReplayMode mode, int k_ahead) {
+  return replay(models, r, mode, k_ahead, ObserverOptions{});
+}
+
+std::vector<Prediction> replay(std::span<const Model> models, const Record& r, ReplayMode mode, int k_ahead,
+                               const ObserverOptions& observer) {
   if (mode == ReplayMode::kInverseDynamics) {
     std::vector<Prediction> out(models.size());
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::size_t i = 0; i < models.size(); ++i) out[i] = inverse_dynamics(models[i], r);
+    return out;
+  }
+  if (k_ahead > 0) {  // k-step: restarts from the observer's estimate (validate/observer.hpp)
+    const ObserverRun o = run_observer(models, r, mode, k_ahead, observer);
+    std::vector<Prediction> out;
+    for (std::size_t l = 0; l < models.size(); ++l) out.push_back(sample_trace(o.k_step[l], r, o.k_step_ok(l)));
     return out;
   }
   std::vector<Model> lanes;
@@ -201,11 +213,6 @@ std::vector<Prediction> replay(std::span<const Model> models, const Record& r, R
   SampleInputs in;
   if (mode == ReplayMode::kClosedLoop) in.ref = at_samples(r, r.at("ref"), T, ns);
   if (mode == ReplayMode::kOpenLoop) in.torque = at_samples(r, r.at("hub_torque"), T, ns);
-  if (k_ahead > 0) {
-    in.reset_every = k_ahead;
-    in.hub_angle = at_samples(r, r.at("hub_angle"), T, ns);
-    in.hub_rate = r.has("hub_rate") ? at_samples(r, r.at("hub_rate"), T, ns) : derivative(in.hub_angle, T);
-  }
   const BatchRun run = simulate(bm, nullptr, &in);
   std::vector<Prediction> out;
   for (int l = 0; l < bm.W; ++l) out.push_back(sample_trace(run.traces[l], r, run.status[l] == LaneStatus::kOk));

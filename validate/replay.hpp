@@ -31,10 +31,16 @@ struct Prediction {
 // The channels a mode predicts that the record also measured: what compare and diagnose score.
 std::vector<std::string> scored_channels(ReplayMode mode, const Record& r);
 
-// Replays the record on each model (one lane each). k_ahead > 0: every k_ahead controller samples
-// the hub angle and rate are reset to the measured ones (hub_rate from the record, or central
-// differences of hub_angle), so each prediction reaches at most k_ahead samples ahead.
+struct ObserverOptions;  // validate/observer.hpp
+
+// Replays the record on each model (one lane each). k_ahead > 0 (closed and open loop): the k-step
+// prediction from the observer's estimate (validate/observer.hpp, run_observer): every k_ahead
+// controller samples each model restarts from its observer's state estimate from the measurements
+// before that sample (all plant states), so each predicted sample is 1 to k_ahead samples ahead.
+// Inverse dynamics follows the measured hub in any case: k_ahead is ignored.
 std::vector<Prediction> replay(std::span<const Model> models, const Record& r, ReplayMode mode, int k_ahead = 0);
+std::vector<Prediction> replay(std::span<const Model> models, const Record& r, ReplayMode mode, int k_ahead,
+                               const ObserverOptions& observer);
 
 // Fit % = 100 (1 - |y - yhat| / |y - mean(y)|) (normalised RMSE, as MATLAB's compare) and RMSE.
 struct Fit {

@@ -129,7 +129,7 @@ TEST_F(Cli, VerbHelpListsEveryOption) {
       {"modes", {"model", "--set", "--count"}},
       {"simulate", {"model", "--out", "--set", "trace.csv"}},
       {"run", {"study", "--out", "--threads"}},
-      {"compare", {"--model", "--data", "--mode", "--k", "--set", "--out", "report.md", "compare.json"}},
+      {"compare", {"--model", "--data", "--mode", "--k", "--process-noise", "--set", "--out", "report.md", "compare.json"}},
   };
   for (const auto& c : cases) {
     const auto r = run(std::string(c.verb) + " --help");

@@ -137,6 +137,34 @@ TEST(Simulate, DivergingLaneIsRecordedAndOthersFinish) {
   EXPECT_TRUE(std::isfinite(run.traces[0].tip_deflection.back()));
 }
 
+TEST(Simulate, SampleHookChangesTheStateAndACopiedLaneContinuesAsItsSource) {
+  // Two lanes of one model: the hook bends lane 1's beam at sample 300 and copies lane 0 into it at
+  // sample 1000. Before 300 and from 1000 on the lanes are bit for bit the same (RK4 carries nothing
+  // between samples outside the state); in between they differ.
+  ModelSpec spec = test::rig_spec(0.5, 2.0);
+  spec.simulation.substeps = 2;
+  const std::vector<Model> models(2, make_model(spec));
+  const BatchModel bm = make_batch(models);
+  SampleInputs in;
+  std::vector<long> seen;
+  in.at_sample = [&](BatchState& s) {
+    seen.push_back(s.sample);
+    if (s.sample == 300) s.q[1 * bm.W + 1] += 0.01;  // joint 1 of lane 1, rad
+    if (s.sample == 1000) copy_lane(bm, s, 0, 1);
+  };
+  const auto run = simulate(bm, nullptr, &in);
+  const auto& a = run.traces[0].tip_deflection;
+  const auto& b = run.traces[1].tip_deflection;
+  ASSERT_EQ(seen.size(), a.size());
+  EXPECT_EQ(seen[0], 0);
+  EXPECT_EQ(seen.back(), static_cast<long>(a.size()) - 1);
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (k < 300 || k >= 1000) EXPECT_EQ(a[k], b[k]) << "sample " << k;
+  }
+  EXPECT_GT(std::abs(a[300] - b[300]), 0.005);  // m: the bend shows at the sample it is made
+  EXPECT_EQ(run.traces[0].torque[1500], run.traces[1].torque[1500]);
+}
+
 }  // namespace
 }  // namespace ff
 

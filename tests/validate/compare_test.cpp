@@ -88,8 +88,16 @@ TEST(Compare, ReportFilesAreWrittenWithFitsAndFindingsInTheJson) {
                 c.fit_k.percent);
   EXPECT_NE(json.find(fit), std::string::npos) << fit << "\n" << json;
   EXPECT_NE(json.find("\"friction_like\": true"), std::string::npos) << json;
+  // The k-step's start state: the observer's channels and gain, in the JSON and in words.
+  EXPECT_NE(json.find("\"observer\": {\"ok\": true, \"channels\": [\"hub_angle\", \"hub_rate\", \"tip_deflection\"], "
+                      "\"noise_std\": ["),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"process_noise\": 0.005, \"period\": 1, \"pole_radius\": 0.99"), std::string::npos) << json;
   const std::string md = read_text(dir / "report.md");
   EXPECT_NE(md.find("| hub_torque | N m | "), std::string::npos) << md;
+  EXPECT_NE(md.find("estimated from the measurements before that sample by an observer on the model"), std::string::npos)
+      << md;
   EXPECT_NE(md.find("a friction-like effect is missing"), std::string::npos) << md;
   fs::remove_all(dir);
 }
@@ -111,6 +119,14 @@ TEST(Compare, VelocityStateFromTheAngleWhenTheRecordHasNoRate) {
   EXPECT_NEAR(s[0].second[50], 0.5, 1e-12);
   EXPECT_EQ(s[2].first, "hub_acceleration");
   EXPECT_NEAR(s[2].second[50], 1.0, 1e-9);
+}
+
+TEST(Compare, InverseDynamicsHasNoObserver) {
+  const Model m = make_model(rig());
+  const CompareResult r = compare_record(m, record_of(m), ReplayMode::kInverseDynamics, 10);
+  EXPECT_FALSE(r.observed);
+  EXPECT_NE(format_compare_json(r).find("\"observer\": null,"), std::string::npos);
+  EXPECT_EQ(r.channels[0].k_step, r.channels[0].free_run);
 }
 
 TEST(Compare, KBelowOneIsRefused) {

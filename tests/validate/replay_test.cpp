@@ -1,4 +1,5 @@
-// Replaying records on models (validate/replay.cpp): a model replayed on its own output is exact.
+// Replaying records on models (validate/replay.cpp): a model replayed on its own output is exact; the
+// k-step prediction (from the observer's estimate, validate/observer.hpp) runs candidates as lanes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -62,6 +63,18 @@ TEST(Replay, CandidatesRunAsLanesGiveTheSameAsAlone) {
   const auto together = replay(both, r, ReplayMode::kClosedLoop);
   const auto alone = replay(std::span<const Model>(&b, 1), r, ReplayMode::kClosedLoop);
   EXPECT_EQ(together[1].channels.at("tip_deflection"), alone[0].channels.at("tip_deflection"));
+}
+
+TEST(Replay, KStepCandidatesRunAsLanesGiveTheSameAsAlone) {
+  // Each candidate has its own observer (its own linearisation and gain) in the one batch.
+  const Model a = make_model(rig(300.0)), b = make_model(rig(350.0));
+  const Record r = make_synthetic_record(make_model(rig()), 0.01, 2);
+  const std::vector<Model> both = {a, b};
+  const auto together = replay(both, r, ReplayMode::kClosedLoop, 10);
+  const auto alone = replay(std::span<const Model>(&b, 1), r, ReplayMode::kClosedLoop, 10);
+  ASSERT_TRUE(together[1].ok);
+  EXPECT_EQ(together[1].channels.at("tip_deflection"), alone[0].channels.at("tip_deflection"));
+  EXPECT_NE(together[0].channels.at("tip_deflection"), alone[0].channels.at("tip_deflection"));
 }
 
 TEST(Fit, PerfectIsHundredAndTheMeanIsZero) {

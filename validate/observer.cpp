@@ -1,0 +1,391 @@
+#include "validate/observer.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "kernel/drive.hpp"
+#include "kernel/dynamics.hpp"
+
+namespace ff {
+
+namespace {
+
+enum class Channel { kHubAngle, kHubRate, kTipDeflection, kHubTorque };
+
+Channel channel_of(const std::string& name) {
+  if (name == "hub_angle") return Channel::kHubAngle;
+  if (name == "hub_rate") return Channel::kHubRate;
+  if (name == "tip_deflection") return Channel::kTipDeflection;
+  if (name == "hub_torque") return Channel::kHubTorque;
+  throw std::invalid_argument("the observer does not measure '" + name + "'");
+}
+
+// A trace's column of a measured channel (the same signals the record's columns are).
+const std::vector<double>& trace_channel(const Trace& tr, Channel c) {
+  switch (c) {
+    case Channel::kHubAngle: return tr.hub_angle;
+    case Channel::kHubRate: return tr.hub_rate;
+    case Channel::kTipDeflection: return tr.tip_deflection;
+    case Channel::kHubTorque: return tr.torque;
+  }
+  return tr.hub_angle;
+}
+
+bool is_closed_loop(ReplayMode mode) {
+  if (mode == ReplayMode::kInverseDynamics)
+    throw std::invalid_argument("the observer runs in closed or open loop, not in inverse dynamics");
+  return mode == ReplayMode::kClosedLoop;
+}
+
+// x = [q; v; z] of lane l: q (N), v (N), z (nz).
+void get_state(const BatchModel& bm, const BatchState& s, int l, double* x) {
+  const int W = bm.W, N = bm.nseg;
+  for (int i = 0; i < N; ++i) {
+    x[i] = s.q[i * W + l];
+    x[N + i] = s.v[i * W + l];
+  }
+  for (int i = 0; i < bm.layout.nz; ++i) x[2 * N + i] = s.z[i * W + l];
+}
+
+void set_state(const BatchModel& bm, BatchState& s, int l, const double* x) {
+  const int W = bm.W, N = bm.nseg;
+  for (int i = 0; i < N; ++i) {
+    s.q[i * W + l] = x[i];
+    s.v[i * W + l] = x[N + i];
+  }
+  for (int i = 0; i < bm.layout.nz; ++i) s.z[i * W + l] = x[2 * N + i];
+}
+
+// The record's signal at every controller sample k (t = t0 + k T), as replay() drives the model.
+std::vector<double> at_samples(const Record& r, const std::vector<double>& y, double T, long n) {
+  std::vector<double> out(n);
+  for (long k = 0; k < n; ++k) out[k] = interpolate(r.t, y, r.t.front() + k * T);
+  return out;
+}
+
+// What drives the model on the record: its ref (closed loop) or its hub torque (open loop).
+SampleInputs record_inputs(const Record& r, bool closed_loop, double T, long n) {
+  SampleInputs in;
+  if (closed_loop) in.ref = at_samples(r, r.at("ref"), T, n);
+  else in.torque = at_samples(r, r.at("hub_torque"), T, n);
+  return in;
+}
+
+// The record sample measured at each controller sample k (within T/4 of t0 + k T), or -1.
+std::vector<long> measured_samples(const Record& r, double T, long n) {
+  std::vector<long> at(n, -1);
+  for (std::size_t j = 0; j < r.t.size(); ++j) {
+    const double u = (r.t[j] - r.t.front()) / T;
+    const long k = std::lround(u);
+    if (k >= 0 && k < n && std::abs(u - k) <= 0.25 && at[k] < 0) at[k] = static_cast<long>(j);
+  }
+  return at;
+}
+
+// Controller samples between measurements: the median spacing, at least 1.
+int measurement_period(const std::vector<long>& at) {
+  std::vector<long> gaps;
+  long last = -1;
+  for (long k = 0; k < static_cast<long>(at.size()); ++k)
+    if (at[k] >= 0) {
+      if (last >= 0) gaps.push_back(k - last);
+      last = k;
+    }
+  if (gaps.empty()) return 1;
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  return static_cast<int>(std::max(1L, gaps[gaps.size() / 2]));
+}
+
+// The model the gain is designed on: the replay model's smooth part (static Coulomb and Stribeck
+// friction, backlash, the controller's sensor quantisation, noise and delay left out: a central
+// difference across a tanh of width 1e-3 rad/s, a dead zone or a quantum sees a slope the moving arm
+// does not have), one controller sample long, with the replay model's own step.
+Model make_design_model(const Model& m) {
+  ModelSpec s = m.spec;
+  if (s.friction.model == "static") s.friction.coulomb = s.friction.stiction = 0.0;
+  s.drive.backlash = 0.0;
+  for (ChannelSpec* c : {&s.sensors.hub_angle, &s.sensors.hub_rate}) {
+    c->resolution = 0.0;
+    c->noise = 0.0;
+    c->delay = 0;
+  }
+  s.simulation.substeps = m.substeps;
+  s.simulation.duration = m.control_period;
+  s.payload_events.clear();
+  return make_model(s, "<observer design>");
+}
+
+struct Linearisation {
+  bool ok = true;
+  Eigen::MatrixXd A, C;  // dx_1/dx_0 (nx x nx), dy_0/dx_0 (ny x nx)
+};
+
+// A and C at x0 by central differences: lanes x0 +- delta_i e_i run one controller sample (the
+// record's input at sample 0 held), x_1 read at sample 1 and y_0 from the trace at sample 0.
+Linearisation linearise(const Model& dm, const SampleInputs& in0, const std::vector<Channel>& channels,
+                        const Eigen::VectorXd& x0) {
+  const int nx = static_cast<int>(x0.size()), ny = static_cast<int>(channels.size()), lanes = 2 * nx;
+  Eigen::VectorXd delta(nx);
+  for (int i = 0; i < nx; ++i) delta[i] = 1e-6 * std::max(1.0, std::abs(x0[i]));  // state units
+  Eigen::MatrixXd x1(nx, lanes), y0(ny, lanes);
+  Linearisation lin;
+  for (int first = 0; first < lanes; first += kMaxLanes) {
+    const int W = std::min(kMaxLanes, lanes - first);
+    const BatchModel bm = make_batch(std::vector<Model>(W, dm));
+    Eigen::VectorXd x(nx);
+    SampleInputs in = in0;
+    in.at_sample = [&](BatchState& s) {
+      if (s.sample != 0) return;
+      for (int l = 0; l < W; ++l) {
+        const int j = first + l, i = j / 2;  // lane 2i: +delta_i, 2i + 1: -delta_i
+        x = x0;
+        x[i] += j % 2 == 0 ? delta[i] : -delta[i];
+        set_state(bm, s, l, x.data());
+      }
+    };
+    auto observe = [&](const BatchState& s) {
+      if (s.sample != 1) return;
+      for (int l = 0; l < W; ++l) {
+        get_state(bm, s, l, x.data());
+        x1.col(first + l) = x;
+      }
+    };
+    const BatchRun run = simulate(bm, observe, &in);
+    for (int l = 0; l < W; ++l) {
+      lin.ok = lin.ok && run.status[l] == LaneStatus::kOk;
+      for (int c = 0; c < ny; ++c) y0(c, first + l) = trace_channel(run.traces[l], channels[c])[0];
+    }
+  }
+  lin.A.resize(nx, nx);
+  lin.C.resize(ny, nx);
+  for (int i = 0; i < nx; ++i) {
+    lin.A.col(i) = (x1.col(2 * i) - x1.col(2 * i + 1)) / (2.0 * delta[i]);
+    lin.C.col(i) = (y0.col(2 * i) - y0.col(2 * i + 1)) / (2.0 * delta[i]);
+  }
+  lin.ok = lin.ok && lin.A.allFinite() && lin.C.allFinite();
+  return lin;
+}
+
+// Process noise over one controller sample T: white acceleration of std sigma_a on every joint,
+// constant over the sample (Bar-Shalom et al. 2001, eq. 6.3.3-4): [[T^4/4, T^3/2], [T^3/2, T^2]] sigma_a^2.
+Eigen::MatrixXd process_noise(int nseg, int nx, double T, double sigma_a) {
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(nx, nx);
+  const double s2 = sigma_a * sigma_a;
+  for (int i = 0; i < nseg; ++i) {
+    Q(i, i) = s2 * T * T * T * T / 4.0;
+    Q(i, nseg + i) = Q(nseg + i, i) = s2 * T * T * T / 2.0;
+    Q(nseg + i, nseg + i) = s2 * T * T;
+  }
+  return Q;
+}
+
+// |P - DARE(P)|_F / |P|_F.
+double dare_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, const Eigen::MatrixXd& Q,
+                     const Eigen::MatrixXd& R, const Eigen::MatrixXd& P) {
+  const Eigen::MatrixXd S = C * P * C.transpose() + R;
+  const Eigen::MatrixXd APC = A * P * C.transpose();
+  const Eigen::MatrixXd next = A * P * A.transpose() - APC * S.ldlt().solve(APC.transpose()) + Q;
+  const double size = P.norm();
+  return size > 0 ? (P - next).norm() / size : (next.norm() == 0 ? 0.0 : INFINITY);
+}
+
+}  // namespace
+
+std::vector<std::string> observer_channels(const Model& m, const Record& r, ReplayMode mode) {
+  const bool closed = is_closed_loop(mode);
+  std::vector<std::string> out = {"hub_angle"};
+  for (const char* c : {"hub_rate", "tip_deflection"})
+    if (r.has(c)) out.push_back(c);
+  const DriveLayout layout = make_drive_layout(m.spec);
+  if (closed && r.has("hub_torque") && (layout.pressure >= 0 || layout.shaft >= 0)) out.push_back("hub_torque");
+  return out;
+}
+
+double calc_white_noise_variance(const std::vector<double>& y) {
+  if (y.size() < 3) return 0.0;
+  double sum = 0.0;
+  for (std::size_t k = 1; k + 1 < y.size(); ++k) {
+    const double d = y[k + 1] - 2.0 * y[k] + y[k - 1];
+    sum += d * d;
+  }
+  return sum / (static_cast<double>(y.size() - 2) * 6.0);
+}
+
+RiccatiSolution solve_filter_dare(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, const Eigen::MatrixXd& Q,
+                                  const Eigen::MatrixXd& R) {
+  const Eigen::Index n = A.rows();
+  RiccatiSolution out;
+  const Eigen::LDLT<Eigen::MatrixXd> rl(R);
+  if (rl.info() != Eigen::Success || !rl.isPositive()) return out;
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  // The filter DARE is the control DARE of (A^T, C^T): X = A_0^T X (I + G_0 X)^-1 A_0 + H_0.
+  Eigen::MatrixXd a = A.transpose(), g = C.transpose() * rl.solve(C), h = Q;
+  bool converged = false;
+  for (int it = 1; it <= 100 && !converged; ++it) {
+    const Eigen::PartialPivLU<Eigen::MatrixXd> w(I + g * h);
+    const Eigen::MatrixXd wa = w.solve(a), wg = w.solve(g);
+    Eigen::MatrixXd h1 = h + a.transpose() * h * wa;
+    Eigen::MatrixXd g1 = g + a * wg * a.transpose();
+    a = a * wa;
+    h1 = 0.5 * (h1 + h1.transpose()).eval();
+    g1 = 0.5 * (g1 + g1.transpose()).eval();
+    out.iterations = it;
+    if (!h1.allFinite() || !g1.allFinite() || !a.allFinite()) return out;
+    converged = (h1 - h).norm() <= 1e-13 * h1.norm();
+    h = std::move(h1);
+    g = std::move(g1);
+  }
+  out.P = h;
+  out.residual = dare_residual(A, C, Q, R, h);
+  out.ok = converged && out.residual <= 1e-8;
+  return out;
+}
+
+ObserverDesign design_observer(const Model& model, const Record& r, ReplayMode mode, const ObserverOptions& options) {
+  const bool closed = is_closed_loop(mode);
+  if (!(options.process_noise > 0.0) || !std::isfinite(options.process_noise))
+    throw std::invalid_argument("the observer's process noise must be a positive number (rad/s^2)");
+  ObserverDesign d;
+  d.process_noise = options.process_noise;
+  d.channels = observer_channels(model, r, mode);
+  std::vector<Channel> channels;
+  for (const auto& c : d.channels) channels.push_back(channel_of(c));
+  const Model m = make_replay_model(model, r);
+  const double T = m.control_period;
+  const long ns = std::lround(m.duration / T) + 1;
+  // R: the white-noise variance of each channel, at least 1e-12 of its variance (a noise-free record).
+  const int ny = static_cast<int>(channels.size());
+  d.R = Eigen::MatrixXd::Zero(ny, ny);
+  for (int c = 0; c < ny; ++c) {
+    const auto& y = r.at(d.channels[c]);
+    double mean = 0.0, var = 0.0;
+    for (double v : y) mean += v;
+    mean /= y.size();
+    for (double v : y) var += (v - mean) * (v - mean);
+    var /= y.size();
+    d.R(c, c) = std::max({calc_white_noise_variance(y), 1e-12 * var, 1e-300});
+    d.noise_std.push_back(std::sqrt(d.R(c, c)));
+  }
+  // Linearisation about the model's own initial state (the arm at rest) with the record's first input.
+  const Model dm = make_design_model(m);
+  const BatchModel b1 = make_batch(std::span<const Model>(&dm, 1));
+  const int nx = 2 * b1.nseg + b1.layout.nz;
+  Eigen::VectorXd x0(nx);
+  get_state(b1, make_state(b1), 0, x0.data());
+  const Linearisation lin = linearise(dm, record_inputs(r, closed, T, 1), channels, x0);
+  if (!lin.ok) {
+    d.message = "the model failed numerically in its linearisation";
+    return d;
+  }
+  // Over one measurement period m: A^m, Q_m = sum_{j<m} A^j Q A^jT.
+  d.period = measurement_period(measured_samples(r, T, ns));
+  const Eigen::MatrixXd q1 = process_noise(b1.nseg, nx, T, options.process_noise);
+  d.A = Eigen::MatrixXd::Identity(nx, nx);
+  d.Q = Eigen::MatrixXd::Zero(nx, nx);
+  for (int j = 0; j < d.period; ++j) {
+    d.Q += d.A * q1 * d.A.transpose();
+    d.A = lin.A * d.A;
+  }
+  d.C = lin.C;
+  const RiccatiSolution dare = solve_filter_dare(d.A, d.C, d.Q, d.R);
+  d.doublings = dare.iterations;
+  if (!dare.ok) {
+    d.message = "the Riccati equation of the observer's gain has no solution (residual " +
+                std::to_string(dare.residual) + " after " + std::to_string(dare.iterations) + " doublings)";
+    return d;
+  }
+  d.P = dare.P;
+  const Eigen::MatrixXd S = d.C * d.P * d.C.transpose() + d.R;
+  d.L = S.ldlt().solve(d.C * d.P).transpose();  // P C^T S^-1 (S and P symmetric)
+  const Eigen::MatrixXd E = (Eigen::MatrixXd::Identity(nx, nx) - d.L * d.C) * d.A;
+  d.pole_radius = E.eigenvalues().cwiseAbs().maxCoeff();
+  d.ok = d.L.allFinite() && d.pole_radius < 1.0;
+  if (!d.ok) d.message = "the observer's linearised error dynamics do not decay";
+  return d;
+}
+
+ObserverRun run_observer(std::span<const Model> models, const Record& r, ReplayMode mode, int k_ahead,
+                         const ObserverOptions& options) {
+  const bool closed = is_closed_loop(mode);
+  if (k_ahead < 0) throw std::invalid_argument("run_observer: k_ahead must be >= 0");
+  const int M = static_cast<int>(models.size());
+  ObserverRun out;
+  std::vector<Model> lanes;
+  for (const auto& m : models) {
+    lanes.push_back(make_replay_model(m, r));
+    out.design.push_back(design_observer(m, r, mode, options));
+  }
+  if (k_ahead > 0)
+    for (int l = 0; l < M; ++l) lanes.push_back(lanes[l]);  // lanes M..2M-1: the k-step predictions
+  const BatchModel bm = make_batch(lanes);
+  const double T = bm.control_period;
+  const long ns = std::lround(bm.duration / T) + 1;
+  const int nx = 2 * bm.nseg + bm.layout.nz, W = bm.W;
+  out.nx = nx;
+  if (!options.initial_state.empty() && static_cast<int>(options.initial_state.size()) != nx)
+    throw std::invalid_argument("run_observer: the initial state needs " + std::to_string(nx) + " values");
+
+  SampleInputs in = record_inputs(r, closed, T, ns);
+  const std::vector<long> measured = measured_samples(r, T, ns);
+  const std::vector<std::string>& names = out.design[0].channels;  // lanes share a shape, so their channels
+  std::vector<Channel> channels;
+  std::vector<const std::vector<double>*> column;
+  bool need_tip = false, need_torque = false;
+  for (const auto& c : names) {
+    channels.push_back(channel_of(c));
+    column.push_back(&r.at(c));
+    need_tip |= channels.back() == Channel::kTipDeflection;
+    need_torque |= channels.back() == Channel::kHubTorque;
+  }
+  const int ny = static_cast<int>(channels.size());
+  out.state.assign(M, std::vector<double>(static_cast<std::size_t>(ns) * nx));
+  // Scratch for the hook, made once: nothing is allocated while the batch steps.
+  Workspace ws = make_workspace(bm);
+  std::vector<double> defl(W), tip_angle(W), torque(W), x(nx), e(ny);
+  in.at_sample = [&](BatchState& s) {
+    const long k = s.sample;
+    if (k == 0 && !options.initial_state.empty())
+      for (int l = 0; l < M; ++l) set_state(bm, s, l, options.initial_state.data());
+    // A k-step prediction starts from x(k|k-1) and the observer's controller states.
+    if (k_ahead > 0 && k % k_ahead == 0)
+      for (int l = 0; l < M; ++l) copy_lane(bm, s, l, M + l);
+    const long j = measured[k];
+    if (j >= 0) {
+      if (need_tip) compute_tip(bm, s.q.data(), defl.data(), tip_angle.data(), ws);
+      if (need_torque) compute_actuator_torque(bm, s.q.data(), s.v.data(), s.z.data(), s.tau.data(), torque.data());
+      for (int l = 0; l < M; ++l) {
+        const ObserverDesign& d = out.design[l];
+        if (!d.ok || s.status[l] != LaneStatus::kOk) continue;
+        for (int c = 0; c < ny; ++c) {
+          double yhat = 0.0;
+          switch (channels[c]) {
+            case Channel::kHubAngle: yhat = s.q[l]; break;
+            case Channel::kHubRate: yhat = s.v[l]; break;
+            case Channel::kTipDeflection: yhat = defl[l]; break;
+            case Channel::kHubTorque: yhat = torque[l]; break;
+          }
+          e[c] = (*column[c])[j] - yhat;  // innovation
+        }
+        get_state(bm, s, l, x.data());
+        for (int i = 0; i < nx; ++i)
+          for (int c = 0; c < ny; ++c) x[i] += d.L(i, c) * e[c];
+        set_state(bm, s, l, x.data());
+      }
+    }
+    for (int l = 0; l < M; ++l) get_state(bm, s, l, out.state[l].data() + k * nx);
+  };
+  BatchRun run = simulate(bm, nullptr, &in);
+  for (int l = 0; l < M; ++l) {
+    out.estimate.push_back(std::move(run.traces[l]));
+    out.estimate_status.push_back(run.status[l]);
+    if (k_ahead > 0) {
+      out.k_step.push_back(std::move(run.traces[M + l]));
+      out.k_step_status.push_back(run.status[M + l]);
+    }
+  }
+  return out;
+}
+
+}  // namespace ff
