@@ -45,8 +45,9 @@ ReplayMode mode_of(const std::string& name) {
 
 void add_diagnose_verb(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "diagnose", "Try every candidate effect on a model against a measurement record: fit each by nonlinear "
-                  "least squares, rank them by delta BIC and say which one is missing (or none)");
+      "diagnose", "Try every candidate effect on a model against a measurement record: fit each jointly over "
+                  "its parameters (a global scan, then nonlinear least squares), rank them by delta BIC and give "
+                  "the verdict: the effect that is missing, none, or unexplained");
   struct Args {
     std::string model, data, json, mode = "closed-loop";
     std::vector<std::string> sets, effects, refit = {"none"};
@@ -61,7 +62,7 @@ void add_diagnose_verb(CLI::App& app) {
   cmd->add_option("--effects", a->effects, "only these effects, comma separated (default: every one that applies)");
   cmd->add_option("--refit", a->refit, kRefitHelp)->capture_default_str();
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
-  cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect")->capture_default_str();
+  cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect (its leading start's)")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
     DiagnoseOptions opt;

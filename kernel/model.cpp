@@ -118,7 +118,11 @@ void validate(const ModelSpec& s, const std::string& src) {
       {&s.sensors.hub_rate, "sensors.hub_rate"},
       {&s.sensors.strain_gauge, "sensors.strain_gauge"},
       {&s.sensors.tip_accelerometer, "sensors.tip_accelerometer"},
-      {&s.sensors.tip_position, "sensors.tip_position"}};
+      {&s.sensors.tip_position, "sensors.tip_position"},
+      {&s.sensors.hub_torque, "sensors.hub_torque"},
+      {&s.sensors.tip_deflection, "sensors.tip_deflection"},
+      {&s.sensors.pressure_a, "sensors.pressure_a"},
+      {&s.sensors.pressure_b, "sensors.pressure_b"}};
   for (const auto& [ch, key] : channels) {
     const std::string k(key);
     non_negative(ch->resolution, (k + ".resolution").c_str());

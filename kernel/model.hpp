@@ -74,13 +74,18 @@ struct StrainGaugeSpec : RecordedChannelSpec {
 };
 
 // What the controller measures (reference-rig.md: the PD uses the hub angle and the hub rate),
-// and the recorded sensors.
+// the recorded sensors, and the output channels: how a record's columns of signals the trace has as
+// truths (hub_torque, tip_deflection, pressure_a, pressure_b) were measured (kernel/sensors.hpp,
+// measure_output). Their delay shifts the recorded signal only; no controller reads them.
 struct SensorSpec {
   ChannelSpec hub_angle;          // encoder, rad
   ChannelSpec hub_rate;           // tachometer, rad/s
   StrainGaugeSpec strain_gauge;   // N·m (and m)
   RecordedChannelSpec tip_accelerometer;  // lateral tip acceleration in the hub frame, m/s^2
   RecordedChannelSpec tip_position;       // tip deflection (camera, laser tracker), m
+  ChannelSpec hub_torque;         // the record's hub torque, N·m
+  ChannelSpec tip_deflection;     // the record's tip deflection, m
+  ChannelSpec pressure_a, pressure_b;  // the record's chamber pressures, Pa
 };
 
 // Friction at the hub (off by default): viscous, Coulomb and Stribeck, regularised at zero velocity:

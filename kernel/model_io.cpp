@@ -101,7 +101,8 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   shaper.finish();
 
   auto sensors = top.child("sensors");
-  // Every channel: resolution, noise, delay, rate; the recorded ones can be enabled, the strain gauge placed.
+  // Every channel: resolution, noise, delay, rate; the recorded ones can be enabled, the strain gauge placed;
+  // the output channels (hub_torque ... pressure_b) are the record's columns.
   auto& ss = s.sensors;
   const struct {
     const char* name;
@@ -111,7 +112,11 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
                   {"hub_rate", &ss.hub_rate, nullptr},
                   {"strain_gauge", &ss.strain_gauge, &ss.strain_gauge.enabled},
                   {"tip_accelerometer", &ss.tip_accelerometer, &ss.tip_accelerometer.enabled},
-                  {"tip_position", &ss.tip_position, &ss.tip_position.enabled}};
+                  {"tip_position", &ss.tip_position, &ss.tip_position.enabled},
+                  {"hub_torque", &ss.hub_torque, nullptr},
+                  {"tip_deflection", &ss.tip_deflection, nullptr},
+                  {"pressure_a", &ss.pressure_a, nullptr},
+                  {"pressure_b", &ss.pressure_b, nullptr}};
   for (const auto& [name, ch, enabled] : channels) {
     auto c = sensors.child(name);
     c.optional("resolution", ch->resolution);

@@ -1,5 +1,6 @@
 #include "kernel/sensors.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "kernel/dynamics.hpp"
@@ -75,6 +76,44 @@ void compute_recorded_sensors(const BatchModel& bm, BatchState& s, Workspace& ws
   }
   if (bm.rec_enabled[kStrainGauge])
     for (int l = 0; l < W; ++l) out[kStrainTipEstimate * W + l] = bm.strain_gain[l] * out[kStrainMoment * W + l];
+}
+
+const char* output_channel_name(OutputChannel c) {
+  switch (c) {
+    case kOutHubTorque: return "hub_torque";
+    case kOutTipDeflection: return "tip_deflection";
+    case kOutPressureA: return "pressure_a";
+    case kOutPressureB: return "pressure_b";
+    case kOutputChannels: break;
+  }
+  return "?";
+}
+
+const ChannelSpec& output_channel_spec(const SensorSpec& s, OutputChannel c) {
+  const ChannelSpec* ch[kOutputChannels] = {&s.hub_torque, &s.tip_deflection, &s.pressure_a, &s.pressure_b};
+  return *ch[c];
+}
+
+OutputChannel find_output_channel(const std::string& name) {
+  for (int c = 0; c < kOutputChannels; ++c)
+    if (name == output_channel_name(OutputChannel(c))) return OutputChannel(c);
+  return kOutputChannels;
+}
+
+std::vector<double> measure_output(const Model& m, OutputChannel c, const std::vector<double>& x, bool noisy) {
+  const ChannelSpec& ch = output_channel_spec(m.spec.sensors, c);
+  const long n = calc_sensor_hold(ch, m.spec.controller.rate), d = ch.delay;
+  const std::uint64_t key = calc_variant_seed(m.spec.simulation.seed, static_cast<std::uint64_t>(5 + c));
+  std::vector<double> y(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const long kk = static_cast<long>(k);
+    const std::size_t j = static_cast<std::size_t>(kk >= d ? (kk - d) / n * n : 0);
+    double v = x[std::min(j, x.size() - 1)];
+    if (noisy && ch.noise > 0.0) v += ch.noise * CounterRng(key, j).normal();
+    if (noisy && ch.resolution > 0.0) v = ch.resolution * std::nearbyint(v / ch.resolution);
+    y[k] = v;
+  }
+  return y;
 }
 
 }  // namespace ff

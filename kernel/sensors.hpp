@@ -5,6 +5,9 @@
 // go to the trace only.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "kernel/batch.hpp"
 
 namespace ff {
@@ -38,5 +41,21 @@ inline RecordedChannel recorded_channel(RecordedColumn c) {
 // ws is scratch of its own, not the integrators' (SDIRK2 leaves joint armature in theirs): its q1 and zdot
 // receive qdd and the drive rates. Allocates nothing.
 void compute_recorded_sensors(const BatchModel& bm, BatchState& s, Workspace& ws, double* out);
+
+// The output channels: how a record's columns of signals the trace carries as truths were measured
+// (sensors.hub_torque, .tip_deflection, .pressure_a, .pressure_b). Nothing in the loop reads them, so
+// they are applied to a finished trace; their noise streams are channels 5, 6, 7, 8.
+enum OutputChannel { kOutHubTorque = 0, kOutTipDeflection, kOutPressureA, kOutPressureB, kOutputChannels };
+// The record column (and model path sensors.<name>) of a channel.
+const char* output_channel_name(OutputChannel c);
+const ChannelSpec& output_channel_spec(const SensorSpec& s, OutputChannel c);
+// The channel whose column is `name`, or kOutputChannels when none is.
+OutputChannel find_output_channel(const std::string& name);
+
+// The measured sequence of a truth x sampled at every controller sample (the sensor rule above):
+// y_k = Q(x_j + sigma n_j), j = n floor((k - d) / n) for k >= d, else j = 0 (d = delay, n = hold),
+// n_j from the stream (seed, 5 + c) at sample j. noisy = false (a prediction) leaves out the noise and
+// the quantisation.
+std::vector<double> measure_output(const Model& m, OutputChannel c, const std::vector<double>& x, bool noisy);
 
 }  // namespace ff

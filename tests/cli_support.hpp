@@ -5,6 +5,8 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 namespace ff::test {
@@ -24,6 +26,17 @@ inline CliResult run_flexfarm(const std::string& args) {
   const int status = pclose(p);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// The string value of the first `"key": "..."` in a JSON file written by flexfarm ("" when absent):
+// "verdict" is the diagnosis' verdict, "effect" its first-ranked effect.
+inline std::string json_field(const std::string& path, const std::string& key) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str(), k = "\"" + key + "\": \"";
+  const auto a = text.find(k);
+  return a == std::string::npos ? "" : text.substr(a + k.size(), text.find('"', a + k.size()) - a - k.size());
 }
 
 }  // namespace ff::test

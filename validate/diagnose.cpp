@@ -7,10 +7,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 
+#include "kernel/batch.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/yaml_reader.hpp"
+#include "sweep/design.hpp"
+#include "validate/residuals.hpp"
 
 namespace ff {
 
@@ -52,7 +56,21 @@ constexpr double kIdentifiableSv = 1e-6;
 // A trial model needing more fixed steps per control period than this is refused (too stiff).
 constexpr int kMaxFitSubsteps = 64;
 
-// The record's scored channels, decimated and normalised: residual = (y - yhat) / sd(y).
+// Residual tests: lags of the autocorrelation and cross-correlation; a channel is white (uncorrelated)
+// when at most this fraction of them is outside the 99 % band.
+constexpr int kTestLags = 25;
+constexpr double kTestFraction = 0.05;
+// The effective sample size sums the residual's autocorrelation over at most this many lags.
+constexpr int kEffectiveLags = 100;
+
+double sum_squares(const std::vector<double>& r) {
+  double s = 0.0;
+  for (double x : r) s += x * x;
+  return s;
+}
+
+// The record's scored channels, decimated and normalised: residual = (y - yhat) / sd(y), channel-major
+// (channel c's samples at [c n_idx, (c + 1) n_idx)).
 struct Scorer {
   const ModelSource* src = nullptr;
   const Record* rec = nullptr;
@@ -60,18 +78,27 @@ struct Scorer {
   std::vector<std::string> channels;
   std::vector<std::size_t> index;  // decimated sample indices
   std::vector<double> scale;       // 1 / sd per channel
+  std::vector<double> noise;       // the record's noise floor per channel, normalised
+  std::vector<double> input;       // the loop's external input at the decimated samples (for the CCF)
 
   int size() const { return static_cast<int>(channels.size() * index.size()); }
 
   // Residuals of each model (empty vector for a failed lane).
   std::vector<std::vector<double>> residuals(const std::vector<Model>& models) const {
-    // One batch when the models share a shape; one at a time when (e.g.) their substeps differ.
-    std::vector<Prediction> p;
-    try {
-      p = replay(models, *rec, mode);
-    } catch (const std::invalid_argument&) {
-      p.clear();
-      for (const auto& m : models) p.push_back(replay(std::span<const Model>(&m, 1), *rec, mode)[0]);
+    // One batch of the models that share a shape: groups of equal substeps, one at a time when they
+    // differ in more (segments, the drive's parts).
+    std::vector<Prediction> p(models.size());
+    std::map<int, std::vector<std::size_t>> groups;
+    for (std::size_t i = 0; i < models.size(); ++i) groups[models[i].substeps].push_back(i);
+    for (const auto& [substeps, members] : groups) {
+      std::vector<Model> group;
+      for (std::size_t i : members) group.push_back(models[i]);
+      try {
+        const auto q = replay(group, *rec, mode);
+        for (std::size_t j = 0; j < members.size(); ++j) p[members[j]] = q[j];
+      } catch (const std::invalid_argument&) {
+        for (std::size_t i : members) p[i] = replay(std::span<const Model>(&models[i], 1), *rec, mode)[0];
+      }
     }
     std::vector<std::vector<double>> out(models.size());
     for (std::size_t i = 0; i < models.size(); ++i) {
@@ -91,6 +118,41 @@ struct Scorer {
     return out;
   }
 
+  std::vector<double> channel_of(const std::vector<double>& r, std::size_t c) const {
+    const std::size_t n = index.size();
+    return std::vector<double>(r.begin() + c * n, r.begin() + (c + 1) * n);
+  }
+
+  // Residual tests per channel and the effective sample size of a residual.
+  std::map<std::string, ChannelTest> tests(const std::vector<double>& r, double* n_eff) const {
+    std::map<std::string, ChannelTest> out;
+    double ne = 0.0;
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      const auto e = channel_of(r, c);
+      ChannelTest t;
+      t.rms = std::sqrt(sum_squares(e) / e.size());
+      t.noise = noise[c];
+      const Correlation acf = calc_autocorrelation(e, kTestLags);
+      const Correlation ccf = calc_cross_correlation(e, input, kTestLags);
+      t.acf_outside = acf.fraction_outside;
+      t.ccf_outside = ccf.fraction_outside;
+      t.white = t.acf_outside <= kTestFraction;
+      t.uncorrelated = t.ccf_outside <= kTestFraction;
+      t.at_floor = t.rms * t.rms <= kFloorFactor * t.noise * t.noise;
+      out[channels[c]] = t;
+      ne += calc_effective_samples(e, kEffectiveLags);
+    }
+    if (n_eff) *n_eff = ne;
+    return out;
+  }
+
+  // The residual sum of squares of noise alone.
+  double floor_rss() const {
+    double s = 0.0;
+    for (double x : noise) s += x * x * index.size();
+    return s;
+  }
+
   std::map<std::string, double> fit_percent(const Model& m) const {
     std::map<std::string, double> out;
     const auto p = replay(std::span<const Model>(&m, 1), *rec, mode)[0];
@@ -99,16 +161,40 @@ struct Scorer {
   }
 };
 
-double sum_squares(const std::vector<double>& r) {
-  double s = 0.0;
-  for (double x : r) s += x * x;
-  return s;
+bool all_explained(const std::map<std::string, ChannelTest>& tests) {
+  for (const auto& [c, t] : tests)
+    if (!t.explained()) return false;
+  return !tests.empty();
 }
 
-// A parameter's value from its fitted coordinate theta, and back: log(value) for a positive
-// parameter, value / scale for a signed (linear) one.
-double param_value(const EffectParam& p, double theta) { return p.linear ? theta * p.scale : std::exp(theta); }
-double param_theta(const EffectParam& p, double value) { return p.linear ? value / p.scale : std::log(value); }
+// A parameter's fitted coordinate theta and its value (ParamScale).
+double param_value(const EffectParam& p, double theta) {
+  switch (p.scale) {
+    case ParamScale::kLog: return std::exp(theta);
+    case ParamScale::kLinear: return theta * std::max(std::abs(p.lo), std::abs(p.hi));
+    case ParamScale::kShare: return theta;
+  }
+  return theta;
+}
+double param_theta(const EffectParam& p, double value) {
+  switch (p.scale) {
+    case ParamScale::kLog: return std::log(value);
+    case ParamScale::kLinear: return value / std::max(std::abs(p.lo), std::abs(p.hi));
+    case ParamScale::kShare: return value;
+  }
+  return value;
+}
+// d value / d theta at theta.
+double param_unit(const EffectParam& p, double theta) {
+  return p.scale == ParamScale::kLog ? std::exp(theta) : param_value(p, 1.0);
+}
+
+// What a parameter at coordinate theta sets in the model (path -> value).
+std::vector<std::pair<std::string, double>> param_settings(const EffectParam& p, double theta) {
+  const double v = param_value(p, theta);
+  if (p.scale == ParamScale::kShare) return {{p.path, v * p.total / p.divisor}, {p.partner, (1.0 - v) * p.total}};
+  return {{p.path, v}};
+}
 
 // The effect's model for fitted coordinates theta (and the grid value, if any).
 std::vector<Assignment> effect_assignments(const Effect& e, const double* theta, double grid_value) {
@@ -116,11 +202,42 @@ std::vector<Assignment> effect_assignments(const Effect& e, const double* theta,
   for (const auto& [path, value] : e.set) a.push_back(assign(path, YAML::Load(value)));
   if (!e.grid_path.empty()) a.push_back(assign(e.grid_path, number_node(e.grid_path, grid_value)));
   for (std::size_t i = 0; i < e.params.size(); ++i)
-    a.push_back(assign(e.params[i].path, YAML::Node(param_value(e.params[i], theta[i]))));
+    for (const auto& [path, value] : param_settings(e.params[i], theta[i])) a.push_back(assign(path, YAML::Node(value)));
   return a;
 }
 
-// Ceres cost: the normalised residuals of the model with the effect at log-parameters theta. The
+// The trial models of coordinate sets (a failed build, or one too stiff, leaves its slot empty).
+std::vector<std::optional<Model>> build_trials(const Scorer& sc, const Effect& e,
+                                               const std::vector<std::vector<double>>& thetas, double grid_value) {
+  std::vector<std::optional<Model>> out(thetas.size());
+  for (std::size_t i = 0; i < thetas.size(); ++i) try {
+      Model m = build_model(*sc.src, effect_assignments(e, thetas[i].data(), grid_value));
+      if (m.substeps <= kMaxFitSubsteps) out[i] = std::move(m);
+    } catch (const std::exception&) {  // outside the model's valid range
+    }
+  return out;
+}
+
+// Sums of squares of trial models (INFINITY where the model or its run failed).
+std::vector<double> trial_rss(const Scorer& sc, const std::vector<std::optional<Model>>& trials) {
+  std::vector<Model> models;
+  std::vector<std::size_t> slot;
+  for (std::size_t i = 0; i < trials.size(); ++i)
+    if (trials[i]) {
+      models.push_back(*trials[i]);
+      slot.push_back(i);
+    }
+  std::vector<double> out(trials.size(), INFINITY);
+  for (std::size_t lo = 0; lo < models.size(); lo += kMaxLanes) {
+    const std::size_t hi = std::min(models.size(), lo + kMaxLanes);
+    const auto r = sc.residuals(std::vector<Model>(models.begin() + lo, models.begin() + hi));
+    for (std::size_t j = 0; j < r.size(); ++j)
+      if (!r[j].empty()) out[slot[lo + j]] = sum_squares(r[j]);
+  }
+  return out;
+}
+
+// Ceres cost: the normalised residuals of the model with the effect at coordinates theta. The
 // forward-difference Jacobian's columns run as lanes of the same batch as the point itself.
 class ReplayCost : public ceres::CostFunction {
  public:
@@ -130,20 +247,19 @@ class ReplayCost : public ceres::CostFunction {
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const int p = static_cast<int>(e_.params.size());
-    std::vector<double> theta(parameters[0], parameters[0] + p);
+    const std::vector<double> theta(parameters[0], parameters[0] + p);
     const double step = 1e-5;
+    std::vector<std::vector<double>> points = {theta};
+    if (jacobians && jacobians[0])
+      for (int j = 0; j < p; ++j) {
+        points.push_back(theta);
+        points.back()[j] += step;
+      }
+    const auto trials = build_trials(sc_, e_, points, grid_);
     std::vector<Model> models;
-    try {
-      models.push_back(build_model(*sc_.src, effect_assignments(e_, theta.data(), grid_)));
-      if (models[0].substeps > kMaxFitSubsteps) return false;  // too stiff to be worth a trial
-      if (jacobians && jacobians[0])
-        for (int j = 0; j < p; ++j) {
-          auto t = theta;
-          t[j] += step;
-          models.push_back(build_model(*sc_.src, effect_assignments(e_, t.data(), grid_)));
-        }
-    } catch (const std::exception&) {
-      return false;  // outside the model's valid range: Ceres shortens the step
+    for (const auto& t : trials) {
+      if (!t) return false;  // outside the model's valid range: Ceres shortens the step
+      models.push_back(*t);
     }
     const auto r = sc_.residuals(models);
     for (const auto& ri : r)
@@ -163,90 +279,150 @@ class ReplayCost : public ceres::CostFunction {
   double grid_;
 };
 
-// Least-squares fit of one effect: the grid (if any) first, then the continuous parameters.
-// `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
-EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std::map<std::string, double>& base_fit, int n,
-                  int max_iterations, int shared = 0) {
+// The grid search of a discrete parameter: every value as lanes; whole numbers (delays) refined
+// between the best value's neighbours, up to 8 new values a round, until they are adjacent.
+double search_grid(const Scorer& sc, const Effect& e, const std::vector<double>& theta, double* best_rss) {
+  std::map<double, double> seen;  // value -> rss
+  auto evaluate = [&](const std::vector<double>& values) {
+    std::vector<std::optional<Model>> trials;
+    for (double g : values) trials.push_back(build_trials(sc, e, {theta}, g)[0]);
+    const auto rss = trial_rss(sc, trials);
+    for (std::size_t i = 0; i < values.size(); ++i) seen[values[i]] = rss[i];
+  };
+  auto best = [&] {
+    return std::min_element(seen.begin(), seen.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  };
+  evaluate(e.grid);
+  if (!std::isfinite(best()->second)) throw std::runtime_error("every grid value failed");
+  while (e.grid_integer) {
+    const auto b = best();
+    const double lo = b == seen.begin() ? b->first : std::prev(b)->first;
+    const double hi = std::next(b) == seen.end() ? b->first : std::next(b)->first;
+    std::vector<double> fresh;
+    for (int i = 1; i <= 8; ++i) {
+      const double left = std::round(lo + (b->first - lo) * i / 9.0), right = std::round(b->first + (hi - b->first) * i / 9.0);
+      for (double v : {left, right})
+        if (!seen.count(v) && std::find(fresh.begin(), fresh.end(), v) == fresh.end()) fresh.push_back(v);
+    }
+    if (fresh.empty()) break;
+    evaluate(fresh);
+  }
+  *best_rss = best()->second;
+  return best()->first;
+}
+
+// The global scan's points in the box of coordinates: 16 evenly spaced for one parameter, an 8 x 8
+// grid for two, 64 Sobol' points for more; the starting point first.
+std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<double>& start) {
+  const std::size_t p = e.params.size();
+  std::vector<double> lo(p), hi(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    lo[j] = param_theta(e.params[j], e.params[j].lo);
+    hi[j] = param_theta(e.params[j], e.params[j].hi);
+  }
+  std::vector<std::vector<double>> u;  // unit-cube points
+  if (p == 1) {
+    for (int i = 0; i < 16; ++i) u.push_back({i / 15.0});
+  } else if (p == 2) {
+    for (int i = 0; i < 8; ++i)
+      for (int j = 0; j < 8; ++j) u.push_back({i / 7.0, j / 7.0});
+  } else {
+    const auto s = make_sobol_points_unscrambled(65, static_cast<int>(p));
+    for (std::size_t i = 1; i < s.size(); ++i) u.push_back(s[i]);  // row 0 is the origin, a corner
+  }
+  std::vector<std::vector<double>> out = {start};
+  for (const auto& x : u) {
+    std::vector<double> t(p);
+    for (std::size_t j = 0; j < p; ++j) t[j] = lo[j] + x[j] * (hi[j] - lo[j]);
+    out.push_back(t);
+  }
+  return out;
+}
+
+// One Ceres run from theta (in place) within the coordinate bounds.
+void run_ceres(ceres::CostFunction* cost, const Effect& e, std::vector<double>& theta, int max_iterations) {
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  problem.AddResidualBlock(cost, nullptr, theta.data());
+  for (std::size_t j = 0; j < theta.size(); ++j) {
+    const double lo = param_theta(e.params[j], e.params[j].lo), hi = param_theta(e.params[j], e.params[j].hi);
+    problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), lo);
+    problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), hi);
+    theta[j] = std::clamp(theta[j], lo, hi);
+  }
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_QR;
+  o.max_num_iterations = max_iterations;
+  o.num_threads = 1;
+  o.logging_type = ceres::SILENT;
+  // The fit need not be finer than the noise: a relative change of the RSS below 1e-6 moves Delta BIC
+  // by less than n_eff 1e-6.
+  o.function_tolerance = 1e-6;
+  o.parameter_tolerance = 1e-6;
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+}
+
+// What a fit needs besides the effect: the baseline it is measured against.
+struct Against {
+  double rss = NAN;
+  std::map<std::string, double> fit;
+};
+
+// Least-squares fit of one effect: the grid (if any), else the global scan and Ceres from its best
+// starts. `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
+EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const DiagnoseOptions& opt, int shared = 0) {
   EffectFit f;
   f.effect = e.name;
   f.physics = e.physics;
   f.switches = e.set;
   double grid_value = 0.0;
   std::vector<double> theta;
-  for (const auto& p : e.params) theta.push_back(param_theta(p, p.initial));
+  for (const auto& p : e.params) theta.push_back(param_theta(p, std::clamp(p.initial, p.lo, p.hi)));
   for (std::size_t j = e.params.size() - shared; j < e.params.size(); ++j) f.refit.push_back(e.params[j].path);
   try {
     if (!e.grid_path.empty()) {
-      std::vector<Model> models;
-      for (double g : e.grid) models.push_back(build_model(*sc.src, effect_assignments(e, theta.data(), g)));
-      const auto r = sc.residuals(models);
-      double best = INFINITY;
-      for (std::size_t i = 0; i < r.size(); ++i)
-        if (!r[i].empty() && sum_squares(r[i]) < best) {
-          best = sum_squares(r[i]);
-          grid_value = e.grid[i];
-        }
-      if (!std::isfinite(best)) throw std::runtime_error("every grid value failed");
+      grid_value = search_grid(sc, e, theta, &f.rss);
       f.params[e.grid_path] = grid_value;
       f.stderr_[e.grid_path] = NAN;
-      f.rss = best;
     }
-    if (!e.params.empty()) {
-      // Multi-start: every positive starting value scaled together by 1/30 .. 30, run as lanes; the best starts.
-      std::vector<double> factors;
-      for (int i = -6; i <= 6; ++i) factors.push_back(std::pow(30.0, i / 6.0));
-      std::vector<Model> starts;
-      std::vector<double> used;
-      for (double fct : factors) {
-        std::vector<double> t = theta;
-        for (std::size_t j = 0; j < t.size(); ++j)
-          if (!e.params[j].linear) t[j] += std::log(fct);
-        try {
-          starts.push_back(build_model(*sc.src, effect_assignments(e, t.data(), grid_value)));
-          used.push_back(fct);
-        } catch (const std::exception&) {
+    std::vector<double> res(sc.size());
+    const int p = static_cast<int>(theta.size());
+    std::vector<double> jac(static_cast<std::size_t>(sc.size()) * std::max(p, 1));
+    ReplayCost cost(sc, e, grid_value);
+    if (p > 0) {
+      // Global scan (lanes of one batch), then Ceres from the best distinct starts; the best end wins.
+      const auto points = scan_points(e, theta);
+      const auto rss = trial_rss(sc, build_trials(sc, e, points, grid_value));
+      std::vector<std::size_t> order(points.size());
+      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rss[a] < rss[b]; });
+      if (!std::isfinite(rss[order[0]])) throw std::runtime_error("every point of the scan failed");
+      // A race: a few iterations from each start, then the leader runs on to max_iterations.
+      const int race = opt.starts > 1 ? std::max(3, opt.max_iterations / 4) : opt.max_iterations;
+      double best = INFINITY;
+      std::vector<double> best_theta = points[order[0]];
+      for (int s = 0; s < std::min<int>(opt.starts, static_cast<int>(order.size())); ++s) {
+        if (!std::isfinite(rss[order[s]])) break;
+        std::vector<double> t = points[order[s]];
+        run_ceres(&cost, e, t, race);
+        const double* params[] = {t.data()};
+        if (!cost.Evaluate(params, res.data(), nullptr)) continue;
+        const double r2 = sum_squares(res);
+        if (r2 < best) {
+          best = r2;
+          best_theta = t;
         }
       }
-      if (!starts.empty()) {
-        const auto r = sc.residuals(starts);
-        double best = INFINITY, pick = 1.0;
-        for (std::size_t i = 0; i < r.size(); ++i)
-          if (!r[i].empty() && sum_squares(r[i]) < best) {
-            best = sum_squares(r[i]);
-            pick = used[i];
-          }
-        for (std::size_t j = 0; j < theta.size(); ++j)
-          if (!e.params[j].linear) theta[j] += std::log(pick);
-      }
-      ceres::Problem problem;
-      auto* cost = new ReplayCost(sc, e, grid_value);
-      problem.AddResidualBlock(cost, nullptr, theta.data());
-      // Within a factor 1000 of the start either way: far enough for any plausible value, and a
-      // bound on the stiffness (and so the substeps) a trial step can ask for. Signed: within ±scale.
-      for (std::size_t j = 0; j < theta.size(); ++j) {
-        const auto& pj = e.params[j];
-        const double lo = pj.linear ? -1.0 : std::log(pj.initial) - std::log(1e3);
-        const double hi = pj.linear ? 1.0 : std::log(pj.initial) + std::log(1e3);
-        problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), lo);
-        problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), hi);
-        theta[j] = std::clamp(theta[j], lo, hi);
-      }
-      ceres::Solver::Options o;
-      o.linear_solver_type = ceres::DENSE_QR;
-      o.max_num_iterations = max_iterations;
-      o.num_threads = 1;
-      o.logging_type = ceres::SILENT;
-      o.function_tolerance = 1e-8;
-      ceres::Solver::Summary summary;
-      ceres::Solve(o, &problem, &summary);
+      theta = best_theta;
+      if (race < opt.max_iterations) run_ceres(&cost, e, theta, opt.max_iterations - race);
       // Standard errors from the Jacobian at the optimum: cov = s^2 (J^T J)^+, s^2 = RSS / (n - k), by
       // the SVD J = U S V^T. A parameter with weight in a (near-)null direction is not identifiable:
       // the record cannot tell it from the others; its standard error is NaN.
-      const int p = static_cast<int>(theta.size());
-      std::vector<double> res(sc.size()), jac(static_cast<std::size_t>(sc.size()) * p);
       const double* params[] = {theta.data()};
       double* jacs[] = {jac.data()};
-      if (!cost->Evaluate(params, res.data(), jacs)) throw std::runtime_error("the fitted model failed to run");
+      if (!cost.Evaluate(params, res.data(), jacs)) throw std::runtime_error("the fitted model failed to run");
       f.rss = sum_squares(res);
       const Eigen::MatrixXd J =
           Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(jac.data(), sc.size(), p);
@@ -262,21 +438,29 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std:
           for (int j = 0; j < p; ++j) null[j] = null[j] || std::abs(V(j, k)) > 0.1;
         }
       }
-      cov *= f.rss / std::max(1, n - p);
+      cov *= f.rss / std::max(1, sc.size() - p);
       for (int j = 0; j < p; ++j) {
         const auto& pj = e.params[j];
-        const double value = param_value(pj, theta[j]);
-        const double unit = pj.linear ? pj.scale : value;  // d value / d theta
-        f.params[pj.path] = value;
+        for (const auto& [path, value] : param_settings(pj, theta[j])) f.params[path] = value;
+        const double unit = param_unit(pj, theta[j]) * (pj.scale == ParamScale::kShare ? pj.total / pj.divisor : 1.0);
         f.stderr_[pj.path] = null[j] ? NAN : std::abs(unit) * std::sqrt(std::max(cov(j, j), 0.0));
         if (null[j]) f.unidentifiable.push_back(pj.path);
+        const double lo = param_theta(pj, pj.lo), hi = param_theta(pj, pj.hi), tol = 1e-3 * (hi - lo);
+        if (theta[j] <= lo + tol || theta[j] >= hi - tol) f.at_bound.push_back(pj.path);
       }
+    } else {
+      const double* params[] = {theta.data()};
+      if (!cost.Evaluate(params, res.data(), nullptr)) throw std::runtime_error("the fitted model failed to run");
     }
+    f.tests = sc.tests(res, &f.n_eff);
+    f.explained = all_explained(f.tests);
     f.k = static_cast<int>(e.params.size()) - shared + (e.grid_path.empty() ? 0 : 1);
-    f.delta_bic = n * std::log(f.rss / base_rss) + f.k * std::log(static_cast<double>(n));
+    f.delta_bic = f.n_eff * std::log(f.rss / base.rss) + f.k * std::log(f.n_eff);
+    const double floor = sc.floor_rss();
+    f.explains = base.rss > floor ? std::clamp((base.rss - f.rss) / (base.rss - floor), 0.0, 1.0) : 0.0;
     f.fit_percent = sc.fit_percent(build_model(*sc.src, f.assignments()));
     double gain = -INFINITY;
-    for (const auto& [c, v] : f.fit_percent) gain = std::max(gain, v - base_fit.at(c));
+    for (const auto& [c, v] : f.fit_percent) gain = std::max(gain, v - base.fit.at(c));
     f.significant = f.delta_bic < kSignificantDeltaBic && gain >= kMinFitGain;
     f.ok = true;
   } catch (const std::exception& ex) {
@@ -284,6 +468,16 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, double base_rss, const std:
     f.note = ex.what();
   }
   return f;
+}
+
+// The derivative of x over t by central differences (one-sided at the ends).
+std::vector<double> rate_of(const std::vector<double>& t, const std::vector<double>& x) {
+  std::vector<double> d(x.size(), 0.0);
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const std::size_t a = k > 0 ? k - 1 : 0, b = std::min(k + 1, x.size() - 1);
+    if (b > a) d[k] = (x[b] - x[a]) / (t[b] - t[a]);
+  }
+  return d;
 }
 
 Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
@@ -302,8 +496,50 @@ Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOption
     for (double x : y) var += (x - mean) * (x - mean);
     const double sd = std::sqrt(var / y.size());
     sc.scale.push_back(sd > 0 ? 1.0 / sd : 1.0);
+    sc.noise.push_back(std::max(calc_noise_floor(y) * sc.scale.back(), kRelevantError));
   }
+  // The loop's external input: the reference in closed loop, the torque in open loop, the hub angle
+  // in inverse dynamics.
+  const auto& u = r.at(opt.mode == ReplayMode::kClosedLoop ? "ref" : opt.mode == ReplayMode::kOpenLoop ? "hub_torque" : "hub_angle");
+  for (std::size_t k : sc.index) sc.input.push_back(u[k]);
   return sc;
+}
+
+// Where the baseline's residual misfits, channel by channel.
+std::vector<Misfit> locate_misfit(const Scorer& sc, const std::vector<double>& r0, const std::map<std::string, ChannelTest>& tests,
+                                  const std::map<std::string, double>& fit) {
+  const Record& rec = *sc.rec;
+  std::vector<double> t, w, th;
+  const auto& angle = rec.at("hub_angle");
+  const auto omega = rec.has("hub_rate") ? rec.at("hub_rate") : rate_of(rec.t, angle);
+  for (std::size_t k : sc.index) {
+    t.push_back(rec.t[k]);
+    w.push_back(omega[k]);
+    th.push_back(angle[k]);
+  }
+  std::vector<Misfit> out;
+  for (std::size_t c = 0; c < sc.channels.size(); ++c) {
+    Misfit m;
+    m.channel = sc.channels[c];
+    m.fit_percent = fit.at(m.channel);
+    m.test = tests.at(m.channel);
+    const auto e = sc.channel_of(r0, c);
+    const ResidualAnalysis a = analyse_residual(t, e, sc.input, {{"hub_velocity", w}, {"hub_angle", th}});
+    if (a.valid) {
+      if (!a.failure.worst_windows.empty() && a.failure.rms > 0) {
+        m.worst_t0 = a.failure.worst_windows[0].t0;
+        m.worst_t1 = a.failure.worst_windows[0].t1;
+        m.worst_ratio = a.failure.worst_windows[0].rms / a.failure.rms;
+      }
+      if (!a.failure.peaks.empty()) m.peak_hz = a.failure.peaks[0].frequency;
+      if (!a.failure.states.empty()) {
+        m.state = a.failure.states[0].first;
+        m.departure = a.failure.states[0].second;
+      }
+    }
+    out.push_back(m);
+  }
+  return out;
 }
 
 EffectScales make_scales(const Model& base, const Record& r, ReplayMode mode) {
@@ -358,12 +594,10 @@ std::vector<std::string> rank_sensitive(const Scorer& sc, const ModelSource& src
   return out;
 }
 
-// Does the effect fit (or search) this path itself?
+// Does the effect fit (or search, or set through a share) this path itself?
 bool fits_path(const Effect& e, const std::string& path) {
-  if (e.grid_path == path) return true;
-  for (const auto& p : e.params)
-    if (p.path == path) return true;
-  return false;
+  const auto paths = effect_paths(e);
+  return std::find(paths.begin(), paths.end(), path) != paths.end();
 }
 
 }  // namespace
@@ -392,10 +626,19 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   (void)quiet;
   for (const auto& c : replay_inputs(opt.mode))
     if (!r.has(c)) throw ConfigError(r.source, 1, c, std::string("missing column '") + c + "', needed in " + replay_mode_name(opt.mode) + " mode");
-  const Model base = build_model(src);
+  // The fits integrate an explicit (RK4) model with the linearly implicit midpoint rule: one
+  // articulated-body pass per step and the drive's states implicit, half the cost or less, within
+  // 1e-4 of the RK4 response on the reference rig (docs/validation.md). The written model keeps its own.
+  const ModelSource fit_src = [&] {
+    ModelSource f = src;
+    if (build_model(src).spec.simulation.integrator == Integrator::kRk4)
+      f.set.push_back(assign("simulation.integrator", YAML::Node("midpoint")));
+    return f;
+  }();
+  const Model base = build_model(fit_src);
   Diagnosis d;
   d.mode = opt.mode;
-  const Scorer sc = make_scorer(src, r, opt);
+  const Scorer sc = make_scorer(fit_src, r, opt);
   d.channels = sc.channels;
   d.n = sc.size();
   const auto r0 = sc.residuals({base});
@@ -403,7 +646,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   d.base_rss = sum_squares(r0[0]);
   d.base_fit = sc.fit_percent(base);
   const EffectScales scales = make_scales(base, r, opt.mode);
-  auto effects = make_candidate_effects(base, opt.mode, scales);
+  auto effects = make_candidate_effects(base, opt.mode, scales, sc.channels);
   for (const auto& name : opt.only) {
     bool known = false;
     for (const auto& n : effect_names()) known |= n == name;
@@ -432,7 +675,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       throw std::invalid_argument("--refit: '" + path + "' is not a number in the model");
     }
   };
-  const std::vector<std::string> pool = automatic ? rank_sensitive(sc, src, base) : named ? opt.refit : std::vector<std::string>{};
+  const std::vector<std::string> pool = automatic ? rank_sensitive(sc, fit_src, base) : named ? opt.refit : std::vector<std::string>{};
   auto refit_of = [&](const Effect& e) {
     std::vector<std::string> out;
     for (const auto& p : pool)
@@ -463,16 +706,18 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       fitted[i].ok = true;
       fitted[i].rss = d.base_rss;
       fitted[i].fit_percent = d.base_fit;
+      fitted[i].tests = sc.tests(r0[0], &fitted[i].n_eff);
+      fitted[i].explained = all_explained(fitted[i].tests);
       continue;
     }
-    Effect baseline{"baseline", "the model as it is, its re-fitted parameters fitted", {}, {}, "", {}, ""};
+    Effect baseline{"baseline", "the model as it is, its re-fitted parameters fitted", {}, {}, "", {}, false, ""};
     try {
       for (const auto& p : sets[i]) baseline.params.push_back(refit_param(p));
     } catch (const std::exception& ex) {
       fitted[i].note = ex.what();
       continue;
     }
-    fitted[i] = fit_one(sc, baseline, d.base_rss, d.base_fit, d.n, opt.max_iterations);
+    fitted[i] = fit_one(sc, baseline, {d.base_rss, d.base_fit}, opt);
   }
   for (std::size_t i = 0; i < sets.size(); ++i) {
     if (!fitted[i].ok) {
@@ -485,6 +730,10 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   d.base_rss = reported.rss;
   d.base_fit = reported.fit_percent;
   d.base_params = reported.params;
+  d.base_tests = reported.tests;
+  d.base_explained = reported.explained;
+  d.base_n_eff = reported.n_eff;
+  d.misfit = locate_misfit(sc, r0[0], d.base_tests, d.base_fit);
   // Each effect: its own parameters, then its re-fitted ones starting where its baseline put them.
   std::vector<std::vector<std::string>> refits;
   for (auto& e : effects) refits.push_back(refit_of(e));
@@ -494,11 +743,17 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       q.initial = baselines.at(refits[i]).params.at(p);
       effects[i].params.push_back(q);
     }
+  // The costliest fits (most parameters) first, so that the threads finish together.
+  std::vector<std::size_t> order(effects.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return effects[a].params.size() > effects[b].params.size(); });
   d.ranking.resize(effects.size());
 #pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t i = 0; i < effects.size(); ++i) {
+  for (std::size_t o = 0; o < order.size(); ++o) {
+    const std::size_t i = order[o];
     const EffectFit& b = baselines.at(refits[i]);
-    d.ranking[i] = fit_one(sc, effects[i], b.rss, b.fit_percent, d.n, opt.max_iterations, static_cast<int>(refits[i].size()));
+    d.ranking[i] = fit_one(sc, effects[i], {b.rss, b.fit_percent}, opt, static_cast<int>(refits[i].size()));
   }
   std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
@@ -514,7 +769,10 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
     for (const auto& [c, v] : rich->fit_percent) gain = std::max(gain, v - simple->fit_percent.at(c));
     if (gain < kNestedFitMargin) std::rotate(rich, simple, simple + 1);
   }
-  if (!d.ranking.empty() && d.ranking[0].ok && d.ranking[0].significant) d.verdict = d.ranking[0].effect;
+  // The verdict: the best effect when it is significant and explains the record; else "none" when the
+  // model already does; else "unexplained".
+  const bool found = !d.ranking.empty() && d.ranking[0].ok && d.ranking[0].significant && d.ranking[0].explained;
+  d.verdict = found ? d.ranking[0].effect : d.base_explained ? "none" : "unexplained";
   return d;
 }
 
@@ -556,21 +814,57 @@ std::string json_list(const std::vector<std::string>& v) {
   for (const auto& x : v) out += (out.size() > 1 ? ", " : "") + json_string(x);
   return out + "]";
 }
+
+std::string json_bool(bool b) { return b ? "true" : "false"; }
+
+std::string json_tests(const std::map<std::string, ChannelTest>& tests) {
+  std::string out = "{";
+  for (const auto& [c, t] : tests)
+    out += (out.size() > 1 ? ", " : "") + json_string(c) + ": {\"rms\": " + json_number(t.rms) + ", \"noise\": " +
+           json_number(t.noise) + ", \"acf_outside\": " + json_number(t.acf_outside) + ", \"ccf_outside\": " +
+           json_number(t.ccf_outside) + ", \"white\": " + json_bool(t.white) + ", \"uncorrelated\": " +
+           json_bool(t.uncorrelated) + ", \"at_floor\": " + json_bool(t.at_floor) + "}";
+  return out + "}";
+}
+
+// The best partial candidates of an unexplained record: significant ones by the share of the misfit they explain.
+std::vector<const EffectFit*> partial_candidates(const Diagnosis& d, std::size_t count = 3) {
+  std::vector<const EffectFit*> out;
+  for (const auto& f : d.ranking)
+    if (f.ok && f.significant) out.push_back(&f);
+  std::stable_sort(out.begin(), out.end(), [](const EffectFit* a, const EffectFit* b) { return a->explains > b->explains; });
+  if (out.size() > count) out.resize(count);
+  return out;
+}
+
 }  // namespace
 
 std::string format_diagnosis_json(const Diagnosis& d) {
   std::string out = "{\n  \"mode\": \"" + std::string(replay_mode_name(d.mode)) + "\",\n";
   out += "  \"samples\": " + std::to_string(d.n) + ",\n";
   out += "  \"baseline\": {\"fit_percent\": " + json_map(d.base_fit) + ", \"params\": " + json_map(d.base_params) +
-         ", \"refit\": " + json_list(d.refit) + ", \"rss\": " + json_number(d.base_rss) + "},\n";
-  out += "  \"ranking\": [\n";
+         ", \"refit\": " + json_list(d.refit) + ", \"rss\": " + json_number(d.base_rss) + ", \"n_eff\": " +
+         json_number(d.base_n_eff) + ", \"explained\": " + json_bool(d.base_explained) + ", \"tests\": " +
+         json_tests(d.base_tests) + "},\n";
+  out += "  \"misfit\": [";
+  for (std::size_t i = 0; i < d.misfit.size(); ++i) {
+    const auto& m = d.misfit[i];
+    out += std::string(i ? ", " : "") + "{\"channel\": " + json_string(m.channel) + ", \"fit_percent\": " +
+           json_number(m.fit_percent) + ", \"rms\": " + json_number(m.test.rms) + ", \"noise\": " +
+           json_number(m.test.noise) + ", \"worst_window\": [" + json_number(m.worst_t0) + ", " + json_number(m.worst_t1) +
+           "], \"worst_ratio\": " + json_number(m.worst_ratio) + ", \"peak_hz\": " + json_number(m.peak_hz) +
+           ", \"state\": " + json_string(m.state) + ", \"departure\": " + json_number(m.departure) + "}";
+  }
+  out += "],\n  \"ranking\": [\n";
   for (std::size_t i = 0; i < d.ranking.size(); ++i) {
     const auto& f = d.ranking[i];
     out += "    {\"effect\": " + json_string(f.effect) + ", \"params\": " + json_map(f.params) + ", \"stderr\": " +
-           json_map(f.stderr_) + ", \"unidentifiable\": " + json_list(f.unidentifiable) + ", \"refit\": " +
-           json_list(f.refit) + ", \"fit_percent\": " + json_map(f.fit_percent) + ", \"delta_bic\": " +
-           json_number(f.delta_bic) + ", \"significant\": " + (f.significant ? "true" : "false") +
-           ", \"ok\": " + (f.ok ? "true" : "false") + (f.note.empty() ? "" : ", \"note\": " + json_string(f.note)) + "}" +
+           json_map(f.stderr_) + ", \"unidentifiable\": " + json_list(f.unidentifiable) + ", \"at_bound\": " +
+           json_list(f.at_bound) + ", \"refit\": " + json_list(f.refit) + ", \"fit_percent\": " +
+           json_map(f.fit_percent) + ", \"delta_bic\": " + json_number(f.delta_bic) + ", \"n_eff\": " +
+           json_number(f.n_eff) + ", \"significant\": " + json_bool(f.significant) + ", \"explained\": " +
+           json_bool(f.explained) + ", \"explains\": " + json_number(f.explains) + ", \"tests\": " + json_tests(f.tests) +
+           ", \"ok\": " + json_bool(f.ok) + (f.note.empty() ? "" : ", \"note\": " + json_string(f.note)) + "}" +
            (i + 1 < d.ranking.size() ? "," : "") + "\n";
   }
   out += "  ],\n  \"verdict\": " + json_string(d.verdict) + "\n}\n";
@@ -579,7 +873,7 @@ std::string format_diagnosis_json(const Diagnosis& d) {
 
 std::string format_diagnosis_text(const Diagnosis& d) {
   std::string out = "baseline fit (" + std::string(replay_mode_name(d.mode)) + "):";
-  char buf[256];
+  char buf[512];
   for (const auto& [c, v] : d.base_fit) {
     std::snprintf(buf, sizeof buf, " %s %.2f %%", c.c_str(), v);
     out += buf;
@@ -590,6 +884,12 @@ std::string format_diagnosis_text(const Diagnosis& d) {
       std::snprintf(buf, sizeof buf, " %s = %.4g", p.c_str(), v);
       out += buf;
     }
+  }
+  out += "\n  residual (RMS / noise floor, white, uncorrelated with the input):";
+  for (const auto& [c, t] : d.base_tests) {
+    std::snprintf(buf, sizeof buf, " %s %.3g/%.3g %s %s;", c.c_str(), t.rms, t.noise, t.white ? "white" : "NOT white",
+                  t.uncorrelated ? "uncorr." : "CORRELATED");
+    out += buf;
   }
   out += "\n\n  rank  effect                      delta BIC   fit % after      parameters\n";
   int rank = 0;
@@ -602,16 +902,50 @@ std::string format_diagnosis_text(const Diagnosis& d) {
     for (const auto& [p, v] : f.params) {
       const double se = f.stderr_.count(p) ? f.stderr_.at(p) : NAN;
       const bool unid = std::find(f.unidentifiable.begin(), f.unidentifiable.end(), p) != f.unidentifiable.end();
+      const bool bound = std::find(f.at_bound.begin(), f.at_bound.end(), p) != f.at_bound.end();
       std::snprintf(buf, sizeof buf, unid ? "%s%s = %.4g (unidentifiable)" : std::isfinite(se) ? "%s%s = %.4g ± %.2g" : "%s%s = %.4g",
                     params.empty() ? "" : ", ", p.c_str(), v, se);
       params += buf;
+      if (bound) params += " (at its bound)";
     }
-    std::snprintf(buf, sizeof buf, "  %4d  %-26s %10.1f%s  %-15s  %s\n", ++rank, f.effect.c_str(), f.delta_bic,
-                  f.significant ? "*" : " ", f.ok ? fits.c_str() : "failed", f.ok ? params.c_str() : f.note.c_str());
+    std::snprintf(buf, sizeof buf, "  %4d  %-26s %10.1f%s%s %-15s  %s\n", ++rank, f.effect.c_str(), f.delta_bic,
+                  f.significant ? "*" : " ", f.ok && f.explained ? "=" : " ", f.ok ? fits.c_str() : "failed",
+                  f.ok ? params.c_str() : f.note.c_str());
     out += buf;
   }
-  out += "\n  * significant: delta BIC < " + json_number(kSignificantDeltaBic) + "\n";
-  out += "verdict: " + (d.verdict == "none" ? std::string("none of the candidates is missing") : d.verdict + " is missing") + "\n";
+  out += "\n  * significant: delta BIC < " + json_number(kSignificantDeltaBic) +
+         " (in effective samples); = after it every channel's residual is noise\n";
+  if (d.verdict == "none") {
+    out += "verdict: none - the model explains the record down to its noise\n";
+  } else if (d.verdict != "unexplained") {
+    out += "verdict: " + d.verdict + " is missing\n";
+  } else {
+    out += "verdict: unexplained - the model misfits the record and no candidate explains it\n";
+    for (const auto* f : partial_candidates(d)) {
+      std::snprintf(buf, sizeof buf, "  %s explains %.0f %% of the misfit above the noise\n", f->effect.c_str(),
+                    100.0 * f->explains);
+      out += buf;
+    }
+    for (const auto& m : d.misfit) {
+      if (m.test.explained()) continue;
+      std::snprintf(buf, sizeof buf, "  %s: fit %.2f %%, residual %.2gx its noise", m.channel.c_str(), m.fit_percent,
+                    m.test.noise > 0 ? m.test.rms / m.test.noise : INFINITY);
+      out += buf;
+      if (std::isfinite(m.worst_t0)) {
+        std::snprintf(buf, sizeof buf, ", worst in t = %.1f-%.1f s (%.1fx)", m.worst_t0, m.worst_t1, m.worst_ratio);
+        out += buf;
+      }
+      if (std::isfinite(m.peak_hz)) {
+        std::snprintf(buf, sizeof buf, ", peaks at %.2f Hz", m.peak_hz);
+        out += buf;
+      }
+      if (!m.state.empty()) {
+        std::snprintf(buf, sizeof buf, ", depends on %s (%.2f)", m.state.c_str(), m.departure);
+        out += buf;
+      }
+      out += "\n";
+    }
+  }
   return out;
 }
 

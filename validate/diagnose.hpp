@@ -1,11 +1,16 @@
 // Which physical effect is the model missing? Each candidate (validate/effects.hpp) is added to the
-// model and its parameters fitted to the record by nonlinear least squares (Ceres, Levenberg-
-// Marquardt; the Jacobian by forward differences, its columns run as lanes of one batch). Candidates
-// are ranked by the Bayesian information criterion against the base model:
-//   BIC = n ln(RSS / n) + k ln n,   Delta BIC = BIC(effect) - BIC(base),
-// with n residuals (every scored channel, each divided by its measured standard deviation) and k
-// fitted parameters. Delta BIC < -10 is "very strong" evidence (Kass and Raftery 1995): significant,
-// when the fit also visibly improves (kMinFitGain).
+// model and its parameters fitted jointly to the record by nonlinear least squares: a coarse global
+// scan (log-spaced over decades, run as lanes of one batch), then Ceres (Levenberg-Marquardt, the
+// Jacobian by forward differences, its columns as lanes) from the best few starts. Candidates are
+// ranked by the Bayesian information criterion against the base model, counted in independent samples:
+//   BIC = n_eff ln(RSS / n) + k ln n_eff,   Delta BIC = n_eff ln(RSS_effect / RSS_base) + k ln n_eff,
+// with n residuals (every scored channel, each divided by its measured standard deviation), k fitted
+// parameters and n_eff = sum over channels of n_c / (1 + 2 sum_k rho_k), the effective sample size of
+// the fit's own residual (rho its autocorrelation, summed while positive: Geyer's initial positive
+// sequence, Geyer 1992). Delta BIC < -10 is "very strong" evidence (Kass and Raftery 1995): significant,
+// when the fit also visibly improves (kMinFitGain). The verdict is one of three (docs/validation.md):
+// "none" (the model explains the record down to its noise), the effect's name (significant, and after it
+// the record is explained), or "unexplained" (the model misfits and no candidate explains it).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -35,6 +40,34 @@ struct ModelSource {
 ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets);
 Model build_model(const ModelSource& src, const std::vector<Assignment>& extra = {});
 
+// Residual tests of one scored channel (decimated, normalised residual): is what is left noise?
+struct ChannelTest {
+  double rms = NAN;             // of the normalised residual
+  double noise = NAN;           // the record's noise floor on that scale (from its high-order differences),
+                                // at least kRelevantError
+  double acf_outside = NAN;     // fraction of autocorrelation lags 1..L outside the 99 % band
+  double ccf_outside = NAN;     // fraction of cross-correlation lags with the input outside its band
+  bool white = false, uncorrelated = false;
+  bool at_floor = false;        // rms^2 <= kFloorFactor noise^2: what is left is mostly noise
+  bool explained() const { return (white && uncorrelated) || at_floor; }
+};
+// A residual whose mean square is within this factor of the noise floor's is at the floor.
+inline constexpr double kFloorFactor = 2.0;
+// The least noise floor, as a fraction of the channel's standard deviation: a model error below 0.1 % of
+// the signal (fit 99.9 %) is below what a rig's sensors resolve; a noise-free record has no floor of its own.
+inline constexpr double kRelevantError = 1e-3;
+
+// Where the base model's misfit lives, per scored channel.
+struct Misfit {
+  std::string channel;
+  double fit_percent = NAN;
+  ChannelTest test;
+  double worst_t0 = NAN, worst_t1 = NAN, worst_ratio = NAN;  // the worst 1 s window and its RMS / the whole's
+  double peak_hz = NAN;                                       // the residual's largest spectral peak
+  std::string state;                                          // the state its mean depends on most ("" = none)
+  double departure = NAN;                                     // how much (0..1)
+};
+
 struct EffectFit {
   std::string effect;
   std::string physics;
@@ -43,7 +76,12 @@ struct EffectFit {
   std::map<std::string, double> stderr_;      // their standard errors (NaN when not identifiable)
   std::vector<std::string> unidentifiable;    // fitted paths the record cannot tell apart from the others
   std::vector<std::string> refit;             // the existing parameters re-fitted with it (also in params)
+  std::vector<std::string> at_bound;          // fitted paths that ended on their search range's bound
   std::map<std::string, double> fit_percent;  // per scored channel
+  std::map<std::string, ChannelTest> tests;   // residual tests per scored channel after the fit
+  bool explained = false;                      // every channel's test passes
+  double n_eff = NAN;                          // effective sample size of its residual
+  double explains = NAN;                       // share of the base's misfit above the noise floor it removes (0..1)
   double rss = NAN;                            // normalised residual sum of squares
   int k = 0;                                   // parameters fitted (a grid search counts one)
   double delta_bic = NAN;
@@ -61,8 +99,12 @@ struct Diagnosis {
   std::map<std::string, double> base_fit;      // fit % per channel of the base model (after its re-fit)
   std::map<std::string, double> base_params;   // the re-fitted existing parameters of the baseline
   std::vector<std::string> refit;              // their paths (as given, or as `auto` chose them for no effect)
+  std::map<std::string, ChannelTest> base_tests;  // the baseline's residual tests
+  bool base_explained = false;
+  double base_n_eff = NAN;
+  std::vector<Misfit> misfit;                  // where the baseline misfits, per channel
   std::vector<EffectFit> ranking;              // best (lowest Delta BIC) first
-  std::string verdict = "none";                // the best significant effect, or "none"
+  std::string verdict = "none";                // "none", the effect that explains the record, or "unexplained"
 };
 
 struct DiagnoseOptions {
@@ -73,7 +115,9 @@ struct DiagnoseOptions {
   // does not fit itself; {} or {"none"}: none (the default: with `auto` by default the hidden-effect
   // acceptance of docs/validation.md fell to 68 % first, 89 % among the first three).
   std::vector<std::string> refit;
-  int max_iterations = 25;
+  int max_iterations = 25;                     // Levenberg-Marquardt iterations per start
+  int starts = 3;                              // Ceres races from the best points of the global scan (a quarter
+                                               // of max_iterations each), the leader then runs to the end
   int max_samples = 1500;                      // per channel: the record is decimated to at most this
 };
 
@@ -82,7 +126,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
 // One effect fitted alone (what `calibrate --add` uses).
 EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& effect);
 
-// JSON of a diagnosis (docs/formats.md, "diagnose JSON").
+// JSON of a diagnosis (docs/cli.md, "flexfarm diagnose").
 std::string format_diagnosis_json(const Diagnosis& d);
 // A human-readable summary for the terminal.
 std::string format_diagnosis_text(const Diagnosis& d);

@@ -6,71 +6,143 @@
 namespace ff {
 
 std::vector<std::string> effect_names() {
-  return {"coulomb_friction", "viscous_friction", "stribeck_friction", "torque_offset", "backlash", "drive_compliance",
-          "hydraulic_compressibility", "torque_saturation", "joint_stiffening", "sensor_delay.hub_angle",
-          "sensor_delay.hub_rate", "sensor_quantization", "extra_mode", "payload", "hub_inertia"};
+  return {"coulomb_friction",      "viscous_friction",       "stribeck_friction",        "torque_offset",
+          "backlash",              "drive_compliance",       "hydraulic_compressibility", "torque_saturation",
+          "joint_stiffening",      "sensor_delay.hub_angle", "sensor_delay.hub_rate",    "sensor_delay.hub_torque",
+          "sensor_delay.tip_deflection", "sensor_quantization", "extra_mode",             "payload",
+          "hub_inertia"};
+}
+
+std::vector<std::string> effect_paths(const Effect& e) {
+  std::vector<std::string> out;
+  for (const auto& p : e.params) {
+    out.push_back(p.path);
+    if (!p.partner.empty()) out.push_back(p.partner);
+  }
+  if (!e.grid_path.empty()) out.push_back(e.grid_path);
+  return out;
 }
 
 EffectParam make_effect_param(const std::string& path, double value, const EffectScales& sc) {
-  if (path == "hub.torque_offset")
-    return {path, value, true, 2.0 * std::max({std::abs(value), sc.torque_rms, 1e-6})};
-  return {path, value > 0 ? value : 1.0, false, 1.0};
+  if (path == "hub.torque_offset") {
+    const double b = 2.0 * std::max({std::abs(value), sc.torque_rms, 1e-6});
+    return {path, value, -b, b, ParamScale::kLinear};
+  }
+  const double v = value > 0 ? value : 1.0;
+  return {path, v, v / 1e3, v * 1e3, ParamScale::kLog};
 }
 
-std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& sc) {
+namespace {
+
+// A positive parameter searched over [lo, hi], starting at `current` when the model has it (clamped), else at `fallback`.
+EffectParam positive(const std::string& path, double current, double fallback, double lo, double hi) {
+  const double start = std::clamp(current > 0 ? current : fallback, lo, hi);
+  return {path, start, lo, hi, ParamScale::kLog};
+}
+
+// Whole numbers from 1 to `last`, spaced by about a factor 4/3 (every one up to 5).
+std::vector<double> delay_grid(int last) {
+  std::vector<double> g;
+  for (double x = 1.0; std::lround(x) <= last; x = std::max(x + 1.0, x * 4.0 / 3.0)) g.push_back(std::lround(x));
+  if (g.back() != last) g.push_back(last);
+  return g;
+}
+
+}  // namespace
+
+std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& sc,
+                                           const std::vector<std::string>& scored) {
   const auto& s = base.spec;
   const bool closed = mode == ReplayMode::kClosedLoop, inverse = mode == ReplayMode::kInverseDynamics;
   const double tau = std::max(sc.torque_rms, 1e-6), w = std::max(sc.rate_rms, 1e-6);
-  auto start = [](double current, double fallback) { return current > 0 ? current : fallback; };
+  const double kp = std::max(s.controller.kp, 1.0);
   std::vector<Effect> out;
-  out.push_back({"coulomb_friction", "Coulomb friction at the hub", {},
-                 {{"friction.coulomb", start(s.friction.coulomb, 0.05 * tau)}}, "", {}, ""});
+
+  // Hub friction: levels from a thousandth of the torque RMS to twice it; the tanh smoothing from 1e-4 to 1e-2 of
+  // the rate RMS (wider, a smooth Coulomb term imitates viscous friction: on EMPS the loop then ends at 7.8 %, not 6.2 %).
+  const EffectParam coulomb = positive("friction.coulomb", s.friction.coulomb, 0.05 * tau, 1e-3 * tau, 2.0 * tau);
+  const EffectParam smoothing = positive("friction.smoothing", s.friction.smoothing, 1e-3, 1e-4 * w, 1e-2 * w);
+  out.push_back({"coulomb_friction", "Coulomb friction at the hub", {}, {coulomb, smoothing}, "", {}, false, ""});
   out.push_back({"viscous_friction", "viscous friction at the hub", {},
-                 {{"friction.viscous", start(s.friction.viscous, 0.05 * tau / w)}}, "", {}, ""});
+                 {positive("friction.viscous", s.friction.viscous, 0.05 * tau / w, 1e-4 * tau / w, 10.0 * tau / w)}, "",
+                 {}, false, ""});
   out.push_back({"stribeck_friction", "Coulomb friction with a Stribeck (stiction) peak", {},
-                 {{"friction.coulomb", start(s.friction.coulomb, 0.05 * tau)},
-                  {"friction.stiction", start(s.friction.stiction, std::max(0.1 * tau, 2.0 * s.friction.coulomb))},
-                  {"friction.stribeck_velocity", std::max(s.friction.stribeck_velocity, 0.05 * w)}},
-                 "", {}, "coulomb_friction"});
+                 {coulomb,
+                  positive("friction.stiction", s.friction.stiction, std::max(0.1 * tau, 2.0 * s.friction.coulomb),
+                           2e-3 * tau, 4.0 * tau),
+                  positive("friction.stribeck_velocity", s.friction.stribeck_velocity, 0.05 * w, 1e-3 * w, w), smoothing},
+                 "", {}, false, "coulomb_friction"});
   out.push_back({"torque_offset", "a constant load torque on the hub (cable drag, an unbalanced axis, amplifier bias)",
-                 {}, {make_effect_param("hub.torque_offset", s.hub_torque_offset, sc)}, "", {}, ""});
+                 {}, {make_effect_param("hub.torque_offset", s.hub_torque_offset, sc)}, "", {}, false, ""});
   if (!inverse) {
-    out.push_back({"backlash", "free play in the drive train", {{"drive.enabled", "true"}},
-                   {{"drive.backlash", start(s.drive.backlash, 1e-3)}}, "", {}, ""});
+    // The drive train: mesh stiffness from the PD's own spring to a thousand times it, its damping, and the
+    // share of the hub's inertia that sits on the actuator side (the total kept).
+    const double n2 = s.drive.ratio * s.drive.ratio;
+    const double total = s.hub_inertia + (s.drive.enabled ? s.drive.inertia * n2 : 0.0);
+    const double share0 = s.drive.enabled ? s.drive.inertia * n2 / total : 0.1;
+    const EffectParam share{"drive.inertia", std::clamp(share0, 0.01, 0.9), 0.01, 0.9, ParamScale::kShare,
+                            "hub.inertia", total, n2};
+    const EffectParam stiffness = positive("drive.stiffness", s.drive.enabled ? s.drive.stiffness : 0.0, 200.0 * kp,
+                                           kp, 1e3 * kp);
+    const EffectParam damping = positive("drive.damping", s.drive.enabled ? s.drive.damping : 0.0, 2e3, 1.0, 1e5);
     out.push_back({"drive_compliance", "a compliant drive train between actuator and hub", {{"drive.enabled", "true"}},
-                   {{"drive.stiffness", s.drive.enabled ? s.drive.stiffness : 200.0 * std::max(s.controller.kp, 1.0)}},
-                   "", {}, ""});
+                   {stiffness, damping, share}, "", {}, false, ""});
+    out.push_back({"backlash", "free play in the drive train", {{"drive.enabled", "true"}},
+                   {positive("drive.backlash", s.drive.backlash, 1e-3, 1e-5, 3e-2), stiffness, damping, share}, "", {},
+                   false, "drive_compliance"});
+    // The oil spring 4 beta D^2 / V: bulk modulus (entrained air lowers it by decades) and chamber volume.
+    const double beta0 = s.hydraulics.enabled ? s.hydraulics.bulk_modulus : 1.4e9;
+    const double v0 = s.hydraulics.chamber_volume;
     out.push_back({"hydraulic_compressibility", "oil compressibility of a hydraulic actuator",
                    {{"hydraulics.enabled", "true"}},
-                   {{"hydraulics.bulk_modulus", s.hydraulics.enabled ? 0.5 * s.hydraulics.bulk_modulus : 1.4e9}}, "",
-                   {}, ""});
+                   {positive("hydraulics.bulk_modulus", 0.5 * beta0, 0.5 * beta0, 1e7, 2e9),
+                    positive("hydraulics.chamber_volume", v0, v0, 0.1 * v0, 10.0 * v0)},
+                   "", {}, false, ""});
   }
   if (closed)
     out.push_back({"torque_saturation", "actuator torque saturation", {},
-                   {{"controller.torque_limit", 0.8 * std::max(sc.torque_max, 1e-6)}}, "", {}, ""});
-  if (base.nseg > 1)
+                   {positive("controller.torque_limit", 0.0, 0.8 * std::max(sc.torque_max, 1e-6),
+                             0.05 * std::max(sc.torque_max, 1e-6), 1.5 * std::max(sc.torque_max, 1e-6))},
+                   "", {}, false, ""});
+  if (base.nseg > 1) {
+    // Hardening k q + k3 q^3: k3 from a tenth of k (negligible at the rig's joint angles) to 1e5 k.
+    const double k = s.joints.stiffness;
     out.push_back({"joint_stiffening", "hardening beam joints (cubic stiffness)", {},
-                   {{"joints.cubic_stiffness", start(s.joints.cubic_stiffness, 0.1 * s.joints.stiffness)}}, "", {}, ""});
+                   {positive("joints.cubic_stiffness", s.joints.cubic_stiffness, 10.0 * k, 0.1 * k, 1e5 * k)}, "", {},
+                   false, ""});
+  }
+  // Delays: from one controller sample to kMaxSearchedDelay. In the loop for the controller's sensors;
+  // an output delay (the scored signal shifted only) for every scored output channel.
+  const int last = std::max(24, static_cast<int>(std::ceil(kMaxSearchedDelay * s.controller.rate)));
+  const std::vector<double> delays = delay_grid(last);
   if (closed) {
-    out.push_back({"sensor_delay.hub_angle", "delay of the hub angle measurement", {}, {}, "sensors.hub_angle.delay",
-                   {1, 2, 3, 4, 6, 8, 12, 16, 24}, ""});
-    out.push_back({"sensor_delay.hub_rate", "delay of the hub rate measurement", {}, {}, "sensors.hub_rate.delay",
-                   {1, 2, 3, 4, 6, 8, 12, 16, 24}, ""});
+    out.push_back({"sensor_delay.hub_angle", "delay of the hub angle measurement (in the loop)", {}, {},
+                   "sensors.hub_angle.delay", delays, true, ""});
+    out.push_back({"sensor_delay.hub_rate", "delay of the hub rate measurement (in the loop)", {}, {},
+                   "sensors.hub_rate.delay", delays, true, ""});
+  }
+  for (const char* c : {"hub_torque", "tip_deflection"})
+    if (std::find(scored.begin(), scored.end(), c) != scored.end())
+      out.push_back({std::string("sensor_delay.") + c, std::string("latency of the recorded ") + c + " (output only)",
+                     {}, {}, std::string("sensors.") + c + ".delay", delays, true, ""});
+  if (closed) {
     std::vector<double> quanta;
     for (int i = 0; i <= 12; ++i) quanta.push_back(1e-6 * std::pow(10.0, i / 3.0));  // 1e-6 .. 1e-2 rad
     out.push_back({"sensor_quantization", "quantisation of the hub angle encoder", {}, {},
-                   "sensors.hub_angle.resolution", quanta, ""});
+                   "sensors.hub_angle.resolution", quanta, false, ""});
   }
   if (s.beam.density > 0) {  // a massless arm has no mode to add
     std::vector<double> more;
     for (int n : {base.nseg + 1, 2 * base.nseg, 4 * base.nseg}) more.push_back(std::max(n, 2));
-    out.push_back({"extra_mode", "more segments: a beam mode the model lacks", {}, {}, "segments", more, ""});
+    out.push_back({"extra_mode", "more segments: a beam mode the model lacks", {}, {}, "segments", more, false, ""});
   }
+  const double pm = s.payload_mass > 0 ? s.payload_mass : 1.0, pi = s.payload_inertia > 0 ? s.payload_inertia : 1.0;
   out.push_back({"payload", "payload mass and inertia (a re-fit, no new physics)", {},
-                 {{"payload.mass", start(s.payload_mass, 1.0)}, {"payload.inertia", start(s.payload_inertia, 1.0)}}, "",
-                 {}, ""});
-  out.push_back({"hub_inertia", "hub inertia (a re-fit, no new physics)", {}, {{"hub.inertia", start(s.hub_inertia, 1.0)}},
-                 "", {}, ""});
+                 {{"payload.mass", pm, pm / 10.0, pm * 10.0}, {"payload.inertia", pi, pi / 10.0, pi * 10.0}}, "", {},
+                 false, ""});
+  const double hj = s.hub_inertia > 0 ? s.hub_inertia : 1.0;
+  out.push_back({"hub_inertia", "hub inertia (a re-fit, no new physics)", {}, {{"hub.inertia", hj, hj / 10.0, hj * 30.0}},
+                 "", {}, false, ""});
   return out;
 }
 

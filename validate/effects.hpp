@@ -1,5 +1,6 @@
 // The candidate effects diagnose tries: each a piece of physics (or a re-fit) the model may lack,
-// switched on by model paths and fitted by its parameters (docs/validation.md).
+// switched on by model paths and fitted jointly over the parameters that shape its signature
+// (docs/validation.md, "The candidate effects").
 #pragma once
 
 #include <string>
@@ -11,22 +12,31 @@
 
 namespace ff {
 
-// A continuous parameter. Positive ones are fitted as log(value), within x/÷ 1000 of the start;
-// signed ones (`linear`: a constant torque) as value / scale, within ±scale.
+// How a parameter is fitted: its coordinate theta, searched over [lo, hi] (values).
+enum class ParamScale {
+  kLog,     // positive: theta = ln(value), 0 < lo < hi
+  kLinear,  // signed: theta = value / max(|lo|, |hi|)
+  kShare,   // a share x in [lo, hi] within (0, 1) of `total`: path = x total / divisor, partner = (1 - x) total
+};
+
 struct EffectParam {
-  std::string path;      // model path, e.g. "friction.coulomb"
-  double initial = 1.0;  // starting value, > 0 unless linear
-  bool linear = false;   // signed and fitted linearly
-  double scale = 1.0;    // linear only: the bound on |value| and its unit in the fit, > 0
+  std::string path;        // model path, e.g. "friction.coulomb"
+  double initial = 1.0;    // starting value, in [lo, hi]
+  double lo = 1e-3, hi = 1e3;
+  ParamScale scale = ParamScale::kLog;
+  std::string partner;     // kShare: the path that keeps the rest (e.g. hub.inertia)
+  double total = 0.0;      // kShare: what the two share, in the partner's unit
+  double divisor = 1.0;    // kShare: path = x total / divisor (the drive's ratio squared: shaft coordinates)
 };
 
 struct Effect {
   std::string name;                                      // e.g. "coulomb_friction"
   std::string physics;                                   // one line: what it adds
   std::vector<std::pair<std::string, std::string>> set;  // fixed switches: path -> YAML value
-  std::vector<EffectParam> params;                       // fitted by least squares
-  std::string grid_path;                                 // a discrete parameter searched first ("" = none)
-  std::vector<double> grid;                              // its values
+  std::vector<EffectParam> params;                       // fitted jointly by least squares
+  std::string grid_path;                                 // a discrete parameter searched instead ("" = none)
+  std::vector<double> grid;                              // its values, ascending
+  bool grid_integer = false;                             // whole numbers: refined between the best one's neighbours
   std::string extends;                                   // the simpler effect this one contains ("" = none)
 };
 
@@ -34,22 +44,30 @@ struct Effect {
 // effect it extends to be ranked above it: below this the extra parameters buy nothing a user sees.
 inline constexpr double kNestedFitMargin = 0.5;
 
-// Scales the candidates' starting values take from the base model's replay of the record.
+// Scales the candidates' ranges take from the base model's replay of the record.
 struct EffectScales {
   double torque_rms = 1.0;  // N·m
   double rate_rms = 1.0;    // rad/s
   double torque_max = 1.0;  // N·m
 };
 
-// The parameter at `path` starting at `value`: signed (linear, bounded by twice the larger of
-// |value| and the torque RMS) when the path is a signed one (hub.torque_offset), else positive.
+// The longest delay searched: at least this, s (and at least 24 controller samples).
+inline constexpr double kMaxSearchedDelay = 0.12;
+
+// An existing parameter at `path` with value `value`, re-fitted: signed (within twice the larger of
+// |value| and the torque RMS) when the path is a signed one (hub.torque_offset), else positive within
+// x/÷ 1000 of its value.
 EffectParam make_effect_param(const std::string& path, double value, const EffectScales& scales);
 
-// The candidates that apply to `mode` on `base` (plant effects everywhere; controller-side
-// effects - sensors, saturation - only in closed loop).
-std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& scales);
+// The candidates that apply to `mode` on `base` (plant effects everywhere; controller-side effects -
+// sensors in the loop, saturation - only in closed loop; an output delay for every scored output channel).
+std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& scales,
+                                           const std::vector<std::string>& scored);
 
 // Every candidate's name, in the order diagnose lists them.
 std::vector<std::string> effect_names();
+
+// The paths an effect writes (its parameters, their partners, its grid path).
+std::vector<std::string> effect_paths(const Effect& e);
 
 }  // namespace ff

@@ -1,12 +1,14 @@
 #include "validate/replay.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "kernel/batch.hpp"
 #include "kernel/dynamics.hpp"
 #include "kernel/modes.hpp"
+#include "kernel/sensors.hpp"
 #include "kernel/simulate.hpp"
 #include "validate/observer.hpp"
 
@@ -87,16 +89,34 @@ std::vector<double> derivative(const std::vector<double>& x, double T) {
   return d;
 }
 
-// Simulated channels of one trace at the record's times.
-Prediction sample_trace(const Trace& tr, const Record& r, bool ok) {
+// Simulated channels of one trace at the record's times; the output channels (hub torque, tip
+// deflection, pressures) as the model's sensors measure them, without noise.
+Prediction sample_trace(const Model& m, const Trace& tr, const Record& r, bool ok) {
   Prediction p;
   p.ok = ok;
-  const std::pair<const char*, const std::vector<double>*> ch[] = {
-      {"hub_angle", &tr.hub_angle}, {"hub_rate", &tr.hub_rate}, {"tip_deflection", &tr.tip_deflection},
-      {"hub_torque", &tr.torque}};
+  std::vector<std::pair<std::string, std::vector<double>>> ch = {
+      {"hub_angle", tr.hub_angle}, {"hub_rate", tr.hub_rate},
+      {"tip_deflection", measure_output(m, kOutTipDeflection, tr.tip_deflection, false)},
+      {"hub_torque", measure_output(m, kOutHubTorque, tr.torque, false)}};
+  for (const auto& [name, x] : tr.extra)
+    if (const OutputChannel c = find_output_channel(name); c != kOutputChannels)
+      ch.emplace_back(name, measure_output(m, c, x, false));
+  // The trace is uniform in time (t_k = k T): each record time's neighbours and weight, once.
+  const double T = m.control_period;
+  const std::size_t last = tr.t.size() - 1;
+  std::vector<std::size_t> at(r.size());
+  std::vector<double> w(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    double x = std::max(0.0, (r.t[i] - r.t.front()) / T);
+    if (std::abs(x - std::round(x)) < 1e-9) x = std::round(x);  // on a sample: that sample, exactly
+    at[i] = std::min(static_cast<std::size_t>(x), last);
+    w[i] = at[i] < last ? x - static_cast<double>(at[i]) : 0.0;
+  }
   for (const auto& [name, y] : ch) {
     auto& out = p.channels[name];
-    for (double t : r.t) out.push_back(interpolate(tr.t, *y, t - r.t.front()));
+    out.resize(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i)
+      out[i] = w[i] > 0.0 ? y[at[i]] + w[i] * (y[at[i] + 1] - y[at[i]]) : y[at[i]];
   }
   return p;
 }
@@ -180,7 +200,8 @@ Prediction inverse_dynamics(const Model& model, const Record& r) {
     }
   }
   Prediction p;
-  for (double t : r.t) p.channels["hub_torque"].push_back(interpolate(tr.t, tr.torque, t - r.t.front()));
+  const std::vector<double> torque = measure_output(model, kOutHubTorque, tr.torque, false);
+  for (double t : r.t) p.channels["hub_torque"].push_back(interpolate(tr.t, torque, t - r.t.front()));
   for (double x : p.channels["hub_torque"]) p.ok = p.ok && std::isfinite(x);
   return p;
 }
@@ -202,7 +223,7 @@ std::vector<Prediction> replay(std::span<const Model> models, const Record& r, R
   if (k_ahead > 0) {  // k-step: restarts from the observer's estimate (validate/observer.hpp)
     const ObserverRun o = run_observer(models, r, mode, k_ahead, observer);
     std::vector<Prediction> out;
-    for (std::size_t l = 0; l < models.size(); ++l) out.push_back(sample_trace(o.k_step[l], r, o.k_step_ok(l)));
+    for (std::size_t l = 0; l < models.size(); ++l) out.push_back(sample_trace(models[l], o.k_step[l], r, o.k_step_ok(l)));
     return out;
   }
   std::vector<Model> lanes;
@@ -215,7 +236,7 @@ std::vector<Prediction> replay(std::span<const Model> models, const Record& r, R
   if (mode == ReplayMode::kOpenLoop) in.torque = at_samples(r, r.at("hub_torque"), T, ns);
   const BatchRun run = simulate(bm, nullptr, &in);
   std::vector<Prediction> out;
-  for (int l = 0; l < bm.W; ++l) out.push_back(sample_trace(run.traces[l], r, run.status[l] == LaneStatus::kOk));
+  for (int l = 0; l < bm.W; ++l) out.push_back(sample_trace(lanes[l], run.traces[l], r, run.status[l] == LaneStatus::kOk));
   return out;
 }
 

@@ -107,6 +107,29 @@ Correlation calc_cross_correlation(const std::vector<double>& e, const std::vect
   return r;
 }
 
+double calc_effective_samples(const std::vector<double>& e, int max_lag) {
+  const double n = static_cast<double>(e.size());
+  if (e.size() < 4) return std::max(1.0, n);
+  const Correlation r = calc_autocorrelation(e, max_lag);
+  double tau = 1.0;
+  for (std::size_t i = 1; i < r.value.size() && r.value[i] > 0.0; ++i) tau += 2.0 * r.value[i];
+  return std::clamp(n / tau, 1.0, n);
+}
+
+double calc_noise_floor(const std::vector<double>& y) {
+  const std::size_t n = y.size();
+  if (n < 8) return 0.0;
+  double s2 = 0.0, s4 = 0.0;
+  for (std::size_t k = 2; k + 2 < n; ++k) {
+    const double d2 = y[k + 1] - 2.0 * y[k] + y[k - 1];
+    const double d4 = y[k + 2] - 4.0 * y[k + 1] + 6.0 * y[k] - 4.0 * y[k - 1] + y[k - 2];
+    s2 += d2 * d2;
+    s4 += d4 * d4;
+  }
+  const double m = static_cast<double>(n - 4);
+  return std::sqrt(std::min(s2 / (6.0 * m), s4 / (70.0 * m)));
+}
+
 Spectrum calc_amplitude_spectrum(const std::vector<double>& t, const std::vector<double>& e) {
   check_sizes("calc_amplitude_spectrum", t.size(), e.size());
   Spectrum s;

@@ -36,6 +36,16 @@ Correlation calc_autocorrelation(const std::vector<double>& e, int max_lag);
 // sqrt(N) r_eu when e and u are independent); P is not taken below 1, the white-residual value.
 Correlation calc_cross_correlation(const std::vector<double>& e, const std::vector<double>& u, int max_lag);
 
+// Effective sample size of a residual: n / (1 + 2 sum_{k=1}^{K} r_e(k)), summed over lags 1..max_lag
+// while r_e stays positive (Geyer's initial positive sequence, Geyer 1992, "Practical Markov chain
+// Monte Carlo"), within [1, n]: n for a white residual, about n / 10 for an AR(1) with rho = 0.82.
+double calc_effective_samples(const std::vector<double>& e, int max_lag = 100);
+
+// The standard deviation of the white noise on a smooth signal y, from its second and fourth
+// differences: var(d2 y) = 6 sigma^2, var(d4 y) = 70 sigma^2 for white noise, the signal's share
+// falling as h^4 and h^8 with the sample spacing h; the smaller estimate. 0 for fewer than 8 samples.
+double calc_noise_floor(const std::vector<double>& y);
+
 // One-sided amplitude spectrum. e(t) is resampled linearly onto M equally spaced times over
 // [t_0, t_{N-1}] (M = the power of two >= N, spacing dt = (t_{N-1} - t_0)/(M-1)), detrended (its
 // least-squares line removed), Hann-windowed (w_j = 0.5 - 0.5 cos(2 pi j / M)) and transformed with

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "kernel/random.hpp"
+#include "kernel/sensors.hpp"
 #include "kernel/simulate.hpp"
 
 namespace ff {
@@ -16,14 +17,20 @@ Record make_synthetic_record(const Model& truth, double noise, std::uint64_t see
   const Trace& tr = run.traces[0];
   Record r;
   r.source = "<synthetic>";
-  const std::pair<const char*, const std::vector<double>*> cols[] = {
-      {"ref", &tr.ref}, {"hub_torque", &tr.torque}, {"hub_angle", &tr.hub_angle}, {"hub_rate", &tr.hub_rate},
-      {"tip_deflection", &tr.tip_deflection}};
+  // The output channels as their sensors (sensors.hub_torque ...) measured them.
+  const std::vector<double> torque = measure_output(truth, kOutHubTorque, tr.torque, true);
+  const std::vector<double> tip = measure_output(truth, kOutTipDeflection, tr.tip_deflection, true);
+  std::vector<std::pair<const char*, std::vector<double>>> cols = {
+      {"ref", tr.ref}, {"hub_torque", torque}, {"hub_angle", tr.hub_angle}, {"hub_rate", tr.hub_rate},
+      {"tip_deflection", tip}};
+  for (const auto& [name, x] : tr.extra)
+    if (const OutputChannel c = find_output_channel(name); c != kOutputChannels)
+      cols.emplace_back(output_channel_name(c), measure_output(truth, c, x, true));
   for (std::size_t k = 0; k < tr.t.size(); k += decimate) r.t.push_back(tr.t[k]);
   std::uint64_t channel = 0;
   for (const auto& [name, y] : cols) {
     auto& out = r.columns[name];
-    for (std::size_t k = 0; k < tr.t.size(); k += decimate) out.push_back((*y)[k]);
+    for (std::size_t k = 0; k < tr.t.size(); k += decimate) out.push_back(y[k]);
     ++channel;
     if (std::string(name) == "ref" || noise <= 0) continue;
     double mean = 0.0, var = 0.0;

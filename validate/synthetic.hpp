@@ -10,7 +10,9 @@
 
 namespace ff {
 
-// Columns t, ref, hub_torque, hub_angle, hub_rate, tip_deflection at every `decimate`-th controller
+// Columns t, ref, hub_torque, hub_angle, hub_rate, tip_deflection (and pressure_a, pressure_b with
+// hydraulics; the output channels as their sensors measure them, kernel/sensors.hpp measure_output)
+// at every `decimate`-th controller
 // sample; each measured channel (all but t and ref) gets noise of standard deviation
 // noise x (its standard deviation over the run), from the counter-based stream of (seed, channel).
 Record make_synthetic_record(const Model& truth, double noise, std::uint64_t seed, int decimate = 1);

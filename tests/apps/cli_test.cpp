@@ -314,9 +314,12 @@ TEST_F(Cli, DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict) {
   for (const char* key : {"\"stderr\": {", "\"fit_percent\": {", "\"delta_bic\": -", "\"significant\": true"})
     EXPECT_NE(json.find(key, first), std::string::npos) << key;
   // The payload on a one-body axis: its mass, inertia and the hub's are one number; not identifiable.
-  EXPECT_NE(json.find("\"unidentifiable\": [\"payload.mass\", \"payload.inertia\"]", second), std::string::npos) << json;
+  EXPECT_NE(json.find("\"unidentifiable\": [\"payload.mass\", \"payload.inertia\", \"hub.inertia\"]", second),
+            std::string::npos) << json;
   EXPECT_NE(json.find("\"payload.mass\": null", second), std::string::npos) << json;
-  const std::string end = "  ],\n  \"verdict\": \"coulomb_friction\"\n}\n";
+  // Coulomb friction alone does not explain a real axis (viscous friction, the offset): "unexplained".
+  EXPECT_NE(json.find("\"misfit\": [{\"channel\": \"hub_torque\""), std::string::npos) << json;
+  const std::string end = "  ],\n  \"verdict\": \"unexplained\"\n}\n";
   EXPECT_EQ(json.substr(json.size() - end.size()), end);
 }
 

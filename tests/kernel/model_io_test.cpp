@@ -361,6 +361,22 @@ TEST(ModelIo, RecordedSensorBlocksParse) {
   EXPECT_EQ(m.spec.notch.placement, "reference");
 }
 
+TEST(ModelIo, OutputChannelBlocksParse) {
+  const ff::Model m = ff::parse_model(
+      YAML::Load(with_sensors("{hub_torque: {delay: 7, noise: 3}, tip_deflection: {delay: 45, rate: 100}, "
+                              "pressure_a: {resolution: 1000}}")),
+      "good.yaml");
+  EXPECT_EQ(m.spec.sensors.hub_torque.delay, 7);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.hub_torque.noise, 3.0);
+  EXPECT_EQ(m.spec.sensors.tip_deflection.delay, 45);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.tip_deflection.rate, 100.0);
+  EXPECT_DOUBLE_EQ(m.spec.sensors.pressure_a.resolution, 1000.0);
+}
+
+TEST(ModelIo, OutputChannelRateMustDivideTheControllerRate) {
+  expect_rejected(with_sensors("{tip_deflection: {rate: 300}}"), 12, "sensors.tip_deflection.rate", "must divide");
+}
+
 TEST(ModelIo, NegativeRecordedNoiseIsRejected) {
   expect_rejected(with_sensors("{tip_position: {noise: -0.001}}"), 12, "sensors.tip_position.noise", ">= 0");
 }

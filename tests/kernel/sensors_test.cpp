@@ -327,3 +327,51 @@ TEST(Sensors, LanesMustAgreeOnTheirRecordedSensors) {
 
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+
+// The output channels (sensors.hub_torque ...): the sensor rule applied to a finished sequence.
+TEST(OutputChannels, DelayAndHoldFollowTheSensorRule) {
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.tip_deflection.delay = 3;
+  spec.sensors.tip_deflection.rate = 250.0;  // hold 4 controller samples at 1 kHz
+  const Model m = make_model(spec);
+  std::vector<double> x(40);
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = static_cast<double>(k);
+  const auto y = measure_output(m, kOutTipDeflection, x, false);
+  for (long k = 0; k < 40; ++k) {
+    const long j = k >= 3 ? (k - 3) / 4 * 4 : 0;  // the reading of sample 4 floor((k - 3) / 4)
+    EXPECT_EQ(y[k], static_cast<double>(j)) << k;
+  }
+  // Another channel keeps its own (none): unchanged.
+  EXPECT_EQ(measure_output(m, kOutHubTorque, x, true), x);
+}
+
+TEST(OutputChannels, NoiseAndQuantumOnlyWhenMeasuredNotPredicted) {
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.hub_torque.noise = 2.0;
+  spec.sensors.hub_torque.resolution = 0.5;
+  const Model m = make_model(spec);
+  const std::vector<double> x(20000, 100.0);
+  const auto y = measure_output(m, kOutHubTorque, x, true);
+  double s1 = 0, s2 = 0;
+  for (double v : y) {
+    EXPECT_EQ(std::fmod(v, 0.5), 0.0);
+    s1 += v - 100.0;
+    s2 += (v - 100.0) * (v - 100.0);
+  }
+  EXPECT_NEAR(s1 / y.size(), 0.0, 0.05);
+  EXPECT_NEAR(std::sqrt(s2 / y.size()), std::sqrt(4.0 + 0.25 / 12.0), 0.05);  // noise and the quantum's share
+  EXPECT_EQ(measure_output(m, kOutHubTorque, x, true), y);                    // repeats (seed, channel)
+  EXPECT_EQ(measure_output(m, kOutHubTorque, x, false), x);                   // a prediction: neither
+}
+
+TEST(OutputChannels, NamesAreTheRecordColumns) {
+  for (int c = 0; c < kOutputChannels; ++c)
+    EXPECT_EQ(find_output_channel(output_channel_name(OutputChannel(c))), OutputChannel(c));
+  EXPECT_EQ(find_output_channel("hub_angle"), kOutputChannels);  // a controller channel, in the loop
+}
+
+}  // namespace
+}  // namespace ff

@@ -1,60 +1,20 @@
-// diagnose (validate/diagnose.cpp) on records the project makes itself: the reference rig with one
-// effect hidden in the truth model, each candidate at two strengths, 1 % noise on every channel,
-// independent seeds, plus records with nothing hidden. Acceptance (the validation issue): the
-// hidden effect ranks first in >= 80 % of the records and among the first three in >= 95 %; the
-// records with nothing hidden get the verdict "none".
+// diagnose (validate/diagnose.cpp) on particular records: nothing hidden, the independent reference
+// trace, re-fits, a fitted value against its truth, the issue's examples (a late tip sensor on an
+// independent record, strong stiffening, two effects at once). The randomised acceptance suite is
+// hidden_effect_suite_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
 
 #include "validate/diagnose.hpp"
+#include "tests/validate/truth/truth_sim.hpp"
 #include "validate/synthetic.hpp"
 
 namespace ff {
 namespace {
 
 const std::string kModel = std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml";
-
-struct Hidden {
-  const char* effect;  // "none": nothing hidden
-  std::vector<std::string> set;
-};
-
-// Each candidate at two strengths (weak, strong). A drive softer than 3e7 N m/rad, or a rate delayed
-// by more than 2 samples, makes the rig's PD unstable: those are not records anyone measures.
-const std::vector<Hidden> kHidden = {
-    {"coulomb_friction", {"friction.coulomb=150"}},
-    {"coulomb_friction", {"friction.coulomb=400"}},
-    {"viscous_friction", {"friction.viscous=1500"}},
-    {"viscous_friction", {"friction.viscous=5000"}},
-    {"stribeck_friction", {"friction.coulomb=150", "friction.stiction=450", "friction.stribeck_velocity=0.02"}},
-    {"stribeck_friction", {"friction.coulomb=300", "friction.stiction=900", "friction.stribeck_velocity=0.02"}},
-    {"backlash", {"drive.enabled=true", "drive.backlash=0.0005"}},
-    {"backlash", {"drive.enabled=true", "drive.backlash=0.002"}},
-    {"drive_compliance", {"drive.enabled=true", "drive.stiffness=1e8"}},
-    {"drive_compliance", {"drive.enabled=true", "drive.stiffness=3e7"}},
-    {"hydraulic_compressibility", {"hydraulics.enabled=true", "hydraulics.bulk_modulus=1.4e9"}},
-    {"hydraulic_compressibility", {"hydraulics.enabled=true", "hydraulics.bulk_modulus=0.7e9"}},
-    {"torque_saturation", {"controller.torque_limit=3000"}},
-    {"torque_saturation", {"controller.torque_limit=1500"}},
-    {"joint_stiffening", {"joints.cubic_stiffness=3e6"}},
-    {"joint_stiffening", {"joints.cubic_stiffness=1e7"}},
-    {"sensor_delay.hub_angle", {"sensors.hub_angle.delay=3"}},
-    {"sensor_delay.hub_angle", {"sensors.hub_angle.delay=8"}},
-    {"sensor_delay.hub_rate", {"sensors.hub_rate.delay=1"}},
-    {"sensor_delay.hub_rate", {"sensors.hub_rate.delay=2"}},
-    {"sensor_quantization", {"sensors.hub_angle.resolution=5e-4"}},
-    {"sensor_quantization", {"sensors.hub_angle.resolution=2e-3"}},
-    {"extra_mode", {"segments=12"}},
-    {"extra_mode", {"segments=24"}},
-    {"payload", {"payload.mass=380", "payload.inertia=140"}},
-    {"payload", {"payload.mass=250", "payload.inertia=80"}},
-    {"hub_inertia", {"hub.inertia=300"}},
-    {"hub_inertia", {"hub.inertia=1000"}},
-    {"torque_offset", {"hub.torque_offset=150"}},
-    {"torque_offset", {"hub.torque_offset=-500"}},
-};
 
 const std::vector<std::string> kShortRun = {"trajectory.moves=[{target: 0.5, hold: 3}]"};
 
@@ -68,33 +28,6 @@ Diagnosis diagnose_hidden(const std::vector<std::string>& hidden, std::uint64_t 
   DiagnoseOptions opt;
   opt.max_iterations = 15;
   return diagnose(base, r, opt);
-}
-
-TEST(Diagnose, FindsTheHiddenEffectInRecordsOfTheRig) {
-  // The records in parallel, one per core (each diagnosis then runs its candidates in turn).
-  const int n_rec = static_cast<int>(kHidden.size());
-  std::vector<int> rank(n_rec, 0);
-  std::vector<std::string> verdict(n_rec);
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int i = 0; i < n_rec; ++i) {
-    const Diagnosis d = diagnose_hidden(kHidden[i].set, 100 + i);
-    for (std::size_t j = 0; j < d.ranking.size(); ++j)
-      if (d.ranking[j].effect == kHidden[i].effect) rank[i] = static_cast<int>(j) + 1;
-    verdict[i] = d.verdict;
-  }
-  int first = 0, top3 = 0;
-  std::string table;
-  for (int i = 0; i < n_rec; ++i) {
-    first += rank[i] == 1;
-    top3 += rank[i] >= 1 && rank[i] <= 3;
-    char line[256];
-    std::snprintf(line, sizeof line, "%-26s rank %2d  verdict %s\n", kHidden[i].effect, rank[i], verdict[i].c_str());
-    table += line;
-  }
-  const double n = static_cast<double>(kHidden.size());
-  EXPECT_GE(first / n, 0.80) << table;
-  EXPECT_GE(top3 / n, 0.95) << table;
-  std::printf("%s", table.c_str());
 }
 
 TEST(Diagnose, RecordsWithNothingHiddenGetTheVerdictNone) {
@@ -140,6 +73,48 @@ TEST(Diagnose, FittedCoulombFrictionMatchesTheTruthWithinItsStandardError) {
   const double fc = f.params.at("friction.coulomb"), se = f.stderr_.at("friction.coulomb");
   EXPECT_NEAR(fc, 400.0, std::max(4.0 * se, 4.0));
   EXPECT_LT(f.delta_bic, kSignificantDeltaBic);
+}
+
+// The issue's first example: a record of the independent simulator (16-bit encoder, tachometer noise
+// in the loop) whose tip sensor is 40 ms late. The latency of a recorded-only channel is a candidate,
+// found with its delay, and after it the record is explained.
+TEST(Diagnose, TipSensorLatencyOnAnIndependentRecordIsFoundWithItsDelay) {
+  truth::TruthRig rig;
+  set_truth_field(rig, "trajectory.moves", "0.5:3");
+  set_truth_field(rig, "sensors.hub_angle.quantize", "true");
+  set_truth_field(rig, "sensors.hub_rate.noise", "5e-4");
+  set_truth_field(rig, "sensors.tip_deflection.delay", "40");
+  set_truth_field(rig, "sensors.tip_deflection.noise", "0.002");
+  set_truth_field(rig, "sensors.hub_torque.noise", "20");
+  set_truth_field(rig, "record.decimate", "2");
+  const Record r = truth::simulate_truth(rig);
+  const Diagnosis d = diagnose(load_model_source(kModel, kShortRun), r, DiagnoseOptions{});
+  ASSERT_EQ(d.verdict, "sensor_delay.tip_deflection") << format_diagnosis_text(d);
+  EXPECT_EQ(d.ranking[0].params.at("sensors.tip_deflection.delay"), 40.0);
+  EXPECT_FALSE(d.base_explained);
+  EXPECT_TRUE(d.ranking[0].explained);
+}
+
+// Strong cubic stiffening (k3 = 2500 k): the fit reaches it from a scan over six decades.
+TEST(Diagnose, StrongJointStiffeningIsFittedOverDecades) {
+  const Diagnosis d = diagnose_hidden({"joints.cubic_stiffness=1e8"}, 21);
+  ASSERT_EQ(d.verdict, "joint_stiffening") << format_diagnosis_text(d);
+  EXPECT_NEAR(d.ranking[0].params.at("joints.cubic_stiffness"), 1e8, 0.05e8);
+}
+
+// A record the model cannot explain with any one candidate (two effects): the verdict says so, and
+// names the best partial candidates and where the misfit lives.
+TEST(Diagnose, TwoHiddenEffectsAreUnexplainedWithTheBestPartialCandidates) {
+  const Diagnosis d = diagnose_hidden({"friction.coulomb=300", "sensors.tip_deflection.delay=30"}, 22);
+  EXPECT_EQ(d.verdict, "unexplained") << format_diagnosis_text(d);
+  ASSERT_FALSE(d.ranking.empty());
+  EXPECT_TRUE(d.ranking[0].effect == "coulomb_friction" || d.ranking[0].effect == "sensor_delay.tip_deflection")
+      << format_diagnosis_text(d);
+  EXPECT_GT(d.ranking[0].explains, 0.3);
+  ASSERT_EQ(d.misfit.size(), d.channels.size());
+  const std::string text = format_diagnosis_text(d);
+  EXPECT_NE(text.find("explains"), std::string::npos) << text;
+  EXPECT_NE(text.find("of the misfit"), std::string::npos) << text;
 }
 
 }  // namespace

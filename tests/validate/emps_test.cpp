@@ -50,22 +50,16 @@ TEST_F(Emps, DiagnoseRanksCoulombFrictionFirst) {
   const Diagnosis d = diagnose(src, rec, opt);
   ASSERT_FALSE(d.ranking.empty());
   EXPECT_EQ(d.refit, std::vector<std::string>{"hub.inertia"});
-  EXPECT_EQ(d.verdict, "coulomb_friction");
+  // Coulomb friction first; it explains most of the misfit but not all (viscous friction and the offset
+  // remain), so the verdict is "unexplained" with it as the best partial candidate.
+  EXPECT_EQ(d.ranking[0].effect, "coulomb_friction");
+  EXPECT_EQ(d.verdict, "unexplained");
   const EffectFit& f = d.ranking[0];
   // Alone, Coulomb friction takes on the viscous part too: 36.5 N (the benchmark's Fc: 20.4 N).
   EXPECT_NEAR(f.params.at("friction.coulomb"), 36.5, 1.0);
   EXPECT_NEAR(f.params.at("hub.inertia"), 95.4, 1.0);  // the benchmark: 95.11 kg
   EXPECT_NEAR(d.base_fit.at("hub_torque"), 30.5, 0.5);  // the mass alone
   EXPECT_NEAR(f.fit_percent.at("hub_torque"), 83.2, 0.5);
-}
-
-std::string verdict_of(const fs::path& json) {
-  std::ifstream in(json);
-  std::stringstream s;
-  s << in.rdbuf();
-  const std::string text = s.str(), key = "\"verdict\": \"";
-  const auto a = text.find(key);
-  return a == std::string::npos ? "" : text.substr(a + key.size(), text.find('"', a + key.size()) - a - key.size());
 }
 
 TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
@@ -80,7 +74,8 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
     const fs::path json = dir / ("diagnosis" + std::to_string(v + 1) + ".json");
     const auto d = test::run_flexfarm("diagnose --model " + model + common + " --json " + json.string());
     ASSERT_EQ(d.exit_code, 0) << d.output;
-    EXPECT_EQ(verdict_of(json), expected[v]) << d.output;
+    // The first-ranked effect; the verdict is "unexplained" until the last: a real axis has more in it.
+    EXPECT_EQ(test::json_field(json.string(), "effect"), expected[v]) << d.output;
     const std::string next = (dir / ("v" + std::to_string(v + 2) + ".yaml")).string();
     const auto c = test::run_flexfarm("calibrate --model " + model + common + " --add " + expected[v] + " --out " + next);
     ASSERT_EQ(c.exit_code, 0) << c.output;
@@ -93,7 +88,7 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
   EXPECT_NEAR(last.spec.hub_torque_offset, -3.2, 0.2);
   EXPECT_NEAR(last.spec.hub_inertia, 95.4, 0.5);
   // The ledger: one row per version, its fit on the record; relative error RMSE / RMS(F) falls
-  // 69 % -> 17 % -> 8.6 % -> 6.2 % (least squares on the record with sign(v): 6.1 %; the benchmark: about 5 %).
+  // 69 % -> 17 % -> 8.6 % -> 6.7 % (least squares on the record with sign(v): 6.1 %; the benchmark: about 5 %).
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "ledger.sqlite").string().c_str(), &db), SQLITE_OK);
   sqlite3_stmt* st = nullptr;
@@ -111,7 +106,7 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
   sqlite3_finalize(st);
   sqlite3_close(db);
   ASSERT_EQ(effects, (std::vector<std::string>{"base", "coulomb_friction", "viscous_friction", "torque_offset"}));
-  const double want_fit[] = {30.5, 83.2, 91.4, 93.8}, want_rel[] = {69.4, 16.7, 8.6, 6.2};
+  const double want_fit[] = {30.5, 83.2, 91.4, 93.8}, want_rel[] = {69.4, 16.7, 8.6, 6.7};
   for (int v = 0; v < 4; ++v) {
     EXPECT_NEAR(fit[v], want_fit[v], 0.5) << "version " << v + 1;
     EXPECT_NEAR(relative[v], want_rel[v], 0.4) << "version " << v + 1;
