@@ -12,18 +12,6 @@ namespace ff {
 
 namespace {
 
-// Central differences of y(t), one-sided at the ends (units of y per s).
-std::vector<double> time_derivative(const std::vector<double>& t, const std::vector<double>& y) {
-  const std::size_t n = y.size();
-  std::vector<double> d(n, 0.0);
-  if (n < 2) return d;
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t a = k > 0 ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
-    d[k] = (y[b] - y[a]) / (t[b] - t[a]);
-  }
-  return d;
-}
-
 const char* channel_unit(const std::string& c) {
   if (c == "hub_angle") return "rad";
   if (c == "hub_rate") return "rad/s";

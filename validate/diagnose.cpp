@@ -470,16 +470,6 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
   return f;
 }
 
-// The derivative of x over t by central differences (one-sided at the ends).
-std::vector<double> rate_of(const std::vector<double>& t, const std::vector<double>& x) {
-  std::vector<double> d(x.size(), 0.0);
-  for (std::size_t k = 0; k < x.size(); ++k) {
-    const std::size_t a = k > 0 ? k - 1 : 0, b = std::min(k + 1, x.size() - 1);
-    if (b > a) d[k] = (x[b] - x[a]) / (t[b] - t[a]);
-  }
-  return d;
-}
-
 Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
   Scorer sc;
   sc.src = &src;
@@ -511,7 +501,7 @@ std::vector<Misfit> locate_misfit(const Scorer& sc, const std::vector<double>& r
   const Record& rec = *sc.rec;
   std::vector<double> t, w, th;
   const auto& angle = rec.at("hub_angle");
-  const auto omega = rec.has("hub_rate") ? rec.at("hub_rate") : rate_of(rec.t, angle);
+  const auto omega = rec.has("hub_rate") ? rec.at("hub_rate") : time_derivative(rec.t, angle);
   for (std::size_t k : sc.index) {
     t.push_back(rec.t[k]);
     w.push_back(omega[k]);

@@ -139,6 +139,17 @@ void write_record_csv(const Record& r, const std::vector<std::string>& order, co
   write_file_atomic(path, text);
 }
 
+std::vector<double> time_derivative(const std::vector<double>& t, const std::vector<double>& y) {
+  const std::size_t n = y.size();
+  std::vector<double> d(n, 0.0);
+  if (n < 2) return d;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t a = k > 0 ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
+    d[k] = (y[b] - y[a]) / (t[b] - t[a]);
+  }
+  return d;
+}
+
 double interpolate(const std::vector<double>& t, const std::vector<double>& y, double x) {
   if (x <= t.front()) return y.front();
   if (x >= t.back()) return y.back();

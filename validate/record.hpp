@@ -31,6 +31,9 @@ Record read_record_csv(const std::string& path, const std::vector<std::string>& 
 // Writes a record (columns in the order given, %.10g), atomically.
 void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path);
 
+// Central differences of y(t), one-sided at the ends (units of y per s).
+std::vector<double> time_derivative(const std::vector<double>& t, const std::vector<double>& y);
+
 // Linear interpolation of (t, y) at time x; clamped to the ends.
 double interpolate(const std::vector<double>& t, const std::vector<double>& y, double x);
 
