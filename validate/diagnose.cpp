@@ -69,24 +69,26 @@ double sum_squares(const std::vector<double>& r) {
   return s;
 }
 
-// The record's scored channels, decimated and normalised: residual = (y - yhat) / sd(y), channel-major
-// (channel c's samples at [c n_idx, (c + 1) n_idx)).
+// The record's scored channels, decimated and weighted by their noise: residual = (y - yhat) / sigma_c,
+// sigma_c the channel's noise floor, channel-major (channel c's samples at [c n_idx, (c + 1) n_idx)).
+// Weighted least squares with each channel's own noise is the maximum-likelihood fit of channels whose
+// noise differs (a torque that rattles in a drive's free play against a tip sensor at 3 %): one
+// channel's misfit counts by its signal-to-noise ratio, not by its share of the record's variance.
 struct Scorer {
   const ModelSource* src = nullptr;
   const Record* rec = nullptr;
   ReplayMode mode = ReplayMode::kClosedLoop;
   std::vector<std::string> channels;
   std::vector<std::size_t> index;  // decimated sample indices
-  std::vector<double> scale;       // 1 / sd per channel
-  std::vector<double> noise;       // the record's noise floor per channel, normalised
+  std::vector<double> scale;       // 1 / sigma_c per channel: the residual's weight
+  std::vector<double> noise;       // the record's noise floor per channel, as a fraction of sd(y) (reports)
   std::vector<double> input;       // the loop's external input at the decimated samples (for the CCF)
 
   int size() const { return static_cast<int>(channels.size() * index.size()); }
 
-  // Residuals of each model (empty vector for a failed lane).
-  std::vector<std::vector<double>> residuals(const std::vector<Model>& models) const {
-    // One batch of the models that share a shape: groups of equal substeps, one at a time when they
-    // differ in more (segments, the drive's parts).
+  // What each model predicts for the record: one batch of the models that share a shape (groups of
+  // equal substeps, one at a time when they differ in more: segments, the drive's parts).
+  std::vector<Prediction> predict(const std::vector<Model>& models) const {
     std::vector<Prediction> p(models.size());
     std::map<int, std::vector<std::size_t>> groups;
     for (std::size_t i = 0; i < models.size(); ++i) groups[models[i].substeps].push_back(i);
@@ -100,6 +102,12 @@ struct Scorer {
         for (std::size_t i : members) p[i] = replay(std::span<const Model>(&models[i], 1), *rec, mode)[0];
       }
     }
+    return p;
+  }
+
+  // Residuals of each model (empty vector for a failed lane).
+  std::vector<std::vector<double>> residuals(const std::vector<Model>& models) const {
+    const std::vector<Prediction> p = predict(models);
     std::vector<std::vector<double>> out(models.size());
     for (std::size_t i = 0; i < models.size(); ++i) {
       if (!p[i].ok) continue;
@@ -130,7 +138,7 @@ struct Scorer {
     for (std::size_t c = 0; c < channels.size(); ++c) {
       const auto e = channel_of(r, c);
       ChannelTest t;
-      t.rms = std::sqrt(sum_squares(e) / e.size());
+      t.rms = std::sqrt(sum_squares(e) / e.size()) * noise[c];  // as a fraction of sd(y)
       t.noise = noise[c];
       const Correlation acf = calc_autocorrelation(e, kTestLags);
       const Correlation ccf = calc_cross_correlation(e, input, kTestLags);
@@ -139,23 +147,21 @@ struct Scorer {
       t.white = t.acf_outside <= kTestFraction;
       t.uncorrelated = t.ccf_outside <= kTestFraction;
       t.at_floor = t.rms * t.rms <= kFloorFactor * t.noise * t.noise;
+      t.rss = sum_squares(e);
+      t.n_eff = calc_effective_samples(e, kEffectiveLags);
       out[channels[c]] = t;
-      ne += calc_effective_samples(e, kEffectiveLags);
+      ne += t.n_eff;
     }
     if (n_eff) *n_eff = ne;
     return out;
   }
 
-  // The residual sum of squares of noise alone.
-  double floor_rss() const {
-    double s = 0.0;
-    for (double x : noise) s += x * x * index.size();
-    return s;
-  }
+  // The residual sum of squares of noise alone (each channel's weighted noise has unit variance).
+  double floor_rss() const { return static_cast<double>(noise.size() * index.size()); }
 
   std::map<std::string, double> fit_percent(const Model& m) const {
     std::map<std::string, double> out;
-    const auto p = replay(std::span<const Model>(&m, 1), *rec, mode)[0];
+    const auto p = predict({m})[0];
     for (const auto& c : channels) out[c] = p.ok ? calc_fit(rec->at(c), p.channels.at(c)).percent : -INFINITY;
     return out;
   }
@@ -368,7 +374,21 @@ void run_ceres(ceres::CostFunction* cost, const Effect& e, std::vector<double>& 
 struct Against {
   double rss = NAN;
   std::map<std::string, double> fit;
+  std::map<std::string, ChannelTest> tests;
 };
+
+// Delta BIC of a fit against its baseline, channel by channel: sum_c n_c ln(RSS_c / RSS_c,base) + k ln n,
+// n_c the effective samples of the fit's residual on channel c and n their sum. Each channel keeps its
+// own noise variance (the likelihood of channels whose noise differs), and the count is what the
+// residual's autocorrelation leaves of the samples, so correlated residuals at 1 kHz do not inflate it.
+double calc_delta_bic(const std::map<std::string, ChannelTest>& fit, const std::map<std::string, ChannelTest>& base, int k) {
+  double d = 0.0, n = 0.0;
+  for (const auto& [c, t] : fit) {
+    d += t.n_eff * std::log(std::max(t.rss, 1e-300) / std::max(base.at(c).rss, 1e-300));
+    n += t.n_eff;
+  }
+  return d + k * std::log(std::max(n, 1.0));
+}
 
 // Least-squares fit of one effect: the grid (if any), else the global scan and Ceres from its best
 // starts. `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
@@ -455,7 +475,7 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
     f.tests = sc.tests(res, &f.n_eff);
     f.explained = all_explained(f.tests);
     f.k = static_cast<int>(e.params.size()) - shared + (e.grid_path.empty() ? 0 : 1);
-    f.delta_bic = f.n_eff * std::log(f.rss / base.rss) + f.k * std::log(f.n_eff);
+    f.delta_bic = calc_delta_bic(f.tests, base.tests, f.k);
     const double floor = sc.floor_rss();
     f.explains = base.rss > floor ? std::clamp((base.rss - f.rss) / (base.rss - floor), 0.0, 1.0) : 0.0;
     f.fit_percent = sc.fit_percent(build_model(*sc.src, f.assignments()));
@@ -485,8 +505,9 @@ Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOption
     mean /= y.size();
     for (double x : y) var += (x - mean) * (x - mean);
     const double sd = std::sqrt(var / y.size());
-    sc.scale.push_back(sd > 0 ? 1.0 / sd : 1.0);
-    sc.noise.push_back(std::max(calc_noise_floor(y) * sc.scale.back(), kRelevantError));
+    const double unit = sd > 0 ? sd : 1.0;
+    sc.noise.push_back(std::max(calc_noise_floor(y) / unit, kRelevantError));
+    sc.scale.push_back(1.0 / (sc.noise.back() * unit));
   }
   // The loop's external input: the reference in closed loop, the torque in open loop, the hub angle
   // in inverse dynamics.
@@ -707,7 +728,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       fitted[i].note = ex.what();
       continue;
     }
-    fitted[i] = fit_one(sc, baseline, {d.base_rss, d.base_fit}, opt);
+    fitted[i] = fit_one(sc, baseline, {d.base_rss, d.base_fit, sc.tests(r0[0], nullptr)}, opt);
   }
   for (std::size_t i = 0; i < sets.size(); ++i) {
     if (!fitted[i].ok) {
@@ -743,7 +764,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   for (std::size_t o = 0; o < order.size(); ++o) {
     const std::size_t i = order[o];
     const EffectFit& b = baselines.at(refits[i]);
-    d.ranking[i] = fit_one(sc, effects[i], {b.rss, b.fit_percent}, opt, static_cast<int>(refits[i].size()));
+    d.ranking[i] = fit_one(sc, effects[i], {b.rss, b.fit_percent, b.tests}, opt, static_cast<int>(refits[i].size()));
   }
   std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
@@ -813,7 +834,8 @@ std::string json_tests(const std::map<std::string, ChannelTest>& tests) {
     out += (out.size() > 1 ? ", " : "") + json_string(c) + ": {\"rms\": " + json_number(t.rms) + ", \"noise\": " +
            json_number(t.noise) + ", \"acf_outside\": " + json_number(t.acf_outside) + ", \"ccf_outside\": " +
            json_number(t.ccf_outside) + ", \"white\": " + json_bool(t.white) + ", \"uncorrelated\": " +
-           json_bool(t.uncorrelated) + ", \"at_floor\": " + json_bool(t.at_floor) + "}";
+           json_bool(t.uncorrelated) + ", \"at_floor\": " + json_bool(t.at_floor) + ", \"rss\": " + json_number(t.rss) +
+           ", \"n_eff\": " + json_number(t.n_eff) + "}";
   return out + "}";
 }
 

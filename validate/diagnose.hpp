@@ -42,9 +42,11 @@ Model build_model(const ModelSource& src, const std::vector<Assignment>& extra =
 
 // Residual tests of one scored channel (decimated, normalised residual): is what is left noise?
 struct ChannelTest {
-  double rms = NAN;             // of the normalised residual
+  double rms = NAN;             // of the residual, as a fraction of the channel's standard deviation
   double noise = NAN;           // the record's noise floor on that scale (from its high-order differences),
                                 // at least kRelevantError
+  double rss = NAN;             // the noise-weighted residual's sum of squares (what the fit minimises)
+  double n_eff = NAN;           // its effective sample size (from its autocorrelation)
   double acf_outside = NAN;     // fraction of autocorrelation lags 1..L outside the 99 % band
   double ccf_outside = NAN;     // fraction of cross-correlation lags with the input outside its band
   bool white = false, uncorrelated = false;

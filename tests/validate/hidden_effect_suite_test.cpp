@@ -40,8 +40,11 @@ constexpr int kFullRecords = 72;
 struct Setting {
   std::vector<std::string> ff;                              // PATH=VALUE
   std::vector<std::pair<std::string, std::string>> truth;  // field, value
-  bool independent_ok = true;                               // the independent simulator has this effect
 };
+
+// The independent simulator has every effect but the hydraulic one (its valve is not flexfarm's: a
+// different actuator, not this effect).
+bool independent_has(const std::string& effect) { return effect != "hydraulic_compressibility"; }
 
 std::string num(double x) {
   char b[32];
@@ -75,14 +78,13 @@ Setting make_setting(const std::string& effect, CounterRng& rng) {
     s.truth.emplace_back("drive.enabled", "true");
     both("drive.inertia", "drive.inertia", ja);
     both("hub.inertia", "hub_inertia", 50.0 - ja);
-    both("drive.stiffness", "drive.stiffness", log_uniform(effect == "backlash" ? 3e7 : 1.5e7, 2e8, rng.uniform()));
+    both("drive.stiffness", "drive.stiffness", log_uniform(effect == "backlash" ? 3e7 : 3e5, 2e8, rng.uniform()));
     both("drive.damping", "drive.damping", log_uniform(2e3, 3e4, rng.uniform()));
     if (effect == "backlash") both("drive.backlash", "drive.backlash", log_uniform(2e-4, 3e-3, rng.uniform()));
   } else if (effect == "hydraulic_compressibility") {
     s.ff.push_back("hydraulics.enabled=true");
     s.ff.push_back("hydraulics.bulk_modulus=" + num(log_uniform(2e8, 1.4e9, rng.uniform())));
     s.ff.push_back("hydraulics.chamber_volume=" + num(log_uniform(2.5e-3, 9e-3, rng.uniform())));
-    s.independent_ok = false;  // its valve is not flexfarm's: a different actuator, not this effect
   } else if (effect == "torque_saturation") {
     both("controller.torque_limit", "controller.torque_limit", log_uniform(800, 3000, rng.uniform()));
   } else if (effect == "joint_stiffening") {
@@ -138,7 +140,69 @@ struct Case {
   std::vector<std::string> trajectory;  // the model's --set for the record's move
   Record record;
   std::string describe;
+  std::string visibility;  // each effect's visibility and the draw that reached it
+  bool invisible = false;  // an effect stayed below kMinVisibility in every draw: nothing to find
 };
+
+// The record's noise-free channels with these effects: the deterministic response, without the
+// independent simulator's in-loop encoder and tachometer noise (which a drive's mode, say, filters into
+// a torque that differs sample by sample, yet no replay could predict).
+struct Move {
+  double amplitude = 0, move_time = 0, hold = 0, noise = 0;
+  int decimate = 1;
+  std::uint64_t seed = 0;
+};
+// in_loop_noise false: without the 16-bit encoder and the tachometer's noise (what is deterministic).
+truth::TruthRig make_rig(const Move& mv, const std::vector<Setting>& settings, bool in_loop_noise = true) {
+  truth::TruthRig rig;
+  set_truth_field(rig, "trajectory.moves", num(mv.amplitude) + ":" + num(mv.hold));
+  set_truth_field(rig, "trajectory.move_time", num(mv.move_time));
+  set_truth_field(rig, "record.decimate", std::to_string(mv.decimate));
+  if (in_loop_noise) {
+    set_truth_field(rig, "sensors.hub_angle.quantize", "true");  // a 16-bit encoder unless the effect sets fewer bits
+    set_truth_field(rig, "sensors.hub_rate.noise", "5e-4");      // tachometer noise in the loop, rad/s
+  }
+  set_truth_field(rig, "seed", std::to_string(mv.seed));
+  for (const auto& st : settings)
+    for (const auto& [k, v] : st.truth) set_truth_field(rig, k, v);
+  return rig;
+}
+Record clean_record(bool independent, const std::vector<std::string>& trajectory, const Move& mv,
+                    const std::vector<Setting>& settings) {
+  if (independent) return truth::simulate_truth(make_rig(mv, settings, false));
+  std::vector<std::string> set = trajectory;
+  for (const auto& st : settings) set.insert(set.end(), st.ff.begin(), st.ff.end());
+  return make_synthetic_record(build_model(load_model_source(kModel, set)), 0.0, mv.seed, mv.decimate);
+}
+
+double channel_sd(const std::vector<double>& y) {
+  double mean = 0, var = 0;
+  for (double x : y) mean += x;
+  mean /= y.size();
+  for (double x : y) var += (x - mean) * (x - mean);
+  return std::sqrt(var / y.size());
+}
+
+// How visible an effect is: the largest, over the scored channels, of the RMS change it makes in the
+// noise-free record divided by that channel's noise (the record's `noise` x its standard deviation).
+double calc_visibility(const Record& with, const Record& without, double noise) {
+  double v = 0.0;
+  for (const char* c : {"hub_angle", "hub_torque", "tip_deflection"}) {
+    if (!with.has(c) || !without.has(c)) continue;
+    const auto &a = with.at(c), &b = without.at(c);
+    const std::size_t n = std::min(a.size(), b.size());
+    double s2 = 0.0;
+    for (std::size_t k = 0; k < n; ++k) s2 += (a[k] - b[k]) * (a[k] - b[k]);
+    v = std::max(v, std::sqrt(s2 / n) / (noise * channel_sd(a)));
+  }
+  return v;
+}
+
+// A hidden effect must be visible: change some scored channel by at least its noise's RMS. A draw that
+// does not (a drive mode far above the loop's bandwidth, a torque limit the move never reaches) is a
+// record with nothing to find, and is drawn again (at most kRedraws times).
+constexpr double kMinVisibility = 1.0;
+constexpr int kRedraws = 12;
 
 // Record i of the suite: every 4th nothing hidden, every 6th two effects, the rest one effect in turn.
 Case make_case(int i) {
@@ -154,56 +218,67 @@ Case make_case(int i) {
     for (int j = 0; j < i; ++j) single += j % 4 != 3 && j % 6 != 4;
     c.effects = {kEffects[single % kEffects.size()]};
   }
-  std::vector<Setting> settings;
-  for (const auto& e : c.effects) settings.push_back(make_setting(e, rng));
-  bool independent_ok = true;
-  for (const auto& s : settings) independent_ok = independent_ok && s.independent_ok;
-  c.independent = independent_ok && (i % 3 == 0 || i % 9 == 1);
   // The move, the record's rate and noise.
-  const double amplitude = (rng.uniform() < 0.5 ? -1 : 1) * log_uniform(0.2, 0.8, rng.uniform());
-  const double move_time = 2.0 + 2.0 * rng.uniform(), hold = 2.0 + 3.0 * rng.uniform();
-  const int decimate = std::vector<int>{1, 2, 5}[rng.next_below(3)];
-  const double noise = log_uniform(0.003, 0.03, rng.uniform());
-  const std::uint64_t seed = 1000 + static_cast<std::uint64_t>(i);
-  c.trajectory = {"trajectory.moves=[{target: " + num(amplitude) + ", hold: " + num(hold) + "}]",
-                  "trajectory.move_time=" + num(move_time)};
+  Move mv;
+  mv.amplitude = (rng.uniform() < 0.5 ? -1 : 1) * log_uniform(0.2, 0.8, rng.uniform());
+  mv.move_time = 2.0 + 2.0 * rng.uniform();
+  mv.hold = 2.0 + 3.0 * rng.uniform();
+  mv.decimate = std::vector<int>{1, 2, 5}[rng.next_below(3)];
+  mv.noise = log_uniform(0.003, 0.03, rng.uniform());
+  mv.seed = 1000 + static_cast<std::uint64_t>(i);
+  c.trajectory = {"trajectory.moves=[{target: " + num(mv.amplitude) + ", hold: " + num(mv.hold) + "}]",
+                  "trajectory.move_time=" + num(mv.move_time)};
+  // The effects, each drawn until it is visible.
+  std::vector<Setting> settings;
+  bool independent_ok = true;
+  for (const auto& e : c.effects) independent_ok = independent_ok && independent_has(e);
+  c.independent = independent_ok && (i % 3 == 0 || i % 9 == 1);
+  if (!c.effects.empty()) {
+    const Record base = clean_record(c.independent, c.trajectory, mv, {});
+    for (const auto& e : c.effects) {
+      Setting st;
+      double v = 0.0;
+      int draws = 0;
+      while (draws++ < kRedraws) {
+        st = make_setting(e, rng);
+        try {
+          v = calc_visibility(clean_record(c.independent, c.trajectory, mv, {st}), base, mv.noise);
+        } catch (const std::exception&) {  // a truth that does not run (a drive too soft to hold the arm)
+          v = 0.0;
+          continue;
+        }
+        if (v >= kMinVisibility) break;
+      }
+      c.invisible = c.invisible || v < kMinVisibility;
+      settings.push_back(st);
+      char b[80];
+      std::snprintf(b, sizeof b, ", %s %.3g x noise (draw %d)", e.c_str(), v, std::min(draws, kRedraws));
+      c.visibility += b;
+    }
+  }
   char d[160];
   std::snprintf(d, sizeof d, "%s, A %.2f rad, T %.1f s, hold %.1f s, %d Hz, noise %.2g %%", c.independent ? "independent" : "flexfarm",
-                amplitude, move_time, hold, 1000 / decimate, 100 * noise);
-  c.describe = d;
-  for (const auto& s : settings)
-    for (const auto& a : (c.independent ? std::vector<std::string>{} : s.ff)) c.describe += " " + a;
+                mv.amplitude, mv.move_time, mv.hold, 1000 / mv.decimate, 100 * mv.noise);
+  c.describe = d + c.visibility;
+  for (const auto& st : settings)
+    for (const auto& a : (c.independent ? std::vector<std::string>{} : st.ff)) c.describe += " " + a;
   if (c.independent) {
-    truth::TruthRig rig;
-    set_truth_field(rig, "trajectory.moves", num(amplitude) + ":" + num(hold));
-    set_truth_field(rig, "trajectory.move_time", num(move_time));
-    set_truth_field(rig, "record.decimate", std::to_string(decimate));
-    set_truth_field(rig, "sensors.hub_angle.quantize", "true");  // a 16-bit encoder unless the effect sets fewer bits
-    set_truth_field(rig, "sensors.hub_rate.noise", "5e-4");      // tachometer noise in the loop, rad/s
-    set_truth_field(rig, "seed", std::to_string(seed));
-    for (const auto& s : settings)
-      for (const auto& [k, v] : s.truth) {
-        set_truth_field(rig, k, v);
-        c.describe += " " + k + "=" + v;
-      }
-    c.record = truth::simulate_truth(rig);
+    for (const auto& st : settings)
+      for (const auto& [k, v] : st.truth) c.describe += " " + k + "=" + v;
+    c.record = truth::simulate_truth(make_rig(mv, settings));
     // Output noise on the torque, tip and rate channels: `noise` x their standard deviation.
     std::uint64_t channel = 0;
     for (const char* name : {"hub_torque", "tip_deflection", "hub_rate"}) {
       if (!c.record.has(name)) continue;
       auto& y = c.record.columns[name];
-      double mean = 0, var = 0;
-      for (double x : y) mean += x;
-      mean /= y.size();
-      for (double x : y) var += (x - mean) * (x - mean);
-      CounterRng nrng(calc_variant_seed(seed, 100 + channel++));
-      const double sd = noise * std::sqrt(var / y.size());
+      CounterRng nrng(calc_variant_seed(mv.seed, 100 + channel++));
+      const double sd = mv.noise * channel_sd(y);
       for (double& x : y) x += sd * nrng.normal();
     }
   } else {
     std::vector<std::string> set = c.trajectory;
-    for (const auto& s : settings) set.insert(set.end(), s.ff.begin(), s.ff.end());
-    c.record = make_synthetic_record(build_model(load_model_source(kModel, set)), noise, seed, decimate);
+    for (const auto& st : settings) set.insert(set.end(), st.ff.begin(), st.ff.end());
+    c.record = make_synthetic_record(build_model(load_model_source(kModel, set)), mv.noise, mv.seed, mv.decimate);
   }
   return c;
 }
@@ -226,12 +301,13 @@ bool hidden(const Case& c, const std::string& effect) {
   return std::find(c.effects.begin(), c.effects.end(), effect) != c.effects.end();
 }
 
-Outcome run_case(const Case& c) {
+Outcome run_case(const Case& c, bool print) {
   Outcome o;
   ModelSource model = load_model_source(kModel, c.trajectory);
   DiagnoseOptions opt;
   opt.max_iterations = 15;
   const Diagnosis d = diagnose(model, c.record, opt);
+  if (print) std::printf("record %d: %s\n%s\n", c.id, c.describe.c_str(), format_diagnosis_text(d).c_str());
   o.verdict = d.verdict;
   o.fit_before = worst_fit(d.base_fit);
   for (std::size_t j = 0; j < d.ranking.size() && o.rank == 0; ++j)
@@ -257,15 +333,28 @@ Outcome run_case(const Case& c) {
 
 TEST(HiddenEffectSuite, DiagnosisHoldsOnRandomRecordsOfBothSimulators) {
   const bool full = std::getenv("FLEXFARM_SUITE") && std::string(std::getenv("FLEXFARM_SUITE")) == "full";
-  const int n = full ? kFullRecords : kFastRecords;
+  int n = full ? kFullRecords : kFastRecords;
+  // FLEXFARM_SUITE_RECORDS=6,36: only these records, each diagnosis printed in full (for study).
+  std::vector<int> ids(n);
+  for (int i = 0; i < n; ++i) ids[i] = i;
+  const char* only = std::getenv("FLEXFARM_SUITE_RECORDS");
+  if (only) {
+    ids.clear();
+    for (const char* p = only; *p;) {
+      char* end = nullptr;
+      ids.push_back(static_cast<int>(std::strtol(p, &end, 10)));
+      p = *end ? end + 1 : end;
+    }
+    n = static_cast<int>(ids.size());
+  }
   std::vector<Case> cases(n);
   std::vector<Outcome> out(n);
   std::vector<std::string> errors(n);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int i = 0; i < n; ++i) {
     try {
-      cases[i] = make_case(i);
-      out[i] = run_case(cases[i]);
+      cases[i] = make_case(ids[i]);
+      out[i] = run_case(cases[i], only != nullptr);
     } catch (const std::exception& e) {
       errors[i] = e.what();
     }
@@ -275,7 +364,7 @@ TEST(HiddenEffectSuite, DiagnosisHoldsOnRandomRecordsOfBothSimulators) {
     int records = 0, first = 0, top3 = 0, wrong = 0;
   };
   std::map<std::string, Tally> by;
-  Tally single, none, pair, all;
+  Tally single, none, pair, all, invisible;
   int pair_second = 0, independent = 0;
   std::string rows;
   for (int i = 0; i < n; ++i) {
@@ -284,17 +373,20 @@ TEST(HiddenEffectSuite, DiagnosisHoldsOnRandomRecordsOfBothSimulators) {
     const Outcome& o = out[i];
     independent += c.independent;
     const std::string key = c.effects.empty() ? "none" : c.effects.size() == 1 ? c.effects[0] : c.effects[0] + " + " + c.effects[1];
-    Tally& t = c.effects.empty() ? none : c.effects.size() == 1 ? single : pair;
-    const bool ok_first = c.effects.empty() ? o.verdict == "none" : o.rank == 1;
-    for (Tally* x : {&t, &by[c.effects.size() == 2 ? std::string("(two effects)") : key], &all}) {
+    // An effect no draw made visible: a record with nothing to find, where `none` (or the effect) is right.
+    const bool unseen = c.invisible && c.effects.size() == 1;
+    Tally& t = unseen ? invisible : c.effects.empty() ? none : c.effects.size() == 1 ? single : pair;
+    const bool ok_first = unseen ? o.verdict == "none" || o.verdict == key : c.effects.empty() ? o.verdict == "none" : o.rank == 1;
+    const bool ok_top3 = unseen || c.effects.empty() ? ok_first : (o.rank >= 1 && o.rank <= 3);
+    for (Tally* x : {&t, &by[c.effects.size() == 2 ? std::string("(two effects)") : unseen ? "(invisible) " + key : key], &all}) {
       x->records++;
       x->first += ok_first;
-      x->top3 += c.effects.empty() ? o.verdict == "none" : (o.rank >= 1 && o.rank <= 3);
+      x->top3 += ok_top3;
       x->wrong += o.wrong;
     }
     pair_second += o.second;
     char line[900];
-    std::snprintf(line, sizeof line, "| %d | %s | %s | %d | %s%s%s |\n", i, key.c_str(), c.describe.c_str(), o.rank,
+    std::snprintf(line, sizeof line, "| %d | %s | %s | %d | %s%s%s |\n", c.id, key.c_str(), c.describe.c_str(), o.rank,
                   o.verdict.c_str(), c.effects.size() == 2 ? " → " : "", o.second_verdict.c_str());
     rows += line;
   }
@@ -304,14 +396,16 @@ TEST(HiddenEffectSuite, DiagnosisHoldsOnRandomRecordsOfBothSimulators) {
     std::snprintf(line, sizeof line, "| `%s` | %d | %d | %d | %d |\n", k.c_str(), t.records, t.first, t.top3, t.wrong);
     table += line;
   }
-  char sum[512];
+  char sum[640];
   std::snprintf(sum, sizeof sum,
                 "\n%d records (%d from the independent simulator): one effect %d, first %d (%.0f %%), first three %d "
                 "(%.0f %%); nothing hidden %d, verdict none %d (%.0f %%); two effects %d, one first %d, the other "
-                "first after calibration %d; wrong verdicts %d (%.1f %%)\n",
+                "first after calibration %d; invisible draws %d, verdict none or the effect %d; wrong verdicts %d "
+                "(%.1f %%)\n",
                 n, independent, single.records, single.first, 100.0 * single.first / std::max(1, single.records),
                 single.top3, 100.0 * single.top3 / std::max(1, single.records), none.records, none.first,
-                100.0 * none.first / std::max(1, none.records), pair.records, pair.first, pair_second, all.wrong,
+                100.0 * none.first / std::max(1, none.records), pair.records, pair.first, pair_second, invisible.records,
+                invisible.first, all.wrong,
                 100.0 * all.wrong / std::max(1, all.records));
   table += sum;
   std::printf("%s\n| record | hidden | truth | rank | verdict |\n|---|---|---|---|---|\n%s", table.c_str(), rows.c_str());
@@ -320,6 +414,7 @@ TEST(HiddenEffectSuite, DiagnosisHoldsOnRandomRecordsOfBothSimulators) {
     std::ofstream(path ? path : "hidden_effect_suite.md")
         << table << "\n| record | hidden | truth | rank | verdict |\n|---|---|---|---|---|\n" << rows;
   }
+  if (only) return;
   EXPECT_GE(3 * independent, n) << "a third of the records from the independent simulator";
   if (full) {  // the acceptance (docs/validation.md)
     EXPECT_GE(single.first, 0.80 * single.records) << table;
