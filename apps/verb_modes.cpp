@@ -38,8 +38,11 @@ void add_modes_verb(CLI::App& app) {
   cmd->callback([args] {
     const Model m = load_model_with(args->model, args->sets);
     const auto& b = m.spec.beam;
-    std::printf("model %s: N = %d segments, cell l = %.5f m, joint k = %.5g N m/rad, c = %.5g N m s/rad\n",
-                args->model.c_str(), m.nseg, m.cell, m.joint_k[1], m.joint_c[1]);
+    if (m.nseg > 1)
+      std::printf("model %s: N = %d segments, cell l = %.5f m, joint k = %.5g N m/rad, c = %.5g N m s/rad\n",
+                  args->model.c_str(), m.nseg, m.cell, m.joint_k[1], m.joint_c[1]);
+    else
+      std::printf("model %s: N = 1, one rigid arm (no joints)\n", args->model.c_str());
     std::printf("beam mass %.2f kg, EI = %.5g N m^2\n", calc_beam_mass(b), b.youngs_modulus * calc_area_moment(b));
     std::printf("equivalent cantilever stiffness 3EI/L (seed eq. 5):\n");
     std::printf("  one cell   (L = %.5f m): %10.2f kN m/rad\n", m.cell, 1e-3 * calc_cantilever_stiffness(b, m.cell));

@@ -14,8 +14,14 @@ function(flexfarm_library name)
   endif()
 endfunction()
 
+# The tests that take more than a few seconds in a release build (gtest filter patterns): labelled
+# `slow`, the rest `fast`. The sanitizer build (.ci/sanitize) runs the fast ones of every program.
+set(FLEXFARM_SLOW_TESTS
+  "HiddenEffectSuite.*:EmpsLoop.*:Emps.*:CalibrateLoop.*:Diagnose.*:Farm.ThreadCountAndLaneWidthDoNotChangeResults:Farm.ShardsMergeToTheSameTable:Farm.MpiTwoRanksMatchOneProcess:Cli.DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict"
+  CACHE STRING "gtest filter of the slow tests (labelled slow; the others fast)")
+
 # flexfarm_tests(FOLDER LIBS...): one GoogleTest program per folder of tests/ (its *_test.cpp files and
-# their helpers), each test registered with ctest.
+# their helpers), each test registered with ctest, labelled fast or slow.
 function(flexfarm_tests folder)
   file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/${folder}/*.cpp)
   if(NOT srcs)
@@ -27,5 +33,8 @@ function(flexfarm_tests folder)
     FLEXFARM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     FLEXFARM_BINARY="$<TARGET_FILE:flexfarm>")
   add_dependencies(test_${folder} flexfarm)
-  gtest_discover_tests(test_${folder} WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} DISCOVERY_TIMEOUT 60)
+  gtest_discover_tests(test_${folder} WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} DISCOVERY_TIMEOUT 60
+    TEST_FILTER "-${FLEXFARM_SLOW_TESTS}" PROPERTIES LABELS fast)
+  gtest_discover_tests(test_${folder} WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} DISCOVERY_TIMEOUT 60
+    TEST_FILTER "${FLEXFARM_SLOW_TESTS}" PROPERTIES LABELS slow)
 endfunction()

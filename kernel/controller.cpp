@@ -42,11 +42,15 @@ void compute_control(const BatchModel& bm, BatchState& s, const double* ref, con
   }
 
   const double T = bm.control_period;
-  const double* q = s.q.data();
-  const double* v = s.v.data();
-  const double* k1 = bm.joint_k.data() + W;  // joint 1: the root of the beam
-  const double* c1 = bm.joint_c.data() + W;
-  const double* k31 = bm.joint_k3.data() + W;
+  // Joint 1, the root of the beam: its moment on the hub. A rigid arm (N = 1) has none: its lanes read
+  // zeros instead of one lane block past the joint arrays' end.
+  static const double kNone[kMaxLanes] = {};
+  const bool beam = bm.nseg > 1;
+  const double* q1s = beam ? s.q.data() + W : kNone;
+  const double* v1s = beam ? s.v.data() + W : kNone;
+  const double* k1 = beam ? bm.joint_k.data() + W : kNone;
+  const double* c1 = beam ? bm.joint_c.data() + W : kNone;
+  const double* k31 = beam ? bm.joint_k3.data() + W : kNone;
   // The hydraulic load signal n D (p_a - p_b), N·m (seed: "hydraulic pressure instead of torque").
   double pressure_torque[kMaxLanes] = {};
   if (bm.layout.pressure >= 0)
@@ -58,8 +62,8 @@ void compute_control(const BatchModel& bm, BatchState& s, const double* ref, con
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     const double e = ref_filtered[l] - sensed_angle[l];
-    const double q1 = q[W + l];
-    const double root_moment = (k1[l] + k31[l] * q1 * q1) * q1 + c1[l] * v[W + l];  // beam on the hub, N·m
+    const double q1 = q1s[l];
+    const double root_moment = (k1[l] + k31[l] * q1 * q1) * q1 + c1[l] * v1s[l];  // beam on the hub, N·m
     const double load = bm.load_pressure[l] ? pressure_torque[l] : root_moment;
     const double raw = bm.kp[l] * e + bm.ki[l] * s.integral[l] - bm.kd[l] * sensed_rate[l] - bm.load_comp[l] * load +
                        bm.ff_gain[l] * ref_ff[l];

@@ -92,8 +92,10 @@ std::vector<Mode> calc_closed_loop_modes(const Model& m) {
   // tau = -kp q0 - kd v0 - g (k1 q1 + c1 v1) + ki z
   stiff(0, 0) += c.kp;
   damp(0, 0) += c.kd;
-  stiff(0, 1) += c.load_compensation * m.joint_k[1];
-  damp(0, 1) += c.load_compensation * m.joint_c[1];
+  if (n > 1) {  // the beam's root moment fed forward; a rigid arm (N = 1) has no joint 1
+    stiff(0, 1) += c.load_compensation * m.joint_k[1];
+    damp(0, 1) += c.load_compensation * m.joint_c[1];
+  }
   // A hydraulic actuator's torque loop, well below its bandwidth, is a torque source in series with
   // a damper: tau = tau_cmd - b_h w, b_h = D^2 p_s / (K K_q) (kernel/drive.hpp).
   const auto& h = m.spec.hydraulics;

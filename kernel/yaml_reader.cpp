@@ -138,14 +138,40 @@ void YamlReader::only(std::initializer_list<std::string> known) const {
   reject_unknown([&](const std::string& key) { return std::find(known.begin(), known.end(), key) != known.end(); });
 }
 
+namespace {
+void check_keys(const YAML::Node& n, const std::string& file, const std::string& path) {
+  if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i) check_keys(n[i], file, path + "[" + std::to_string(i) + "]");
+  } else if (n.IsMap()) {
+    std::map<std::string, int> seen;  // key -> line
+    for (const auto& kv : n) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "";
+      const std::string full = path.empty() ? key : path + "." + key;
+      if (const auto it = seen.find(key); it != seen.end())
+        throw ConfigError(file, line_of(kv.first), full,
+                          "written twice (lines " + std::to_string(it->second) + " and " + std::to_string(line_of(kv.first)) + ")");
+      seen.emplace(key, line_of(kv.first));
+      check_keys(kv.second, file, full);
+    }
+  }
+}
+}  // namespace
+
+void check_unique_keys(const YAML::Node& doc, const std::string& file, const std::string& prefix) {
+  check_keys(doc, file, prefix);
+}
+
 YAML::Node load_yaml_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path, 0, "", "cannot open file");
+  YAML::Node doc;
   try {
-    return YAML::Load(in);
+    doc = YAML::Load(in);
   } catch (const YAML::ParserException& e) {
     throw ConfigError(path, e.mark.line + 1, "", e.msg);
   }
+  check_unique_keys(doc, path);
+  return doc;
 }
 
 }  // namespace ff

@@ -60,7 +60,11 @@ class YamlReader {
   std::set<std::string> used_;
 };
 
-// Loads a YAML file, turning parse errors into ConfigError with the file and line.
+// Loads a YAML file, turning parse errors into ConfigError with the file and line, and a key written
+// twice in one map into one naming both lines.
 YAML::Node load_yaml_file(const std::string& path);
+// The duplicate-key check alone (for YAML parsed from elsewhere, e.g. a --set value).
+// `prefix`: the path the document sits under, for the error's key.
+void check_unique_keys(const YAML::Node& doc, const std::string& file, const std::string& prefix = "");
 
 }  // namespace ff

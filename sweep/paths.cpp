@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "kernel/errors.hpp"
+#include "kernel/yaml_reader.hpp"
 #include "kernel/model_io.hpp"
 
 namespace ff {
@@ -102,6 +103,7 @@ Assignment parse_assignment(const std::string& text) {
   } catch (const YAML::Exception& e) {
     throw ConfigError("--set", 0, a.path, "value is not valid YAML: " + e.msg);
   }
+  check_unique_keys(a.value, "--set", a.path);
   split_path(a.path, "--set");  // reject a malformed path now
   return a;
 }

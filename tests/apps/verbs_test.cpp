@@ -83,3 +83,14 @@ TEST_F(Verbs, AnimateWritesAVideoWithOneFramePerStep) {
 }
 
 }  // namespace
+
+// A rigid one-body arm (N = 1, configs/emps.yaml) has no beam joints: modes and simulate must not
+// read joint 1 (under -DFLEXFARM_SANITIZE=ON they stopped on a heap-buffer-overflow).
+TEST_F(Verbs, RigidOneBodyArmRunsModesAndSimulate) {
+  const Result modes = flexfarm("modes configs/emps.yaml");
+  EXPECT_EQ(modes.exit_code, 0) << modes.output;
+  EXPECT_NE(modes.output.find("N = 1, one rigid arm"), std::string::npos) << modes.output;
+  const Result sim = flexfarm("simulate configs/emps.yaml --out '" + (dir / "emps").string() + "'");
+  EXPECT_EQ(sim.exit_code, 0) << sim.output;
+  EXPECT_TRUE(fs::exists(dir / "emps" / "trace.csv"));
+}

@@ -575,3 +575,36 @@ TEST(ModelIo, EveryIntegratorNameParsesBack) {
 }
 
 }  // namespace
+
+// ---- keys written twice ----------------------------------------------------------------
+
+TEST(ModelIo, KeyWrittenTwiceIsAnErrorNamingBothLines) {
+  TempDir dir;
+  auto lines = reference_lines();
+  ASSERT_EQ(lines.at(10).rfind("segments: 6", 0), 0u);
+  lines.push_back("segments: 7");
+  const std::string path = dir.write("twice.yaml", join(lines));
+  const int last = static_cast<int>(lines.size());
+  try {
+    ff::load_model(path);
+    ADD_FAILURE() << "a key written twice was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), last);
+    EXPECT_EQ(e.key(), "segments");
+    EXPECT_NE(e.message().find("lines 11 and " + std::to_string(last)), std::string::npos) << e.what();
+  }
+}
+
+TEST(ModelIo, NestedKeyWrittenTwiceNamesItsFullPath) {
+  TempDir dir;
+  auto lines = reference_lines();
+  lines.push_back("extra: {a: [{b: 1, b: 2}]}");
+  try {
+    ff::load_model(dir.write("nested.yaml", join(lines)));
+    ADD_FAILURE() << "a nested key written twice was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.key(), "extra.a[0].b") << e.what();
+    EXPECT_EQ(e.line(), static_cast<int>(lines.size()));
+  }
+}

@@ -199,6 +199,17 @@ TEST(ApplyAssignment, ValueIsYaml) {
   EXPECT_DOUBLE_EQ(d["beam"]["length"].as<double>(), 2.5);
 }
 
+TEST(ApplyAssignment, KeyWrittenTwiceInTheValueIsRejected) {
+  try {
+    ff::parse_assignment("trajectory.moves=[{target: 0.2, target: 0.3}]");
+    ADD_FAILURE() << "a key written twice was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), "--set");
+    EXPECT_EQ(e.key(), "trajectory.moves[0].target") << e.what();
+    EXPECT_NE(e.message().find("written twice"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ApplyAssignment, ValueMayContainEqualsSigns) {
   auto d = doc();
   assign(d, "name=a=b");

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -591,8 +592,10 @@ class Cvode {
     const int flag = CVode(mem_, t_next, y_, &t_reached, CV_NORMAL);
     if (flag < 0) {
       char buf[512];
-      std::snprintf(buf, sizeof buf, "truth_sim: CVODE failed before t = %.6f s (%s)%s%s", t_next,
-                    CVodeGetReturnFlagName(flag), message_.empty() ? "" : ": ", message_.c_str());
+      char* name = CVodeGetReturnFlagName(flag);  // malloc'd: the caller frees it (SUNDIALS 6)
+      std::snprintf(buf, sizeof buf, "truth_sim: CVODE failed before t = %.6f s (%s)%s%s", t_next, name,
+                    message_.empty() ? "" : ": ", message_.c_str());
+      std::free(name);
       throw std::runtime_error(buf);
     }
   }
