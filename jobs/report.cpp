@@ -11,6 +11,7 @@
 #include "kernel/trajectory.hpp"
 #include "plotting/plot.hpp"
 #include "plotting/charts.hpp"
+#include "results/censoring.hpp"
 #include "results/sqlite.hpp"
 #include "results/statistics.hpp"
 #include "results/summaries.hpp"
@@ -201,15 +202,22 @@ std::string report_monte_carlo(const Study& study, const ResultTable& t, const s
   std::string md = "## Responses (95 % percentile-bootstrap intervals; P(miss): Wilson interval)\n\n";
   md += format_monte_carlo_md(t, kKeyMetrics, study.specs, study.seed);
   const auto settle = column_values(t, "m1_tip_settling_s");
+  const auto horizon = horizon_values(t, "m1_tip_settling_s");
+  const Summary s = calc_summary(settle, horizon);
   Histogram h;
   h.title = "tip settling time";
   h.x_label = "tip settling time (s)";
-  h.values = settle;
-  h.nan_label = "not settled";
-  const double p95 = calc_percentile(settle, 95);
-  if (!std::isnan(p95)) {
-    h.markers.push_back(p95);
-    h.marker_labels.push_back("p95");
+  // Not settled (censored at a horizon) as a bar and CDF mass of its own; runs with no value at all left out.
+  for (std::size_t i = 0; i < settle.size(); ++i)
+    if (horizon.empty() || !std::isnan(settle[i]) || !std::isnan(horizon[i])) h.values.push_back(settle[i]);
+  h.nan_label = s.censored > 0 ? "not settled, > horizon " + horizon_range(s) + " s" : "not settled";
+  h.nan_bar = true;
+  // p95 from the Kaplan-Meier curve; above the horizon it has no line, only its legend entry.
+  if (!std::isnan(s.p95)) {
+    char above[64];
+    std::snprintf(above, sizeof above, "p95: not settled (> %.3g s)", s.horizon);
+    h.markers.push_back(s.p95);
+    h.marker_labels.push_back(std::isfinite(s.p95) ? "p95" : above);
   }
   if (study.specs.count("m1_tip_settling_s")) {
     h.markers.push_back(study.specs.at("m1_tip_settling_s"));

@@ -337,13 +337,28 @@ Range histogram_x(const Histogram& h, double lo, double hi, double margin) {
   return resolve_range(NAN, NAN, lo <= hi ? lo : NAN, lo <= hi ? hi : NAN, margin);
 }
 
+// Where the bar of the values that are not finite stands (Histogram::nan_bar): half a bar right of the bins.
+struct NanBar {
+  double lo, hi;
+  int count;
+};
+NanBar nan_bar_of(const HistogramBins& b) {
+  const double end = b.counts.empty() ? 0.0 : b.edge(b.counts.size());
+  const double w = b.counts.empty() ? 1.0 : std::max(b.width, (end - b.lo) / 12);
+  return {end + 0.5 * w, end + 1.5 * w, b.not_finite};
+}
+
 cv::Mat histogram_bgr(const Histogram& h, ChartImage* info) {
   validate(h, "Histogram");
   const Style st = style_for({h.width, h.height});
   const HistogramBins b = calc_histogram_bins(h.values, h.bins);
-  const int top = b.counts.empty() ? 0 : *std::max_element(b.counts.begin(), b.counts.end());
-  const Range x =
-      b.counts.empty() ? histogram_x(h, kInf, -kInf, 0.03) : histogram_x(h, b.edge(0), b.edge(b.counts.size()), 0.03);
+  const bool nan_bar = h.nan_bar && b.not_finite > 0;
+  const NanBar nb = nan_bar_of(b);
+  int top = b.counts.empty() ? 0 : *std::max_element(b.counts.begin(), b.counts.end());
+  if (nan_bar) top = std::max(top, nb.count);
+  const double x_lo = b.counts.empty() ? (nan_bar ? nb.lo : kInf) : b.edge(0);
+  const double x_hi = nan_bar ? nb.hi : b.counts.empty() ? -kInf : b.edge(b.counts.size());
+  const Range x = histogram_x(h, x_lo, x_hi, 0.03);
   const Range y = top > 0 ? resolve_range(0, NAN, 0, top, 0.06) : Range{0, 1};
   AxesOptions opt;
   opt.y_min_step = 1;
@@ -359,6 +374,10 @@ cv::Mat histogram_bgr(const Histogram& h, ChartImage* info) {
     cv::rectangle(img, cv::Point(x0, a.iy(b.counts[i])), cv::Point(right, a.iy(0)), fill, cv::FILLED);
   }
   std::vector<LegendEntry> legend{{"n = " + std::to_string(finite_count(h.values)), {fill, 1, false}, Swatch::box}};
+  if (nan_bar) {
+    hatch(img, cv::Rect(cv::Point(a.ix(nb.lo), a.iy(nb.count)), cv::Point(a.ix(nb.hi), a.iy(0))), st);
+    legend.push_back({hershey_text(h.nan_label + ": " + std::to_string(nb.count)), {kNanFill, 1, false}, Swatch::box});
+  }
   for (auto& e : draw_markers(img, a, h, st)) legend.push_back(std::move(e));
   draw_frame_and_ticks(img, a, st);
   draw_axes_text(img, a, text, st);
@@ -370,7 +389,12 @@ cv::Mat histogram_bgr(const Histogram& h, ChartImage* info) {
 cv::Mat cdf_bgr(const Histogram& h, ChartImage* info) {
   validate(h, "Histogram (CDF)");
   const Style st = style_for({h.width, h.height});
-  const Ecdf e = calc_ecdf(h.values);
+  Ecdf e = calc_ecdf(h.values);
+  // nan_bar: fractions of every value, so the curve ends at the finite fraction.
+  const size_t finite = finite_count(h.values), bad = h.values.size() - finite;
+  const bool nan_mass = h.nan_bar && bad > 0;
+  if (nan_mass)
+    for (double& p : e.p) p *= double(finite) / double(h.values.size());
   const Range x = e.x.empty() ? histogram_x(h, kInf, -kInf, 0.04) : histogram_x(h, e.x.front(), e.x.back(), 0.04);
   const AxesText text{histogram_title(h), hershey_text(h.x_label), "cumulative fraction"};
   const Axes a = layout_axes({h.width, h.height}, x, {-0.03, 1.03}, text, st);
@@ -385,10 +409,21 @@ cv::Mat cdf_bgr(const Histogram& h, ChartImage* info) {
     sx.push_back(e.x[i]), sy.push_back(last = e.p[i]);
   }
   if (!e.x.empty()) sx.push_back(x.hi), sy.push_back(last);
+  std::vector<LegendEntry> legend;
+  if (nan_mass) {
+    // The mass that never arrives: shaded from where the curve ends up to 1, right of the largest value.
+    const double from = e.x.empty() ? x.lo : e.x.back();
+    const double y0 = double(finite) / double(h.values.size());
+    const Polyline box{{double(a.ix(from)), double(a.iy(y0))}, {double(a.ix(x.hi)), double(a.iy(y0))},
+                       {double(a.ix(x.hi)), double(a.iy(1))}, {double(a.ix(from)), double(a.iy(1))}};
+    fill_translucent(img, {box}, kNanHatch, 0.4);
+    legend.push_back({hershey_text(h.nan_label + ": " + std::to_string(bad) + " of " + std::to_string(h.values.size())),
+                      {kNanHatch, 1, false}, Swatch::box, 0.4});
+  }
   const Stroke line{bgr(palette_colour(0)), st.px(2.5), false};
   cv::Mat roi = img(a.area);
   draw_series(roi, a, sx, sy, line, st);
-  std::vector<LegendEntry> legend{{"n = " + std::to_string(e.x.empty() ? 0 : finite_count(h.values)), line}};
+  legend.insert(legend.begin(), {"n = " + std::to_string(e.x.empty() ? 0 : finite), line});
   for (auto& m : draw_markers(img, a, h, st)) legend.push_back(std::move(m));
   draw_frame_and_ticks(img, a, st);
   draw_axes_text(img, a, text, st);

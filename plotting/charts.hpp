@@ -45,10 +45,16 @@ struct Histogram {
   std::vector<std::string> marker_labels;   // legend text per marker (missing/empty = not in the legend)
   int width = 1200, height = 800;
   std::string nan_label = "not finite";     // title note "(12 of 500 <nan_label>)", e.g. "not settled"
+  bool nan_bar = false;                     // show the NaN/inf values as mass of their own (e.g. right-censored
+                                            // settling times): a bar and a CDF that stops short of 1, below
 };
-// Count axis on the left; bars over equal bins from the smallest to the largest finite value.
+// Count axis on the left; bars over equal bins from the smallest to the largest finite value. With
+// nan_bar, the NaN/inf values are one more bar, hatched grey, half a bar gap right of the bins (as
+// wide as a bin, at least 1/12 of their range; "<nan_label>: k" in the legend).
 void render_histogram(const Histogram& h, const std::string& png_path);
 // Empirical CDF of the finite values as a step plot, y in [0, 1]; markers as vertical dashed lines.
+// With nan_bar, the fractions are of every value, so the curve stops at 1 - (NaN/inf fraction), and
+// the mass above it is shaded grey right of the largest value ("<nan_label>: k of n" in the legend).
 void render_cdf(const Histogram& h, const std::string& png_path);
 
 struct BarChart {

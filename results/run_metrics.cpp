@@ -11,7 +11,7 @@ namespace ff {
 
 const std::vector<std::string> kMoveMetrics = {"tip_settling_s",        "tip_overshoot_pct",    "hub_settling_s",
                                                "hub_overshoot_pct",     "peak_tip_deflection_m", "residual_vibration_m",
-                                               "peak_torque_Nm"};
+                                               "peak_torque_Nm",        "settling_horizon_s"};
 
 std::vector<std::string> calc_metric_columns(int nmoves) {
   std::vector<std::string> cols;
@@ -24,6 +24,16 @@ std::vector<std::string> calc_metric_columns(int nmoves) {
       cols.push_back(name);
     }
   return cols;
+}
+
+std::string calc_horizon_column(const std::string& column) {
+  // "m<digits>_" then a settling metric of kMoveMetrics.
+  const std::size_t sep = column.find('_');
+  if (sep < 2 || sep == std::string::npos || column[0] != 'm' ||
+      column.find_first_not_of("0123456789", 1) != sep)
+    return "";
+  const std::string metric = column.substr(sep + 1);
+  return metric == "tip_settling_s" || metric == "hub_settling_s" ? column.substr(0, sep + 1) + "settling_horizon_s" : "";
 }
 
 namespace {
@@ -65,6 +75,8 @@ std::vector<double> calc_run_metrics(const Model& model, const Trace& tr) {
     out.push_back(over(t, t0, t2, [&] { return calc_peak_abs(t, tr.tip_deflection, t0, t2); }));
     out.push_back(over(t, t1, t2, [&] { return calc_residual_amplitude(t, tr.tip_deflection, t1, t2); }));
     out.push_back(over(t, t0, t2, [&] { return calc_peak_abs(t, tr.torque, t0, t2); }));
+    // Horizon: settled_for confirms ts only when t2 - (t1 + ts) >= dwell, so at most t2 - t1 - dwell.
+    out.push_back(std::max(0.0, t2 - t1 - dwell));
   }
   out.resize(ncols, std::nan(""));  // moves that start after the run ends (simulation.duration): no number
   return out;

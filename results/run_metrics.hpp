@@ -19,10 +19,17 @@ namespace ff {
 //   peak_tip_deflection_m  largest |tip deflection| from the move's start to the next move, m
 //   residual_vibration_m   half the peak-to-peak tip deflection after the move ends, m
 //   peak_torque_Nm         largest |hub torque| from the move's start to the next move, N·m
+//   settling_horizon_s     the largest settling time the run can confirm for this move: the window
+//                          (the hold, or up to the end of the run) minus the dwell, >= 0; a settling
+//                          time of NaN is right-censored here (> horizon; censoring.hpp)
 extern const std::vector<std::string> kMoveMetrics;
 
 // Column names "m1_tip_settling_s", ... for `nmoves` moves.
 std::vector<std::string> calc_metric_columns(int nmoves);
+
+// The column holding the horizon a settling column is censored at ("m2_hub_settling_s" ->
+// "m2_settling_horizon_s"); "" for a column that is not a settling time.
+std::string calc_horizon_column(const std::string& column);
 
 // Values in calc_metric_columns order (every move of the model); all NaN when the trace is not finite (a
 // diverged run). A move the run (simulation.duration) ends before its end has no settling times and no

@@ -22,10 +22,12 @@ double calc_percentile(std::vector<double> values, double p);
 
 // count = non-NaN values, missing = NaN values; the rest is over the non-NaN values (all NaN if count = 0).
 // std is the sample standard deviation (divisor count - 1; NaN if count < 2); p5/p50/p95 as calc_percentile.
+// censored and horizon(_min): only the censored summary of censoring.hpp sets them (0 and NaN here).
 struct Summary {
-  int count = 0, missing = 0;
+  int count = 0, censored = 0, missing = 0;
   double mean = kStatsNaN, std = kStatsNaN, min = kStatsNaN, max = kStatsNaN;
   double p5 = kStatsNaN, p50 = kStatsNaN, p95 = kStatsNaN;
+  double horizon = kStatsNaN, horizon_min = kStatsNaN;
 };
 Summary calc_summary(const std::vector<double>& values);
 

@@ -1,9 +1,13 @@
 #include "results/summaries.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
+#include "results/censoring.hpp"
+#include "results/run_metrics.hpp"
 #include "results/statistics.hpp"
 
 namespace ff {
@@ -23,7 +27,16 @@ std::string join(const std::vector<std::string>& cells, const char* sep) {
   return out;
 }
 
+// A statistic of a censored response (censoring.hpp): +inf lies above the horizon, "> H".
+bool above_horizon(double x) { return x == std::numeric_limits<double>::infinity(); }
+std::string bound(double x, double horizon) { return above_horizon(x) ? "> " + num(horizon) : num(x); }
+
 }  // namespace
+
+std::string horizon_range(const Summary& s) {
+  if (s.censored == 0) return "";
+  return (s.horizon_min < s.horizon ? num(s.horizon_min, "%.3g") + "-" : "") + num(s.horizon, "%.3g");
+}
 
 std::string case_label(const std::string& row_label) { return row_label.substr(0, row_label.find(" | ")); }
 
@@ -55,12 +68,20 @@ std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::s
   return out;
 }
 
-// The cells of one group and metric: count, missing, mean, min, p5, p50, p95, max, [miss, interval].
-std::vector<std::string> summary_cells(const std::vector<double>& v, const std::map<std::string, double>& specs,
-                                       const std::string& metric) {
-  const Summary s = calc_summary(v);
-  std::vector<std::string> c = {std::to_string(s.count), std::to_string(s.missing), num(s.mean), num(s.min),
-                                num(s.p5),               num(s.p50),                num(s.p95),  num(s.max)};
+// The cells of one group and metric: count, not settled, missing, horizon, mean, min, p5, p50, p95, max,
+// [miss, interval]; statistics above the horizon as "> H" (Markdown), or in CSV as the number H with
+// their names in a last cell `censored` (the mean too when it is the restricted mean).
+std::vector<std::string> summary_cells(const std::vector<double>& v, const std::vector<double>& h,
+                                       const std::map<std::string, double>& specs, const std::string& metric, bool csv) {
+  const Summary s = calc_summary(v, h);
+  std::vector<std::string> c = {std::to_string(s.count), std::to_string(s.censored), std::to_string(s.missing),
+                                num(s.horizon), num(s.mean)};
+  std::string censored = s.censored > 0 ? "mean" : "";
+  const std::pair<const char*, double> stats[] = {{"min", s.min}, {"p5", s.p5}, {"p50", s.p50}, {"p95", s.p95}, {"max", s.max}};
+  for (const auto& [name, x] : stats) {
+    c.push_back(csv && above_horizon(x) ? num(s.horizon) : bound(x, s.horizon));
+    if (above_horizon(x)) censored += std::string(censored.empty() ? "" : " ") + name;
+  }
   auto spec = specs.find(metric);
   if (spec != specs.end()) {
     const Interval m = calc_miss_probability(v, spec->second, 0.95);
@@ -70,25 +91,33 @@ std::vector<std::string> summary_cells(const std::vector<double>& v, const std::
     c.push_back("");
     c.push_back("");
   }
+  if (csv) c.push_back(censored);
   return c;
 }
 
 template <class Row>
 std::string groupby(const ResultTable& t, const std::vector<std::string>& by, const std::vector<std::string>& metrics,
-                    const std::map<std::string, double>& specs, Row row) {
+                    const std::map<std::string, double>& specs, bool csv, Row row) {
   std::vector<std::string> head = by;
-  for (const char* h : {"metric", "count", "missing", "mean", "min", "p5", "p50", "p95", "max", "P(miss spec)", "95% CI"})
+  for (const char* h : {"metric", "count", "not settled", "missing", "horizon", "mean", "min", "p5", "p50", "p95", "max",
+                        "P(miss spec)", "95% CI"})
     head.push_back(h);
+  if (csv) head.push_back("censored");
   std::string out = row(head, true);
-  std::vector<std::vector<double>> cols;
-  for (const auto& m : metrics) cols.push_back(column_values(t, m));
+  std::vector<std::vector<double>> cols, horizons;
+  for (const auto& m : metrics) {
+    cols.push_back(column_values(t, m));
+    horizons.push_back(horizon_values(t, m));
+  }
   for (const auto& g : group_rows(t, by)) {
     for (std::size_t k = 0; k < metrics.size(); ++k) {
-      std::vector<double> v;
+      std::vector<double> v, h;
       for (int r : g.rows) v.push_back(cols[k][r]);
+      if (!horizons[k].empty())
+        for (int r : g.rows) h.push_back(horizons[k][r]);
       std::vector<std::string> cells = g.key;
       cells.push_back(metrics[k]);
-      for (auto& c : summary_cells(v, specs, metrics[k])) cells.push_back(c);
+      for (auto& c : summary_cells(v, h, specs, metrics[k], csv)) cells.push_back(c);
       out += row(cells, false);
     }
   }
@@ -112,9 +141,15 @@ std::vector<double> column_values(const ResultTable& t, const std::string& name)
   throw std::invalid_argument("no column '" + name + "'; there are: " + join(t.params, ", ") + ", " + join(t.columns, ", "));
 }
 
+std::vector<double> horizon_values(const ResultTable& t, const std::string& metric) {
+  const std::string h = calc_horizon_column(metric);
+  if (h.empty() || std::find(t.columns.begin(), t.columns.end(), h) == t.columns.end()) return {};
+  return column_values(t, h);
+}
+
 std::string format_groupby_md(const ResultTable& t, const std::vector<std::string>& by,
                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
-  return groupby(t, by, metrics, specs, [](const std::vector<std::string>& cells, bool header) {
+  return groupby(t, by, metrics, specs, false, [](const std::vector<std::string>& cells, bool header) {
     std::string line = "| " + join(cells, " | ") + " |\n";
     if (header) {
       line += "|";
@@ -127,7 +162,7 @@ std::string format_groupby_md(const ResultTable& t, const std::vector<std::strin
 
 std::string format_groupby_csv(const ResultTable& t, const std::vector<std::string>& by,
                                const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
-  return groupby(t, by, metrics, specs, [](const std::vector<std::string>& cells, bool) {
+  return groupby(t, by, metrics, specs, true, [](const std::vector<std::string>& cells, bool) {
     std::vector<std::string> quoted;
     for (const auto& c : cells)  // no number: an empty cell
       quoted.push_back(c == "-" ? std::string() : c.find_first_of(", ") != std::string::npos ? "\"" + c + "\"" : c);
@@ -138,15 +173,29 @@ std::string format_groupby_csv(const ResultTable& t, const std::vector<std::stri
 std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::string>& metrics,
                                   const std::map<std::string, double>& specs, std::uint64_t seed) {
   std::string out =
-      "| metric | runs | no value | mean [95% CI] | p5 [95% CI] | p50 [95% CI] | p95 [95% CI] | spec | P(miss) [95% CI] |\n"
-      "|---|---|---|---|---|---|---|---|---|\n";
-  auto ci = [](const Interval& i) { return num(i.estimate) + " [" + num(i.lower) + ", " + num(i.upper) + "]"; };
+      "| metric | runs | not settled | no value | mean [95% CI] | p5 [95% CI] | p50 [95% CI] | p95 [95% CI] | spec | "
+      "P(miss) [95% CI] |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n";
+  // An interval whose ends may lie above the horizon H; an estimate above it reads "> H (not settled)".
+  auto ci = [](const Interval& i, double horizon) {
+    if (above_horizon(i.estimate)) return "> " + num(horizon) + " (not settled)";
+    return num(i.estimate) + " [" + bound(i.lower, horizon) + ", " + bound(i.upper, horizon) + "]";
+  };
+  bool any_censored = false;
   for (const auto& m : metrics) {
     const auto v = column_values(t, m);
-    const Summary s = calc_summary(v);
-    std::string line = "| " + m + " | " + std::to_string(v.size()) + " | " + std::to_string(s.missing) + " | " +
-                       ci(calc_bootstrap_mean(v, 1000, 0.95, seed)) + " | ";
-    for (double p : {5.0, 50.0, 95.0}) line += ci(calc_bootstrap_percentile(v, p, 1000, 0.95, seed)) + " | ";
+    const auto h = horizon_values(t, m);
+    const Summary s = calc_summary(v, h);
+    // Not settled: how many, and the range of their horizons.
+    std::string censored = std::to_string(s.censored);
+    if (s.censored > 0) {
+      censored += " (horizon " + horizon_range(s) + " s)";
+      any_censored = true;
+    }
+    std::string line = "| " + m + " | " + std::to_string(v.size()) + " | " + censored + " | " +
+                       std::to_string(s.missing) + " | " + ci(calc_bootstrap_mean(v, h, 1000, 0.95, seed), s.horizon) +
+                       (s.censored > 0 ? " restricted to " + num(s.horizon, "%.3g") + " s" : "") + " | ";
+    for (double p : {5.0, 50.0, 95.0}) line += ci(calc_bootstrap_percentile(v, h, p, 1000, 0.95, seed), s.horizon) + " | ";
     auto spec = specs.find(m);
     if (spec != specs.end()) {
       const Interval miss = calc_miss_probability(v, spec->second, 0.95);
@@ -157,6 +206,12 @@ std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::s
     }
     out += line + "\n";
   }
+  if (any_censored)
+    out += "\nNot settled: the run could not confirm a settling time up to its horizon (the hold minus one period of "
+           "the slowest closed-loop resonance), so the value is known only to exceed it (right-censored). The mean is "
+           "the restricted mean up to the largest horizon (the area under the Kaplan-Meier curve); percentiles are "
+           "Kaplan-Meier percentiles, \"> H (not settled)\" where fewer than that fraction settled; the bootstrap "
+           "resamples the not-settled runs too. P(miss) counts not settled (and no value) as a miss, over all runs.\n";
   return out;
 }
 

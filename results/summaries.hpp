@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "results/sensitivity.hpp"
+#include "results/statistics.hpp"
 #include "results/table.hpp"
 
 namespace ff {
@@ -16,19 +17,36 @@ namespace ff {
 // and the columns there are when it does not exist.
 std::vector<double> column_values(const ResultTable& t, const std::string& name);
 
+// The horizons of a censored summary (censoring.hpp) as text, "7.68-9.09" or "8" when they are one,
+// 3 significant digits; "" when nothing is censored.
+std::string horizon_range(const Summary& s);
+
 // The case of a row of a study with `cases:` (its label up to " | ").
 std::string case_label(const std::string& row_label);
 
-// One line per group of equal `by` values (all rows when `by` is empty) and metric: count,
-// missing (NaN: e.g. not settled), mean, min, p5, p50, p95, max; with a spec for the metric, the
-// probability of missing it (value > limit or NaN) and its 95 % Wilson interval.
+// The horizons a metric is right-censored at (censoring.hpp): the values of its horizon column
+// (calc_horizon_column) when it is a settling time and the table has that column, else none (a
+// table without it: every NaN is missing).
+std::vector<double> horizon_values(const ResultTable& t, const std::string& metric);
+
+// One line per group of equal `by` values (all rows when `by` is empty) and metric: count (with a
+// value), not settled (NaN with a horizon: right-censored), missing (NaN without one, e.g. a
+// diverged run), horizon (the largest of the not-settled ones), mean, min, p5, p50, p95, max as
+// calc_summary(values, horizons) (censoring.hpp); with a spec for the metric, the probability of
+// missing it (value > limit or NaN: not settled misses) over every row, and its 95 % Wilson interval.
+// A statistic above the horizon reads "> H" in Markdown; in CSV its cell holds H and the last
+// column, `censored`, names those statistics ("mean" when the mean is the restricted mean), e.g.
+// "mean p95 max".
 std::string format_groupby_md(const ResultTable& t, const std::vector<std::string>& by,
                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs);
 std::string format_groupby_csv(const ResultTable& t, const std::vector<std::string>& by,
                                const std::vector<std::string>& metrics, const std::map<std::string, double>& specs);
 
-// Monte Carlo summary of each metric: mean, p5, p50, p95, each with a 95 % percentile-bootstrap
-// interval (1000 resamples, deterministic in `seed`), and the miss probability of its spec.
+// Monte Carlo summary of each metric: runs, not settled (with their horizons), no value, mean, p5,
+// p50, p95, each with a 95 % percentile-bootstrap interval (1000 resamples that draw the
+// not-settled runs too, deterministic in `seed`), and the miss probability of its spec over every
+// run. With not-settled runs the mean is the restricted mean up to the horizon, percentiles are
+// Kaplan–Meier ones, "> H (not settled)" above it, and a note under the table says so.
 std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::string>& metrics,
                                   const std::map<std::string, double>& specs, std::uint64_t seed);
 

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "results/run_metrics.hpp"
+
 namespace ff {
 
 namespace {
@@ -134,16 +136,20 @@ std::string format_settling_table_md(const ResultTable& t, const std::vector<std
       "| run | move | tip settling (s) | tip overshoot (%) | hub settling (s) | hub overshoot (%) | "
       "peak tip deflection (mm) | residual vibration (mm) | peak torque (kN·m) |\n"
       "|---|---|---|---|---|---|---|---|---|\n";
-  const std::size_t per_move = 7;
-  auto settle = [](double x) { return std::isnan(x) ? std::string("not settled") : fmt("%.2f", x); };
+  const std::size_t per_move = kMoveMetrics.size();
+  // Not settled: "> H (not settled)" with the move's horizon H, the largest settling time the run could confirm.
+  auto settle = [](double x, double horizon) {
+    if (!std::isnan(x)) return fmt("%.2f", x);
+    return std::isnan(horizon) ? std::string("not settled") : "> " + fmt("%.2f", horizon) + " (not settled)";
+  };
   // "-": no number (a move the run ended before).
   auto number = [](const char* format, double x) { return std::isnan(x) ? std::string("-") : fmt(format, x); };
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     for (std::size_t j = 0; j < moves[i].size() && (j + 1) * per_move <= r.values.size(); ++j) {
       const double* v = &r.values[j * per_move];
-      out += "| " + r.label + " | " + moves[i][j] + " | " + settle(v[0]) + " | " + number("%.1f", v[1]) + " | " +
-             settle(v[2]) + " | " + number("%.1f", v[3]) + " | " + number("%.1f", 1e3 * v[4]) + " | " +
+      out += "| " + r.label + " | " + moves[i][j] + " | " + settle(v[0], v[7]) + " | " + number("%.1f", v[1]) + " | " +
+             settle(v[2], v[7]) + " | " + number("%.1f", v[3]) + " | " + number("%.1f", 1e3 * v[4]) + " | " +
              number("%.2f", 1e3 * v[5]) + " | " + number("%.2f", 1e-3 * v[6]) + " |\n";
     }
   }

@@ -37,7 +37,8 @@ std::vector<std::string> split_csv_line(const std::string& line);
 // `source`, the line and the column on a malformed file.
 ResultTable parse_results_csv(const std::string& text, const std::string& source);
 
-// Markdown table, one line per run and move: tip and hub settling (s, "not settled"), overshoot (%),
+// Markdown table, one line per run and move: tip and hub settling (s; not settled: "> H (not settled)",
+// H the move's settling_horizon_s, or "not settled" without one), overshoot (%),
 // peak tip deflection (mm), residual vibration (mm), peak torque (kN·m).
 // moves[row][j] describes move j of that row, e.g. "0 -> 0.5 rad".
 std::string format_settling_table_md(const ResultTable& table, const std::vector<std::vector<std::string>>& moves);

@@ -377,6 +377,47 @@ TEST(Charts, CdfPlotStepsFromZeroToOne) {
   EXPECT_LT(on, f.height * 9 / 10);
 }
 
+TEST(Charts, NotSettledValuesStandAsABarOfTheirOwn) {
+  // Counts 4, 2, 8 over [1, 3] and 5 not settled: a grey bar of height 5 half a bin right of the bins.
+  ff::Histogram h;
+  h.x_label = "time (s)";
+  h.values = {1, 1, 1, 1, 2, 2, 3, 3, 3, 3, 3, 3, 3, 3, NAN, NAN, NAN, NAN, NAN};
+  h.bins = 3;
+  h.nan_label = "not settled";
+  h.nan_bar = true;
+  const ff::ChartImage c = ff::render_histogram_rgb(h);
+  const Image img = image(c);
+  const ff::PlotFrame& f = c.frame;
+  EXPECT_GE(f.x_hi, 4.0);  // the bar spans 3 1/3 .. 4
+  const int x = px(f.x_to_px(3 + 2.0 / 3));
+  EXPECT_TRUE(is_grey(img.at(x, px(f.y_to_px(2.5)))));
+  EXPECT_TRUE(is_grey(img.at(x, px(f.y_to_px(4.8)))));
+  EXPECT_FALSE(is_grey(img.at(x, px(f.y_to_px(5.3)))));
+  EXPECT_TRUE(is_white(img.at(px(f.x_to_px(3 + 1.0 / 6)), px(f.y_to_px(1.5)))));  // the gap before it
+  // Without nan_bar the same values keep to the bins (and only the title counts the NaNs).
+  h.nan_bar = false;
+  EXPECT_LT(ff::render_histogram_rgb(h).frame.x_hi, 3.2);
+}
+
+TEST(Charts, CdfWithNotSettledStopsAtTheSettledFraction) {
+  // 100 values 0..99 and 25 not settled: fractions of all 125, so the curve ends at 0.8, the rest shaded grey.
+  ff::Histogram h;
+  h.x_label = "time (s)";
+  h.values = zero_to(99);
+  h.values.resize(125, NAN);
+  h.nan_label = "not settled";
+  h.nan_bar = true;
+  const ff::ChartImage c = ff::render_cdf_rgb(h);
+  const Image img = image(c);
+  const ff::PlotFrame& f = c.frame;
+  const ff::Rgb line = ff::palette_colour(0);
+  EXPECT_TRUE(colour_near(img, px(f.x_to_px(49.5)), px(f.y_to_px(0.4)), line));  // 50 of 125 at or below 49
+  EXPECT_TRUE(colour_near(img, px(f.x_to_px(101)), px(f.y_to_px(0.8)), line));   // flat at 0.8 right of the max
+  EXPECT_FALSE(colour_near(img, px(f.x_to_px(101)), px(f.y_to_px(1)), line));
+  EXPECT_TRUE(is_grey(img.at(px(f.x_to_px(101)), px(f.y_to_px(0.9)))));  // the mass that never settles
+  EXPECT_FALSE(is_grey(img.at(px(f.x_to_px(47.3)), px(f.y_to_px(0.93)))));  // off the grid lines
+}
+
 TEST(Charts, HistogramRejectsBadInput) {
   ff::Histogram h;
   h.values = {1, 2};

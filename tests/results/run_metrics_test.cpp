@@ -44,6 +44,7 @@ TEST(RunMetrics, RunEndingMidMoveLeavesTheMoveNotSettled) {
   EXPECT_GT(v[4], 0.01);          // m1_peak_tip_deflection_m: the arm bends while it moves
   EXPECT_TRUE(std::isnan(v[5]));  // m1_residual_vibration_m
   EXPECT_GT(v[6], 0.0);           // m1_peak_torque_Nm
+  EXPECT_EQ(v[7], 0.0);           // m1_settling_horizon_s: nothing of the hold ran, nothing can be confirmed
   EXPECT_EQ(calc_run_status(LaneStatus::kOk, cols, v), "not_settled");
 }
 
@@ -51,7 +52,16 @@ TEST(RunMetrics, ColumnsNameEveryMoveMetric) {
   const auto cols = calc_metric_columns(2);
   ASSERT_EQ(cols.size(), 2 * kMoveMetrics.size());
   EXPECT_EQ(cols.front(), "m1_tip_settling_s");
-  EXPECT_EQ(cols.back(), "m2_peak_torque_Nm");
+  EXPECT_EQ(cols[6], "m1_peak_torque_Nm");
+  EXPECT_EQ(cols.back(), "m2_settling_horizon_s");
+}
+
+TEST(RunMetrics, SettlingColumnsNameTheirHorizonColumn) {
+  EXPECT_EQ(calc_horizon_column("m1_tip_settling_s"), "m1_settling_horizon_s");
+  EXPECT_EQ(calc_horizon_column("m12_hub_settling_s"), "m12_settling_horizon_s");
+  for (const char* other : {"m1_tip_overshoot_pct", "m1_settling_horizon_s", "tip_settling_s", "mx_tip_settling_s",
+                            "m_tip_settling_s", "payload.mass", ""})
+    EXPECT_EQ(calc_horizon_column(other), "") << other;
 }
 
 TEST(RunMetrics, ResponseCaughtInsideTheBandMidSwingIsNotSettled) {
@@ -62,8 +72,16 @@ TEST(RunMetrics, ResponseCaughtInsideTheBandMidSwingIsNotSettled) {
   const auto run = test::run_one(m);
   const auto cols = calc_metric_columns(2);
   const auto v = calc_run_metrics(m, run.traces[0]);
+  const std::size_t m2 = kMoveMetrics.size();      // the return move's first column
   EXPECT_TRUE(std::isnan(v[0]));                    // out move: still ringing when the hold ends
-  EXPECT_NEAR(v[7], 40.6, 0.5);                     // return move: settles ~40 s after it ends
+  EXPECT_NEAR(v[m2], 40.6, 0.5);                    // return move: settles ~40 s after it ends
+  // Horizons: the hold less one period of the 0.2740 Hz resonance (the dwell the settling rule needs);
+  // the out move's settling time is right-censored at 7 - 3.65 s, the return move's lies below 45 - 3.65 s.
+  const double dwell = 2.0 * M_PI / m.resonances[0];
+  EXPECT_NEAR(dwell, 1.0 / 0.2740, 0.01);
+  EXPECT_NEAR(v[7], 7.0 - dwell, 1e-9);
+  EXPECT_NEAR(v[m2 + 7], 45.0 - dwell, 1e-9);
+  EXPECT_LE(v[m2], v[m2 + 7]);
   EXPECT_EQ(calc_run_status(run.status[0], cols, v), "not_settled");
   EXPECT_NEAR(v[1], 38.0, 0.5);                     // tip overshoot, %
   EXPECT_NEAR(v[4], 0.664, 0.002);                  // peak tip deflection, m

@@ -1,0 +1,94 @@
+// results/summaries.cpp: group-by and Monte Carlo tables of a result table whose settling times are
+// right-censored at their horizons (not settled), and what they print for them.
+#include "results/summaries.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+
+namespace ff {
+namespace {
+
+const double kNaN = std::nan("");
+
+// 10 runs of one move: tip settling 1..7 s, three not settled (NaN) with horizon 8 s; overshoot 1..10 %.
+ResultTable censored_table(bool with_horizon = true) {
+  ResultTable t;
+  t.params = {"x"};
+  t.columns = {"m1_tip_settling_s", "m1_tip_overshoot_pct"};
+  if (with_horizon) t.columns.push_back("m1_settling_horizon_s");
+  const double settle[] = {1, 2, kNaN, 3, 4, kNaN, 5, 6, kNaN, 7};
+  for (int i = 0; i < 10; ++i) {
+    ResultRow r;
+    r.eval_id = i;
+    r.label = "run " + std::to_string(i);
+    r.status = std::isnan(settle[i]) ? "not_settled" : "ok";
+    r.params = {static_cast<double>(i % 2)};
+    r.values = {settle[i], i + 1.0};
+    if (with_horizon) r.values.push_back(8.0);
+    t.rows.push_back(r);
+  }
+  return t;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+TEST(Summaries, MonteCarloTableReportsNotSettledAboveTheHorizon) {
+  const std::string md = format_monte_carlo_md(censored_table(), {"m1_tip_settling_s", "m1_tip_overshoot_pct"},
+                                               {{"m1_tip_settling_s", 3.0}}, 7);
+  const auto lines = lines_of(md);
+  ASSERT_GE(lines.size(), 4u) << md;
+  const std::string& settle = lines[2];
+  EXPECT_EQ(settle.rfind("| m1_tip_settling_s | 10 | 3 (horizon 8 s) | 0 | 5.2 [", 0), 0u) << settle;
+  EXPECT_NE(settle.find("restricted to 8 s"), std::string::npos) << settle;
+  // p5 and p50 are numbers, p95 lies above the horizon; 7 of 10 miss "<= 3" (4, 5, 6, 7 and the 3 not settled).
+  EXPECT_NE(settle.find("| 1 ["), std::string::npos) << settle;
+  EXPECT_NE(settle.find("| 5 ["), std::string::npos) << settle;
+  EXPECT_NE(settle.find("| > 8 (not settled) | <= 3 | 0.700 ["), std::string::npos) << settle;
+  // Overshoot has no horizon: no censoring, its usual numbers; a note explains the censored row.
+  EXPECT_EQ(lines[3].rfind("| m1_tip_overshoot_pct | 10 | 0 | 0 | 5.5 [", 0), 0u) << lines[3];
+  EXPECT_NE(md.find("restricted mean up to the largest horizon"), std::string::npos) << md;
+}
+
+TEST(Summaries, GroupByCsvKeepsNumbersAndNamesTheCensoredStatistics) {
+  const std::string csv = format_groupby_csv(censored_table(), {}, {"m1_tip_settling_s", "m1_tip_overshoot_pct"},
+                                             {{"m1_tip_settling_s", 3.0}});
+  const auto lines = lines_of(csv);
+  ASSERT_EQ(lines.size(), 3u) << csv;
+  EXPECT_EQ(lines[0],
+            "metric,count,\"not settled\",missing,horizon,mean,min,p5,p50,p95,max,\"P(miss spec)\",\"95% CI\",censored");
+  // p95 and max hold the horizon 8; the `censored` cell says which cells are bounds (and that the mean is restricted).
+  EXPECT_EQ(lines[1].rfind("m1_tip_settling_s,7,3,0,8,5.2,1,1,5,8,8,0.700,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[1].substr(lines[1].rfind(',') + 1), "\"mean p95 max\"") << lines[1];
+  EXPECT_EQ(lines[2].rfind("m1_tip_overshoot_pct,10,0,0,,5.5,1,", 0), 0u) << lines[2];
+  EXPECT_EQ(lines[2].back(), ',') << "nothing censored: an empty last cell; " << lines[2];
+}
+
+TEST(Summaries, GroupByMarkdownShowsBoundsPerGroup) {
+  // Group x = 0 holds runs 0, 2, 4, 6, 8: settled 1, 4, 5, censored 2 of 5 (mean 0.2 (1 + 4 + 5) + 0.4 x 8).
+  const std::string md = format_groupby_md(censored_table(), {"x"}, {"m1_tip_settling_s"}, {});
+  const auto lines = lines_of(md);
+  ASSERT_EQ(lines.size(), 4u) << md;
+  EXPECT_EQ(lines[0], "| x | metric | count | not settled | missing | horizon | mean | min | p5 | p50 | p95 | max | "
+                      "P(miss spec) | 95% CI |");
+  EXPECT_EQ(lines[2].rfind("| 0 | m1_tip_settling_s | 3 | 2 | 0 | 8 | 5.2 | 1 | 1 | 5 | > 8 | > 8 |", 0), 0u) << lines[2];
+}
+
+TEST(Summaries, TableWithoutHorizonsCountsNotSettledAsMissing) {
+  // A results.csv written before the horizon column: NaN stays "missing", statistics over the settled runs.
+  const std::string csv = format_groupby_csv(censored_table(false), {}, {"m1_tip_settling_s"}, {});
+  const auto lines = lines_of(csv);
+  ASSERT_EQ(lines.size(), 2u) << csv;
+  EXPECT_EQ(lines[1].rfind("m1_tip_settling_s,7,0,3,,4,1,", 0), 0u) << lines[1];
+}
+
+}  // namespace
+}  // namespace ff
