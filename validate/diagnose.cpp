@@ -711,13 +711,16 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   std::vector<std::vector<std::string>> sets;
   for (const auto& [set, fit] : baselines) sets.push_back(set);
   std::vector<EffectFit> fitted(sets.size());
+  double r0_n_eff = NAN;
+  const auto r0_tests = sc.tests(r0[0], &r0_n_eff);  // the base model's, once: every re-fit is against it
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::size_t i = 0; i < sets.size(); ++i) {
     if (sets[i].empty()) {
       fitted[i].ok = true;
       fitted[i].rss = d.base_rss;
       fitted[i].fit_percent = d.base_fit;
-      fitted[i].tests = sc.tests(r0[0], &fitted[i].n_eff);
+      fitted[i].tests = r0_tests;
+      fitted[i].n_eff = r0_n_eff;
       fitted[i].explained = all_explained(fitted[i].tests);
       continue;
     }
@@ -728,7 +731,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       fitted[i].note = ex.what();
       continue;
     }
-    fitted[i] = fit_one(sc, baseline, {d.base_rss, d.base_fit, sc.tests(r0[0], nullptr)}, opt);
+    fitted[i] = fit_one(sc, baseline, {d.base_rss, d.base_fit, r0_tests}, opt);
   }
   for (std::size_t i = 0; i < sets.size(); ++i) {
     if (!fitted[i].ok) {
