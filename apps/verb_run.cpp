@@ -86,7 +86,12 @@ void add_run_verb(CLI::App& app) {
     }
     if (comm.rank() == 0) make_directories(args->out + (study.keep_traces ? "/traces" : ""));
     comm.barrier();
+    // One process per journal: a second run on the same --out (and share) refuses before it reads or writes.
+    const FileLock lock(args->out + "/journal-" + opt.tag + ".lock",
+                        args->out + ": another flexfarm run is writing it (journal-" + opt.tag +
+                            ".csv is locked); wait for that run to end, or use another --out");
 
+    opt.notice = [](const std::string& m) { std::fprintf(stderr, "flexfarm: %s\n", m.c_str()); };
     Progress progress(study.name + (opt.tag == "main" ? "" : " " + opt.tag), stderr_is_terminal());
     int already = -1;
     opt.progress = [&](int done, int total, double seconds) {

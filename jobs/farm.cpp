@@ -30,6 +30,7 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   }
 
   JournalWriter journal(opt.out, opt.tag, study.hash, header);
+  if (!journal.repaired().empty() && opt.notice) opt.notice(journal.repaired());
   const std::string timings_path = opt.out + "/timings-" + opt.tag + ".csv";
   const bool new_timings = !std::filesystem::exists(timings_path);
   std::FILE* timings = std::fopen(timings_path.c_str(), "ab");

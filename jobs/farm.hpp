@@ -25,6 +25,8 @@ struct FarmOptions {
   std::string tag = "main";      // this process's journal: out/journal-<tag>.csv
   // After each batch: (variants of this share done, of this share in total, seconds so far).
   std::function<void(int, int, double)> progress;
+  // What the user should be told, once (a journal repaired on resume).
+  std::function<void(const std::string&)> notice;
 };
 
 struct FarmStatus {

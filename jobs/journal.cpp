@@ -31,12 +31,23 @@ std::size_t count_cells(const std::string& line) {
   return n;
 }
 
+// A results row: as many cells as the header, led by a whole-number eval_id.
+bool is_row(const std::string& line, std::size_t cells) {
+  const std::size_t comma = line.find(',');
+  if (line.empty() || comma == 0 || comma == std::string::npos || count_cells(line) != cells) return false;
+  for (std::size_t i = 0; i < comma; ++i)
+    if (line[i] < '0' || line[i] > '9') return false;
+  return comma <= 9;
+}
+
+std::size_t header_cells(const std::string& header) { return count_cells(header.substr(0, header.size() - 1)); }
+
 }  // namespace
 
 std::map<int, std::string> read_journals(const std::string& dir, const std::string& hash, const std::string& header) {
   std::map<int, std::string> rows;
   if (!std::filesystem::is_directory(dir)) return rows;
-  const std::size_t cells = count_cells(header.substr(0, header.size() - 1));
+  const std::size_t cells = header_cells(header);
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();
     if (name.rfind("journal-", 0) != 0 || entry.path().extension() != ".csv") continue;
@@ -57,11 +68,7 @@ std::map<int, std::string> read_journals(const std::string& dir, const std::stri
       if (end == std::string::npos) break;
       const std::string line = text.substr(pos, end - pos);
       pos = end + 1;
-      if (line.empty() || count_cells(line) != cells) continue;
-      try {
-        rows.emplace(std::stoi(line.substr(0, line.find(','))), line + "\n");
-      } catch (const std::exception&) {
-      }
+      if (is_row(line, cells)) rows.emplace(std::stoi(line.substr(0, line.find(','))), line + "\n");
     }
   }
   return rows;
@@ -70,13 +77,33 @@ std::map<int, std::string> read_journals(const std::string& dir, const std::stri
 JournalWriter::JournalWriter(const std::string& dir, const std::string& tag, const std::string& hash,
                              const std::string& header)
     : path_(dir + "/journal-" + tag + ".csv") {
-  std::string text = std::filesystem::exists(path_) ? read_all(path_) : std::string();
-  // Keep the complete lines of an existing journal of this study; start afresh otherwise.
-  const bool ours = text.rfind(kMagic + hash + "\n" + header, 0) == 0;
-  if (!ours) text.clear();
-  const std::size_t keep = text.rfind('\n');
-  text = keep == std::string::npos ? std::string() : text.substr(0, keep + 1);
-  if (text.empty()) text = kMagic + hash + "\n" + header;
+  const std::string old = std::filesystem::exists(path_) ? read_all(path_) : std::string();
+  const std::string head = kMagic + hash + "\n" + header;
+  std::string text = head;
+  // Keep the complete rows of an existing journal of this study; cut a torn last line and drop any
+  // line that is not a row (garbage appended): their variants are computed again. Another study's
+  // journal (or none) starts afresh.
+  if (old.rfind(head, 0) == 0) {
+    const std::size_t cells = header_cells(header);
+    std::size_t pos = head.size(), torn = 0, dropped = 0;
+    while (pos < old.size()) {
+      const std::size_t end = old.find('\n', pos);
+      if (end == std::string::npos) {
+        torn = old.size() - pos;
+        break;
+      }
+      const std::string line = old.substr(pos, end - pos);
+      if (is_row(line, cells)) text += line + "\n";
+      else ++dropped;
+      pos = end + 1;
+    }
+    if (torn || dropped)
+      repaired_ = path_ + ": repaired: " +
+                  (torn ? "a torn last line (" + std::to_string(torn) + " bytes) cut" : std::string()) +
+                  (torn && dropped ? ", " : "") +
+                  (dropped ? std::to_string(dropped) + " line(s) that are not result rows dropped" : std::string()) +
+                  "; their variants are computed again";
+  }
   // Replace the file whole (temporary + rename), then append: a kill at any point loses no row.
   const std::string tmp = path_ + ".tmp";
   file_ = std::fopen(tmp.c_str(), "wb");

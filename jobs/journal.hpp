@@ -17,17 +17,20 @@ std::map<int, std::string> read_journals(const std::string& dir, const std::stri
 class JournalWriter {
  public:
   // Opens DIR/journal-<tag>.csv for appending (creating it with its two header lines). A torn last
-  // line left by a killed run is cut off first.
+  // line left by a killed run, and any line that is not a result row, are dropped first.
   JournalWriter(const std::string& dir, const std::string& tag, const std::string& hash, const std::string& header);
   ~JournalWriter();
   JournalWriter(const JournalWriter&) = delete;
   JournalWriter& operator=(const JournalWriter&) = delete;
   // Appends complete rows (each ending in a newline) and flushes them to the operating system.
   void append(const std::string& rows);
+  // What opening repaired (a torn last line cut, lines that are not rows dropped), for the user; "" if nothing.
+  const std::string& repaired() const { return repaired_; }
 
  private:
   std::FILE* file_ = nullptr;
   std::string path_;
+  std::string repaired_;
 };
 
 }  // namespace ff

@@ -11,4 +11,18 @@ void write_file_atomic(const std::string& path, const std::string& text);
 // Creates a directory and its parents. Throws std::runtime_error naming the path on failure.
 void make_directories(const std::string& path);
 
+// An exclusive lock on `path` (flock; the file is created if missing), held until destruction, so that
+// two processes never write the same output. Throws std::runtime_error, naming `what`, when another
+// process holds it: it refuses at once rather than wait.
+class FileLock {
+ public:
+  FileLock(const std::string& path, const std::string& what);
+  ~FileLock();
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 }  // namespace ff

@@ -116,18 +116,39 @@ double calc_effective_samples(const std::vector<double>& e, int max_lag) {
   return std::clamp(n / tau, 1.0, n);
 }
 
+double calc_standard_deviation(const std::vector<double>& x) {
+  const double m = mean_of(x);
+  double s = 0.0;
+  for (double v : x) s += (v - m) * (v - m);
+  return x.empty() ? 0.0 : std::sqrt(s / x.size());
+}
+
 double calc_noise_floor(const std::vector<double>& y) {
   const std::size_t n = y.size();
   if (n < 8) return 0.0;
+  // Window by window, then the median over windows: a ring or a rattle that fills a minority of the
+  // record (a move's end, a drive's free play crossed) is signal, not noise.
+  const std::size_t w = std::max<std::size_t>(16, std::min<std::size_t>(64, (n - 4) / 8));
+  std::vector<double> v2, v4;
   double s2 = 0.0, s4 = 0.0;
+  std::size_t m = 0;
   for (std::size_t k = 2; k + 2 < n; ++k) {
     const double d2 = y[k + 1] - 2.0 * y[k] + y[k - 1];
     const double d4 = y[k + 2] - 4.0 * y[k + 1] + 6.0 * y[k] - 4.0 * y[k - 1] + y[k - 2];
     s2 += d2 * d2;
     s4 += d4 * d4;
+    if (++m == w) {
+      v2.push_back(s2 / (6.0 * m));
+      v4.push_back(s4 / (70.0 * m));
+      s2 = s4 = 0.0;
+      m = 0;
+    }
   }
-  const double m = static_cast<double>(n - 4);
-  return std::sqrt(std::min(s2 / (6.0 * m), s4 / (70.0 * m)));
+  auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  return std::sqrt(std::min(median(v2), median(v4)));
 }
 
 Spectrum calc_amplitude_spectrum(const std::vector<double>& t, const std::vector<double>& e) {

@@ -41,6 +41,9 @@ Correlation calc_cross_correlation(const std::vector<double>& e, const std::vect
 // Monte Carlo"), within [1, n]: n for a white residual, about n / 10 for an AR(1) with rho = 0.82.
 double calc_effective_samples(const std::vector<double>& e, int max_lag = 100);
 
+// The (population) standard deviation of x: sqrt(mean((x - mean x)^2)); 0 when x is empty.
+double calc_standard_deviation(const std::vector<double>& x);
+
 // The standard deviation of the white noise on a smooth signal y, from its second and fourth
 // differences: var(d2 y) = 6 sigma^2, var(d4 y) = 70 sigma^2 for white noise, the signal's share
 // falling as h^4 and h^8 with the sample spacing h; the smaller estimate. 0 for fewer than 8 samples.

@@ -6,6 +6,7 @@
 #include "kernel/random.hpp"
 #include "kernel/sensors.hpp"
 #include "kernel/simulate.hpp"
+#include "validate/residuals.hpp"
 
 namespace ff {
 
@@ -33,11 +34,7 @@ Record make_synthetic_record(const Model& truth, double noise, std::uint64_t see
     for (std::size_t k = 0; k < tr.t.size(); k += decimate) out.push_back(y[k]);
     ++channel;
     if (std::string(name) == "ref" || noise <= 0) continue;
-    double mean = 0.0, var = 0.0;
-    for (double x : out) mean += x;
-    mean /= out.size();
-    for (double x : out) var += (x - mean) * (x - mean);
-    const double sd = noise * std::sqrt(var / out.size());
+    const double sd = noise * calc_standard_deviation(out);
     CounterRng rng(calc_variant_seed(seed, channel));
     for (double& x : out) x += sd * rng.normal();
   }

@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -129,6 +130,40 @@ int timed_variants(const std::string& rows) {
     if (cells.size() == 3 && cells[0] != "first_eval_id") n += std::stoi(cells[1]);
   }
   return n;
+}
+
+// `flexfarm run mc_small.yaml --out OUT --threads 1` in the background, started directly (no shell in
+// between) so that the pid is flexfarm's own; its output goes to `log`. -1 when fork fails.
+pid_t start_run(const fs::path& out, const std::string& log) {
+  const std::vector<std::string> argv = {kBinary, "run", kStudy, "--out", out.string(), "--threads", "1"};
+  std::vector<char*> cargv;
+  for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
+  cargv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      ::close(fd);
+    }
+    ::execv(cargv[0], cargv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Waits (at most two minutes) until `journal` holds `wanted` rows; true when the process ended first
+// (its wait status in *status). *seen: the rows last counted.
+bool wait_for_rows(pid_t pid, const fs::path& journal, int wanted, int* status, std::size_t* seen) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
+    if (::waitpid(pid, status, WNOHANG) == pid) return true;
+    *seen = read_journal(journal).ids.size();
+    if (static_cast<int>(*seen) >= wanted) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
 }
 
 struct Result {
@@ -282,40 +317,15 @@ TEST_F(Farm, ResumeAfterKill9IsByteIdentical) {
   const fs::path out = dir / "out";
   const fs::path journal = out / "journal-main.csv";
 
-  // Run B, started directly (no shell in between) so the pid is flexfarm's own.
-  const std::vector<std::string> argv = {kBinary, "run", kStudy, "--out", out.string(), "--threads", "1"};
-  std::vector<char*> cargv;
-  for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
-  cargv.push_back(nullptr);
+  // Run B in the background; once a third of the variants are journalled, kill -9 it mid-run.
   const std::string log = (dir / "killed.txt").string();
-  const pid_t pid = ::fork();
+  const pid_t pid = start_run(out, log);
   ASSERT_GE(pid, 0) << "fork failed";
-  if (pid == 0) {
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) {
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      ::close(fd);
-    }
-    ::execv(cargv[0], cargv.data());
-    ::_exit(127);
-  }
-
-  // Wait until a third of the variants are journalled, then kill -9 it mid-run.
   const int wanted = n / 3;
   const auto t0 = std::chrono::steady_clock::now();
-  bool exited = false;
   int status = 0;
   std::size_t seen = 0;
-  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
-    if (::waitpid(pid, &status, WNOHANG) == pid) {
-      exited = true;
-      break;
-    }
-    seen = read_journal(journal).ids.size();
-    if (static_cast<int>(seen) >= wanted) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  const bool exited = wait_for_rows(pid, journal, wanted, &status, &seen);
   if (!exited) {
     ::kill(pid, SIGKILL);
     ::waitpid(pid, &status, 0);
@@ -362,6 +372,64 @@ TEST_F(Farm, ResumeAfterKill9IsByteIdentical) {
   std::printf("killed after %.2f s with %d of %d variants journalled; resume: %.1f s\n", killed_after, done, n, r.seconds);
 }
 
+
+TEST_F(Farm, TornJournalIsRepairedOnResumeAndTheUserIsTold) {
+  const int n = study_size();
+  ref();
+  ASSERT_EQ(run_study("out", "--threads 2").exit_code, 0);
+  const fs::path journal = dir / "out" / "journal-main.csv";
+  // The last row cut mid-write and garbage after it: the half row, a line of the wrong shape, a line
+  // of the right shape without an eval_id, each ended by a newline, and a torn last line.
+  std::string text = read_journal(journal).complete;
+  text.pop_back();
+  const std::size_t last = text.rfind('\n') + 1;
+  const int torn_id = std::stoi(text.substr(last, text.find(',', last) - last));
+  const std::string commas(std::count(text.begin() + last, text.end(), ','), ',');
+  text = text.substr(0, last + (text.size() - last) / 2) + "\ngarbage,not a row\n" + commas + "\n12,3";
+  write_text(journal, text);
+  fs::remove(dir / "out" / "results.csv");
+  const auto r = run_study("out", "--resume");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("repaired: a torn last line (4 bytes) cut, 3 line(s) that are not result rows dropped"),
+            std::string::npos)
+      << r.output;
+  expect_reference_tables("out", "torn journal repaired");
+  const Journal after = read_journal(journal);
+  const std::set<int> unique(after.ids.begin(), after.ids.end());
+  EXPECT_EQ(unique.size(), after.ids.size()) << "a variant was journalled twice";
+  EXPECT_EQ(static_cast<int>(unique.size()), n);
+  EXPECT_EQ(after.ids.back(), torn_id) << "the torn row is computed again, last";
+}
+
+TEST_F(Farm, SecondRunOnTheSameOutRefusesAtOnceAndTheFirstFinishes) {
+  const int n = study_size();
+  ref();
+  const fs::path out = dir / "out";
+  const std::string log = (dir / "first.txt").string();
+  const pid_t pid = start_run(out, log);
+  ASSERT_GE(pid, 0) << "fork failed";
+  int status = 0;
+  std::size_t seen = 0;
+  ASSERT_FALSE(wait_for_rows(pid, out / "journal-main.csv", 1, &status, &seen))
+      << "the first run ended before the second could start; make mc_small.yaml bigger\n" << read_text(log);
+  // The second run, with and without --resume: refused at once, naming the directory; nothing written.
+  const std::string before = read_journal(out / "journal-main.csv").complete;
+  for (const std::string args : {"--resume", ""}) {
+    const auto second = run_study("out", args);
+    EXPECT_NE(second.exit_code, 0) << second.output;
+    EXPECT_NE(second.output.find("another flexfarm run is writing it"), std::string::npos) << second.output;
+    EXPECT_LT(second.seconds, 5.0) << "the second run must refuse at once, not wait";
+  }
+  EXPECT_EQ(read_journal(out / "journal-main.csv").complete.rfind(before, 0), 0u) << "the second run touched the journal";
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status << "\n" << read_text(log);
+  EXPECT_EQ(static_cast<int>(read_journal(out / "journal-main.csv").ids.size()), n);
+  expect_reference_tables("out", "the first run, with a second refused beside it");
+  // Once the first has ended, a --resume on the same directory runs (and finds nothing to compute).
+  const auto after = run_study("out", "--resume");
+  EXPECT_EQ(after.exit_code, 0) << after.output;
+  expect_reference_tables("out", "resumed after the first ended");
+}
 TEST_F(Farm, RunWithoutResumeRefusesAnExistingJournal) {
   write_small_study("study.yaml");
   auto r = flexfarm("run study.yaml --out out");

@@ -24,6 +24,7 @@
 
 #include "kernel/random.hpp"
 #include "validate/diagnose.hpp"
+#include "validate/residuals.hpp"
 #include "validate/synthetic.hpp"
 #include "tests/validate/truth/truth_sim.hpp"
 
@@ -175,14 +176,6 @@ Record clean_record(bool independent, const std::vector<std::string>& trajectory
   return make_synthetic_record(build_model(load_model_source(kModel, set)), 0.0, mv.seed, mv.decimate);
 }
 
-double channel_sd(const std::vector<double>& y) {
-  double mean = 0, var = 0;
-  for (double x : y) mean += x;
-  mean /= y.size();
-  for (double x : y) var += (x - mean) * (x - mean);
-  return std::sqrt(var / y.size());
-}
-
 // How visible an effect is: the largest, over the scored channels, of the RMS change it makes in the
 // noise-free record divided by that channel's noise (the record's `noise` x its standard deviation).
 double calc_visibility(const Record& with, const Record& without, double noise) {
@@ -193,9 +186,28 @@ double calc_visibility(const Record& with, const Record& without, double noise) 
     const std::size_t n = std::min(a.size(), b.size());
     double s2 = 0.0;
     for (std::size_t k = 0; k < n; ++k) s2 += (a[k] - b[k]) * (a[k] - b[k]);
-    v = std::max(v, std::sqrt(s2 / n) / (noise * channel_sd(a)));
+    v = std::max(v, std::sqrt(s2 / n) / (noise * calc_standard_deviation(a)));
   }
   return v;
+}
+
+// A record a rig could make: the loop holds the arm (every sample finite, the hub within 1.5 x the move's
+// amplitude plus 0.1 rad) and the actuator stays within ten times the peak torque the same move takes
+// without the effect. A draw that fails (a soft drive that destabilises the PD loop, free play that makes
+// the drive rattle at 100 x the rated torque) is no measurement anyone takes: the rig's limits trip. It is
+// drawn again, like an invisible one.
+bool holds_the_arm(const Record& with, const Record& without, double amplitude) {
+  double peak = 0.0, peak0 = 0.0, hub = 0.0;
+  for (double x : without.at("hub_torque")) peak0 = std::max(peak0, std::abs(x));
+  for (double x : with.at("hub_torque")) {
+    if (!std::isfinite(x)) return false;
+    peak = std::max(peak, std::abs(x));
+  }
+  for (double x : with.at("hub_angle")) {
+    if (!std::isfinite(x)) return false;
+    hub = std::max(hub, std::abs(x));
+  }
+  return hub <= 1.5 * std::abs(amplitude) + 0.1 && peak <= 10.0 * peak0;
 }
 
 // A hidden effect must be visible: change some scored channel by at least its noise's RMS. A draw that
@@ -241,10 +253,12 @@ Case make_case(int i) {
       int draws = 0;
       while (draws++ < kRedraws) {
         st = make_setting(e, rng);
+        v = 0.0;
         try {
-          v = calc_visibility(clean_record(c.independent, c.trajectory, mv, {st}), base, mv.noise);
+          const Record with = clean_record(c.independent, c.trajectory, mv, {st});
+          if (!holds_the_arm(with, base, mv.amplitude)) continue;
+          v = calc_visibility(with, base, mv.noise);
         } catch (const std::exception&) {  // a truth that does not run (a drive too soft to hold the arm)
-          v = 0.0;
           continue;
         }
         if (v >= kMinVisibility) break;
@@ -272,7 +286,7 @@ Case make_case(int i) {
       if (!c.record.has(name)) continue;
       auto& y = c.record.columns[name];
       CounterRng nrng(calc_variant_seed(mv.seed, 100 + channel++));
-      const double sd = mv.noise * channel_sd(y);
+      const double sd = mv.noise * calc_standard_deviation(y);
       for (double& x : y) x += sd * nrng.normal();
     }
   } else {

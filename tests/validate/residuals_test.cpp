@@ -64,6 +64,30 @@ TEST(CrossCorrelation, IndependentNoiseStaysInsideTheBand) {
   EXPECT_LE(ccf.fraction_outside, 0.03);
 }
 
+// A smooth move (a 0.5 rad S-curve over 4000 samples) with white noise of 0.01 rad on it.
+std::vector<double> noisy_move(int n, double sd) {
+  auto y = white_noise(n, 7, sd);
+  for (int k = 0; k < n; ++k) y[k] += 0.5 * (1.0 - std::cos(M_PI * k / n)) / 2.0;
+  return y;
+}
+
+TEST(StandardDeviation, OfOneToFourIsTheRootOfFiveQuarters) {
+  EXPECT_DOUBLE_EQ(calc_standard_deviation({1, 2, 3, 4}), std::sqrt(1.25));
+  EXPECT_EQ(calc_standard_deviation({}), 0.0);
+}
+
+TEST(NoiseFloor, WhiteNoiseOnASmoothMoveIsItsStandardDeviation) {
+  EXPECT_NEAR(calc_noise_floor(noisy_move(4000, 0.01)), 0.01, 0.0005);
+}
+
+TEST(NoiseFloor, ARingInAFifthOfTheRecordIsSignalNotNoise) {
+  // A 240 Hz ring (at 1 kHz: sample to sample it looks like noise) of amplitude 0.1, 20 x the noise,
+  // in 800 of 4000 samples: the differences of the whole record would put the floor at 0.017.
+  auto y = noisy_move(4000, 0.01);
+  for (int k = 1000; k < 1800; ++k) y[k] += 0.1 * std::sin(2.0 * M_PI * 0.24 * k);
+  EXPECT_NEAR(calc_noise_floor(y), 0.01, 0.001);
+}
+
 TEST(Spectrum, SinusoidPeaksAtItsFrequencyWithinABin) {
   const int n = 5000;
   const auto t = times(n, 1e-3);
