@@ -20,6 +20,14 @@ double calc_hub_friction(const BatchModel& bm, int l, double w) {
   return -(b * w + (fc + fs * std::exp(-x * x)) * std::tanh(w * bm.fric_inv_eps[l]));
 }
 
+double calc_hub_friction_damping(const BatchModel& bm, int l, double w) {
+  const double b = bm.fric_b[l], fc = bm.fric_c[l], fs = bm.fric_s[l];
+  if (fc == 0.0 && fs == 0.0) return std::max(b, 0.0);
+  const double x = w * bm.fric_inv_vs[l], e = std::exp(-x * x), th = std::tanh(w * bm.fric_inv_eps[l]);
+  const double g = fc + fs * e, dg = -2.0 * x * bm.fric_inv_vs[l] * fs * e;
+  return std::max(0.0, b + dg * th + g * (1.0 - th * th) * bm.fric_inv_eps[l]);
+}
+
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            Workspace& ws) {
   const int W = bm.W, N = bm.nseg;

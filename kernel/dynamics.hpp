@@ -14,6 +14,10 @@ void compute_joint_torques(const BatchModel& bm, const double* q, const double* 
 // Hub friction torque at hub rate w of lane l (FrictionSpec), N·m; never adds energy: tau_f w <= 0.
 double calc_hub_friction(const BatchModel& bm, int lane, double w);
 
+// The friction map's damping at hub rate w, -d calc_hub_friction / dw, N·m·s/rad, not below 0 (the
+// Stribeck drop's negative slope is left out): b + g'(w) tanh(w/eps) + g(w) sech^2(w/eps) / eps.
+double calc_hub_friction_damping(const BatchModel& bm, int lane, double w);
+
 // Forward dynamics qdd = M(q)^-1 (tau - C(q, v) v) by the articulated-body algorithm
 // (Featherstone, Rigid Body Dynamics Algorithms, 2008, Table 7.1, planar form), O(N) per lane.
 // Reads ws.tau_joint and ws.armature; q, v, qdd are (N x W).

@@ -50,6 +50,15 @@ void set_armature(const BatchModel& bm, Workspace& ws, double gh) {
   ws.armature_gh = gh;
 }
 
+// The hub friction map linearly implicit, like the joint dampers: the hub's armature gh d(tau_f)/dw at
+// the stage's rate w (calc_hub_friction_damping). A steep map (a small smoothing velocity) is then
+// stable at the step the chain needs, not at h < 2 eps J / F. LuGre's bristles are drive states,
+// implicit in solve_drive_stage; their hub entry stays 0.
+void set_friction_armature(const BatchModel& bm, const double* w, double gh, Workspace& ws) {
+  if (bm.layout.bristle >= 0) return;
+  for (int l = 0; l < bm.W; ++l) ws.armature[l] = gh * calc_hub_friction_damping(bm, l, w[l]);
+}
+
 // The hub drive's part of an SDIRK stage: solves Z = zpre + gh f(q, v, Z) for every lane by
 // simplified Newton (Jacobian df/dZ by forward differences at zpre, four iterations), with the
 // chain held at (q, v). Writes Z (nz x W); uses ws.zdot and ws.zpert.
@@ -156,6 +165,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   if (drive) solve_drive_stage(bm, qs, vs, s.tau.data(), z, gh, Z1, ws);
   compute_hub_drive(bm, qs, vs, Z1, s.tau.data(), ws.tau_hub.data(), nullptr);
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws);
+  set_friction_armature(bm, vs, gh, ws);
   compute_forward_dynamics(bm, qk, vk, A1, ws);
   // Stage 2 (t + h): Q2 = q + (1-g) h V1 + gh V2, V2 = v + (1-g) h A1 + gh A2.
   const double b1 = (1.0 - g) * h;
@@ -179,6 +189,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   }
   compute_hub_drive(bm, qs, vs, z, s.tau.data(), ws.tau_hub.data(), nullptr);
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws);
+  set_friction_armature(bm, vs, gh, ws);
   compute_forward_dynamics(bm, qk, vk, A2, ws);
   // The second stage is the new state (stiffly accurate).
 #pragma omp simd
@@ -211,6 +222,9 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   compute_hub_drive(bm, qs, v, Z, s.tau.data(), ws.tau_hub.data(), nullptr);
   for (std::size_t j = 0; j < s.z.size(); ++j) z[j] = 2.0 * Z[j] - z[j];
   compute_joint_torques(bm, qs, v, ws.tau_hub.data(), ws);
+  // The friction map backward-Euler implicit (armature h F', not h/2 F'): the midpoint rule is not
+  // L-stable, and a stuck hub would flip its rate's sign every step.
+  set_friction_armature(bm, v, h, ws);
   compute_forward_dynamics(bm, qs, vk, A, ws);
   // q += h V, v += h A
 #pragma omp simd

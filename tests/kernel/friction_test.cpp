@@ -1,7 +1,10 @@
 // Hub friction (kernel/dynamics.cpp, calc_hub_friction): viscous, Coulomb, Stribeck; regularised.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "kernel/dynamics.hpp"
 #include "kernel/errors.hpp"
@@ -54,6 +57,40 @@ TEST(Friction, BreaksAwayAtTheStictionTorque) {
   EXPECT_GT(above, 0.03);
   EXPECT_GT(above, 10.0 * below);
   EXPECT_DOUBLE_EQ(slide(-1.1 * 600.0), -above);  // symmetric
+}
+
+// Steep maps (smoothing 1e-4 and 1e-5 rad/s: F_s / (eps J) up to ~1e6 /s) under the PD loop through a
+// move and its hold, where the hub sticks. RK4 needs hundreds of substeps for them; SDIRK and the
+// midpoint rule take the map linearly implicit, at a fiftieth of that or less, and follow CVODE
+// (tolerances 1e-8) to micro-radians on the hub and ten micrometres at the tip.
+TEST(Friction, SteepMapImplicitInTheMidpointAndSdirkStepsFollowsCvode) {
+  for (double eps : {1e-4, 1e-5}) {
+    ModelSpec s = friction_rig();
+    s.trajectory.moves = {{0.5, 3.0}};
+    s.friction.smoothing = eps;
+    s.simulation.integrator = Integrator::kRk4;
+    const int rk4_substeps = make_model(s).substeps;
+    s.simulation.integrator = Integrator::kCvodeDense;
+    const BatchRun cv = test::run_one(make_model(s));
+    ASSERT_EQ(cv.status[0], LaneStatus::kOk);
+    for (Integrator kind : {Integrator::kMidpoint, Integrator::kSdirk2}) {
+      SCOPED_TRACE(std::string(kind == Integrator::kMidpoint ? "midpoint" : "sdirk2") + ", eps " + std::to_string(eps));
+      s.simulation.integrator = kind;
+      const Model m = make_model(s);
+      EXPECT_LE(50 * m.substeps, std::max(rk4_substeps, 50)) << "RK4 takes " << rk4_substeps;
+      const BatchRun run = test::run_one(m);
+      ASSERT_EQ(run.status[0], LaneStatus::kOk);
+      double angle = 0.0, tip = 0.0;
+      for (std::size_t k = 0; k < run.traces[0].t.size(); ++k) {
+        angle = std::max(angle, std::abs(run.traces[0].hub_angle[k] - cv.traces[0].hub_angle[k]));
+        tip = std::max(tip, std::abs(run.traces[0].tip_deflection[k] - cv.traces[0].tip_deflection[k]));
+      }
+      std::printf("eps %g, %d substeps (RK4 %d): hub angle within %.2e rad, tip within %.2e m\n", eps, m.substeps,
+                  rk4_substeps, angle, tip);
+      EXPECT_LT(angle, 1e-5);
+      EXPECT_LT(tip, 3e-5);
+    }
+  }
 }
 
 TEST(Friction, StictionBelowCoulombIsRejected) {
