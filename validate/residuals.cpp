@@ -144,6 +144,10 @@ double calc_noise_floor(const std::vector<double>& y) {
       m = 0;
     }
   }
+  if (v2.empty()) {  // fewer differences than one window: the whole record is the window
+    v2.push_back(s2 / (6.0 * m));
+    v4.push_back(s4 / (70.0 * m));
+  }
   auto median = [](std::vector<double>& v) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];

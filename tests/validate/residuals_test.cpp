@@ -80,6 +80,13 @@ TEST(NoiseFloor, WhiteNoiseOnASmoothMoveIsItsStandardDeviation) {
   EXPECT_NEAR(calc_noise_floor(noisy_move(4000, 0.01)), 0.01, 0.0005);
 }
 
+TEST(NoiseFloor, ARecordShorterThanOneWindowIsItsOwnWindow) {
+  // 12 samples, 8 fourth differences, fewer than a window's 16: the estimate over all of them.
+  const std::vector<double> y = {0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1};
+  EXPECT_DOUBLE_EQ(calc_noise_floor(y), std::sqrt(std::min(4.0 / 6.0, 256.0 / 70.0)));
+  EXPECT_EQ(calc_noise_floor({1, 2, 3}), 0.0);
+}
+
 TEST(NoiseFloor, ARingInAFifthOfTheRecordIsSignalNotNoise) {
   // A 240 Hz ring (at 1 kHz: sample to sample it looks like noise) of amplitude 0.1, 20 x the noise,
   // in 800 of 4000 samples: the differences of the whole record would put the floor at 0.017.
