@@ -39,7 +39,7 @@ void add_animate_verb(CLI::App& app) {
       const Study study = load_study(args->input);
       if (args->eval_id >= static_cast<int>(study.variants.size()))
         throw CLI::ValidationError("--eval", "the study has eval_ids 0.." + std::to_string(study.variants.size() - 1));
-      m = study.models[args->eval_id];
+      m = make_variant_model(study, study.variants[args->eval_id]);
       title = study.name + ": " + study.variants[args->eval_id].label;
     } else {
       m = load_model_with(args->input, args->sets);

@@ -41,7 +41,7 @@ void add_plot_verb(CLI::App& app) {
     std::vector<Trace> traces;
     std::vector<std::string> labels;
     for (int id : ids) {
-      const Model& m = study.models[id];
+      const Model m = make_variant_model(study, study.variants[id]);
       traces.push_back(std::move(simulate(make_batch(std::span<const Model>(&m, 1))).traces[0]));
       labels.push_back(std::to_string(id) + ": " + study.variants[id].label);
     }

@@ -24,11 +24,21 @@ Partition parse_shard(const std::string& text) {
   return p;
 }
 
-// Exit status 3 when any variant failed numerically (not_settled is a result, not a failure).
-int count_failed(const ResultTable& t) {
-  int failed = 0;
-  for (const auto& r : t.rows) failed += r.status == "nonfinite" || r.status == "solver_fail";
-  return failed;
+// Exit status 3 when any variant failed numerically or could not run (not_settled is a result).
+std::string describe_failures(const Study& study, const ResultTable& t) {
+  int failed = 0, invalid = 0, first_invalid = -1;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    failed += t.rows[i].status == "nonfinite" || t.rows[i].status == "solver_fail";
+    if (t.rows[i].status != "invalid") continue;
+    if (!invalid++) first_invalid = static_cast<int>(i);
+  }
+  std::string why;
+  if (failed) why = std::to_string(failed) + " variant(s) failed numerically (status nonfinite or solver_fail in results.csv)";
+  if (invalid)
+    why += (why.empty() ? "" : "; ") + std::to_string(invalid) +
+           " variant(s) invalid (status invalid in results.csv): their values are ones the model rejects; the first, " +
+           explain_invalid_variant(study, first_invalid);
+  return why;
 }
 
 }  // namespace
@@ -38,9 +48,8 @@ void finish_study(const Study& study, const std::string& dir) {
   const ResultTable table = assemble_results(study, dir);
   const std::string md = write_study_report(study, table, dir);
   std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", md.c_str(), dir.c_str());
-  const int failed = count_failed(table);
-  if (failed)
-    throw ExitError(std::to_string(failed) + " variant(s) failed numerically (status nonfinite or solver_fail in results.csv)", 3);
+  const std::string failures = describe_failures(study, table);
+  if (!failures.empty()) throw ExitError(failures, 3);
 }
 
 void add_run_verb(CLI::App& app) {

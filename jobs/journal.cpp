@@ -1,6 +1,10 @@
 #include "jobs/journal.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <filesystem>
 #include <fstream>
@@ -106,23 +110,42 @@ JournalWriter::JournalWriter(const std::string& dir, const std::string& tag, con
   }
   // Replace the file whole (temporary + rename), then append: a kill at any point loses no row.
   const std::string tmp = path_ + ".tmp";
-  file_ = std::fopen(tmp.c_str(), "wb");
-  if (!file_) throw std::runtime_error(path_ + ": cannot open the journal for writing");
-  append(text);
-  std::fclose(file_);
+  fd_ = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw std::runtime_error(path_ + ": cannot open the journal for writing: " + std::strerror(errno));
+  try {
+    append(text);
+  } catch (...) {
+    ::close(fd_);
+    fd_ = -1;
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  ::close(fd_);
   std::filesystem::rename(tmp, path_);
-  file_ = std::fopen(path_.c_str(), "ab");
-  if (!file_) throw std::runtime_error(path_ + ": cannot open the journal for writing");
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd_ < 0) throw std::runtime_error(path_ + ": cannot open the journal for writing: " + std::strerror(errno));
 }
 
 JournalWriter::~JournalWriter() {
-  if (file_) std::fclose(file_);
+  if (fd_ >= 0) ::close(fd_);
 }
 
 void JournalWriter::append(const std::string& rows) {
-  if (std::fwrite(rows.data(), 1, rows.size(), file_) != rows.size() || std::fflush(file_) != 0)
-    throw std::runtime_error(path_ + ": cannot write the journal");
-  fsync(fileno(file_));
+  const off_t before = ::lseek(fd_, 0, SEEK_END);
+  std::size_t done = 0;
+  while (done < rows.size()) {
+    const ssize_t n = ::write(fd_, rows.data() + done, rows.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = n < 0 ? std::strerror(errno) : "nothing written";
+      if (before >= 0 && ::ftruncate(fd_, before) != 0) {}  // best effort: the reader drops a torn line anyway
+      throw std::runtime_error(path_ + ": cannot write the journal: " + why +
+                               "; it holds every row up to the last whole one: free space and run again with --resume");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd_) != 0 && errno != EINVAL)
+    throw std::runtime_error(path_ + ": cannot sync the journal to disk: " + std::strerror(errno));
 }
 
 }  // namespace ff

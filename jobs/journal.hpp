@@ -4,7 +4,6 @@
 // mid-write leaves at most one incomplete last line, which readers ignore.
 #pragma once
 
-#include <cstdio>
 #include <map>
 #include <string>
 
@@ -22,13 +21,15 @@ class JournalWriter {
   ~JournalWriter();
   JournalWriter(const JournalWriter&) = delete;
   JournalWriter& operator=(const JournalWriter&) = delete;
-  // Appends complete rows (each ending in a newline) and flushes them to the operating system.
+  // Appends complete rows (each ending in a newline) and syncs them to the disk. A failed write (the
+  // disk full) is cut back off, so the journal still ends on its last whole row, and throws naming
+  // the file and the system's reason.
   void append(const std::string& rows);
   // What opening repaired (a torn last line cut, lines that are not rows dropped), for the user; "" if nothing.
   const std::string& repaired() const { return repaired_; }
 
  private:
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
   std::string path_;
   std::string repaired_;
 };

@@ -274,16 +274,17 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
 
   // Readable table: per run and move when the runs are few, a summary of every metric otherwise.
   std::string md = "# " + study.name + "\n\n" + (study.description.empty() ? "" : study.description + "\n\n");
-  int counts[4] = {0, 0, 0, 0};
+  int counts[5] = {0, 0, 0, 0, 0};
   for (const auto& r : table.rows)
-    counts[r.status == "ok" ? 0 : r.status == "not_settled" ? 1 : r.status == "nonfinite" ? 2 : 3]++;
+    counts[r.status == "ok" ? 0 : r.status == "not_settled" ? 1 : r.status == "nonfinite" ? 2 : r.status == "invalid" ? 4 : 3]++;
   char status[256];
-  std::snprintf(status, sizeof status, "%zu variants: %d ok, %d not settled, %d nonfinite, %d solver failures.\n\n",
-                table.rows.size(), counts[0], counts[1], counts[2], counts[3]);
+  std::snprintf(status, sizeof status, "%zu variants: %d ok, %d not settled, %d nonfinite, %d solver failures%s.\n\n",
+                table.rows.size(), counts[0], counts[1], counts[2], counts[3],
+                counts[4] ? (", " + std::to_string(counts[4]) + " invalid (values the model rejects)").c_str() : "");
   md += status;
   if (study.listed) {
     std::vector<std::vector<std::string>> moves;
-    for (const auto& m : study.models) moves.push_back(describe_moves(m.spec.trajectory));
+    for (const auto& v : study.variants) moves.push_back(describe_moves(make_variant_model(study, v).spec.trajectory));
     md += format_settling_table_md(table, moves);
   } else {
     if (!study.case_labels.empty()) md += report_cases(study, table, dir);

@@ -2,10 +2,13 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include "jobs/batches.hpp"
+#include "kernel/errors.hpp"
 #include "results/run_metrics.hpp"
 
 namespace ff {
@@ -13,52 +16,101 @@ namespace ff {
 ResultTable make_result_table(const Study& study) {
   ResultTable t;
   t.params = study.params;
-  const std::size_t nmoves = study.models[0].spec.trajectory.moves.size();
-  for (const auto& m : study.models)
-    if (m.spec.trajectory.moves.size() != nmoves)
-      throw std::invalid_argument(study.source + ": every variant of a study needs the same number of moves");
-  t.columns = calc_metric_columns(static_cast<int>(nmoves));
+  t.columns = calc_metric_columns(static_cast<int>(study.nominal.spec.trajectory.moves.size()));
   return t;
 }
 
-ResultRow make_result_row(const Study& study, int i, const Trace& trace, LaneStatus status) {
+namespace {
+// A variant that could not run: its parameters, no metrics, and why in its status.
+ResultRow make_invalid_row(const Study& study, int i, std::size_t ncolumns) {
+  const Variant& v = study.variants[i];
+  return {v.eval_id, v.seed, v.label, "invalid", v.params, std::vector<double>(ncolumns, std::nan(""))};
+}
+}  // namespace
+
+ResultRow make_result_row(const Study& study, int i, const Model& model, const Trace& trace, LaneStatus status) {
   const Variant& v = study.variants[i];
   ResultRow row;
   row.eval_id = v.eval_id;
   row.seed = v.seed;
   row.label = v.label;
   row.params = v.params;
-  row.values = calc_run_metrics(study.models[i], trace);
-  row.status = calc_run_status(status, calc_metric_columns(static_cast<int>(study.models[i].spec.trajectory.moves.size())),
-                               row.values);
+  row.values = calc_run_metrics(model, trace);
+  row.status = calc_run_status(status, calc_metric_columns(static_cast<int>(model.spec.trajectory.moves.size())), row.values);
   return row;
+}
+
+std::string explain_invalid_variant(const Study& study, int i) {
+  const std::size_t nmoves = study.nominal.spec.trajectory.moves.size();
+  const std::string who = "eval_id " + std::to_string(study.variants[i].eval_id) + ": ";
+  try {
+    const Model m = make_variant_model(study, study.variants[i]);
+    if (m.spec.trajectory.moves.size() != nmoves)
+      return who + study.source + ": " + std::to_string(m.spec.trajectory.moves.size()) + " moves where the study's nominal model has " +
+             std::to_string(nmoves) + " (every variant of a study needs the same number of moves)";
+  } catch (const ConfigError& e) {
+    return who + e.what();
+  }
+  return "";
 }
 
 void evaluate_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
                        const std::function<void(BatchResult&&)>& done) {
-  const std::vector<Batch> batches = make_batches(study.models, pending, opt.lanes);
-  const int nb = static_cast<int>(batches.size());
   const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
-  // Nothing may leave the parallel region by exception: the first error is kept and rethrown.
+  const std::size_t ncolumns = make_result_table(study).columns.size();
+  // Models are built per chunk of variants and dropped after it: memory is bounded by the chunk, not
+  // the study. A chunk holds enough batches to keep every thread busy.
+  const std::size_t chunk = std::max<std::size_t>(1024, 32u * static_cast<std::size_t>(opt.lanes * threads));
+  // Nothing may leave a parallel region by exception: the first error is kept and rethrown.
   std::exception_ptr error;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-  for (int b = 0; b < nb; ++b) {
-    try {
-      const auto t0 = std::chrono::steady_clock::now();
-      std::vector<Model> lanes;
-      for (int i : batches[b].variants) lanes.push_back(study.models[i]);
-      BatchRun run = simulate(make_batch(lanes));
-      BatchResult res;
-      for (std::size_t l = 0; l < lanes.size(); ++l) {
-        res.rows.push_back(make_result_row(study, batches[b].variants[l], run.traces[l], run.status[l]));
-        if (opt.keep_traces) res.traces.push_back(std::move(run.traces[l]));
-      }
-      res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-#pragma omp critical(ff_batch_done)
-      done(std::move(res));
-    } catch (...) {
+  auto keep_error = [&] {
 #pragma omp critical(ff_batch_error)
-      if (!error) error = std::current_exception();
+    if (!error) error = std::current_exception();
+  };
+  for (std::size_t c0 = 0; c0 < pending.size() && !error; c0 += chunk) {
+    const int n = static_cast<int>(std::min(chunk, pending.size() - c0));
+    // Build: a variant the model rejects (a draw from a distribution's tail) is a result, `invalid`.
+    std::vector<Model> models(n);
+    std::vector<char> valid(n, 0);
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+    for (int k = 0; k < n; ++k) {
+      try {
+        models[k] = make_variant_model(study, study.variants[pending[c0 + k]]);
+        valid[k] = models[k].spec.trajectory.moves.size() == study.nominal.spec.trajectory.moves.size();
+      } catch (const ConfigError&) {
+      } catch (...) {
+        keep_error();
+      }
+    }
+    if (error) break;
+    std::vector<int> local;
+    BatchResult invalid;
+    for (int k = 0; k < n; ++k)
+      if (valid[k]) local.push_back(k);
+      else invalid.rows.push_back(make_invalid_row(study, pending[c0 + k], ncolumns));
+    if (!invalid.rows.empty()) done(std::move(invalid));
+
+    const std::vector<Batch> batches = make_batches(models, local, opt.lanes);
+    const int nb = static_cast<int>(batches.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (int b = 0; b < nb; ++b) {
+      try {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<Model> lanes;
+        for (int k : batches[b].variants) lanes.push_back(models[k]);
+        BatchRun run = simulate(make_batch(lanes));
+        BatchResult res;
+        for (std::size_t l = 0; l < lanes.size(); ++l) {
+          const int k = batches[b].variants[l];
+          res.rows.push_back(make_result_row(study, pending[c0 + k], models[k], run.traces[l], run.status[l]));
+          if (opt.keep_traces) res.traces.push_back(std::move(run.traces[l]));
+        }
+        res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+#pragma omp critical(ff_batch_done)
+        done(std::move(res));
+      } catch (...) {
+        keep_error();
+      }
     }
   }
   if (error) std::rethrow_exception(error);

@@ -26,11 +26,17 @@ struct BatchResult {
   double seconds = 0.0;
 };
 
-// The result row of one simulated variant.
-ResultRow make_result_row(const Study& study, int variant, const Trace& trace, LaneStatus status);
+// The result row of one simulated variant (`model` is its model).
+ResultRow make_result_row(const Study& study, int variant, const Model& model, const Trace& trace, LaneStatus status);
 
-// Simulates the variants `pending` (indices into study.variants) in batches on the threads. `done`
-// is called once per batch, from one thread at a time, in completion order.
+// Why variant `variant` has the status `invalid`: the error its model gives (file, line, key), or
+// its number of moves; empty if it is valid.
+std::string explain_invalid_variant(const Study& study, int variant);
+
+// Simulates the variants `pending` (indices into study.variants) in batches on the threads, building
+// their models chunk by chunk; a variant whose model cannot be built gets a row with the status
+// `invalid` and no metrics. `done` is called once per batch (and once per chunk for its invalid
+// rows), from one thread at a time, in completion order.
 void evaluate_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
                        const std::function<void(BatchResult&&)>& done);
 

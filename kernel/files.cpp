@@ -14,19 +14,20 @@ namespace ff {
 
 void write_file_atomic(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
+  std::error_code ec;
+  const auto fail = [&](const std::string& why) {
+    std::filesystem::remove(tmp, ec);  // nothing half-written is left behind
+    throw std::runtime_error(path + ": " + why);
+  };
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path + ": cannot open for writing");
+    if (!out) fail(std::string("cannot open for writing: ") + std::strerror(errno));
     out << text;
     out.flush();
-    if (!out) throw std::runtime_error(path + ": write failed");
+    if (!out) fail(std::string("write failed: ") + std::strerror(errno));
   }
-  std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(path + ": cannot rename into place");
-  }
+  if (ec) fail("cannot rename into place: " + ec.message());
 }
 
 void make_directories(const std::string& path) {

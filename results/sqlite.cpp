@@ -50,7 +50,7 @@ void SqliteDb::step(sqlite3_stmt* st) {
 void write_results_sqlite(const ResultTable& t, const std::map<std::string, std::string>& info, const std::string& path) {
   const std::string tmp = path + ".tmp";
   std::filesystem::remove(tmp);
-  {
+  try {
     SqliteDb d(tmp, path);
     d.exec("BEGIN");
     d.exec("CREATE TABLE study (key TEXT PRIMARY KEY, value TEXT)");
@@ -87,6 +87,10 @@ void write_results_sqlite(const ResultTable& t, const std::map<std::string, std:
     }
     sqlite3_finalize(st);
     d.exec("COMMIT");
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);  // nothing half-written is left behind (a full disk)
+    throw;
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);

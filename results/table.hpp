@@ -12,7 +12,7 @@ struct ResultRow {
   int eval_id = 0;
   std::uint64_t seed = 0;        // the variant's random seed (from the study seed and eval_id)
   std::string label;
-  std::string status;            // ok, not_settled, nonfinite, solver_fail
+  std::string status;            // ok, not_settled, nonfinite, solver_fail, invalid (its model rejected its values)
   std::vector<double> params;    // in ResultTable::params order
   std::vector<double> values;    // in ResultTable::columns order; NaN = no number (e.g. not settled)
 };

@@ -171,25 +171,23 @@ Variable parse_variable(YamlReader& r, bool& integer) {
 void cross_cases(Study& st, YamlReader& top) {
   auto cases = top.sequence("cases", true);
   if (cases.empty()) top.fail("cases", "needs at least one case");
-  std::vector<std::pair<std::string, std::vector<Assignment>>> list;
   for (std::size_t i = 0; i < cases.size(); ++i) {
     std::string label = "case " + std::to_string(i);
     cases[i].optional("label", label);
     if (label.find(" | ") != std::string::npos) cases[i].fail("label", "must not contain ' | '");
-    list.emplace_back(label, read_assignments(cases[i], "set"));
+    st.case_sets.push_back(read_assignments(cases[i], "set"));
     cases[i].finish();
     st.case_labels.push_back(label);
   }
   const std::vector<Variant> design = std::move(st.variants);
   st.variants.clear();
   st.params.insert(st.params.begin(), "case");
-  for (std::size_t c = 0; c < list.size(); ++c)
+  for (std::size_t c = 0; c < st.case_labels.size(); ++c)
     for (const auto& d : design) {
       Variant v = d;
       v.eval_id = static_cast<int>(st.variants.size());
-      v.label = list[c].first + " | " + d.label;
+      v.label = st.case_labels[c] + " | " + d.label;
       v.params.insert(v.params.begin(), static_cast<double>(c));
-      v.set.insert(v.set.begin(), list[c].second.begin(), list[c].second.end());
       st.variants.push_back(std::move(v));
     }
 }
@@ -209,15 +207,15 @@ void parse_design(Study& st, YamlReader& top) {
       v.eval_id = static_cast<int>(i);
       v.label = "run " + std::to_string(i);
       runs[i].optional("label", v.label);
-      v.set = read_assignments(runs[i], "set");
+      st.run_sets.push_back(read_assignments(runs[i], "set"));
       runs[i].finish();
-      for (const auto& a : v.set)
+      for (const auto& a : st.run_sets.back())
         if (std::find(st.params.begin(), st.params.end(), a.path) == st.params.end()) st.params.push_back(a.path);
       st.variants.push_back(std::move(v));
     }
     for (auto& v : st.variants) {
       v.params.assign(st.params.size(), std::nan(""));
-      for (const auto& a : v.set)
+      for (const auto& a : st.run_sets[v.eval_id])
         v.params[std::find(st.params.begin(), st.params.end(), a.path) - st.params.begin()] = numeric_value(a.value);
     }
     return;
@@ -225,8 +223,9 @@ void parse_design(Study& st, YamlReader& top) {
 
   auto vars = top.sequence("variables", true);
   if (vars.empty()) top.fail("variables", "needs at least one variable");
-  std::vector<bool> integer(vars.size());
-  std::vector<int> lines;
+  std::vector<bool>& integer = st.integer;
+  integer.assign(vars.size(), false);
+  std::vector<int>& lines = st.variable_lines;
   for (std::size_t i = 0; i < vars.size(); ++i) {
     bool is_int = false;
     st.variables.push_back(parse_variable(vars[i], is_int));
@@ -267,13 +266,23 @@ void parse_design(Study& st, YamlReader& top) {
     for (std::size_t j = 0; j < st.variables.size(); ++j) {
       const double x = integer[j] ? std::nearbyint(rows[k][j]) : rows[k][j];
       v.params.push_back(x);
-      const std::string key = "variables[" + std::to_string(j) + "] (" + st.variables[j].path + ")";
-      v.set.push_back({st.variables[j].path, value_node(x), st.source, lines[j], key});
       v.label += (j ? ", " : "") + st.variables[j].path + "=" + short_number(x);
     }
     st.variants.push_back(std::move(v));
   }
   if (top.has("cases")) cross_cases(st, top);
+}
+
+// The nominal point of a drawn design: variant 0 (case 0) with every variable at the median of its
+// distribution.
+Variant make_nominal_variant(const Study& st) {
+  Variant v = st.variants.front();
+  const std::size_t first = v.params.size() - st.variables.size();  // after the case index
+  for (std::size_t j = 0; j < st.variables.size(); ++j) {
+    const double x = calc_quantile(st.variables[j].dist, 0.5);
+    v.params[first + j] = st.integer[j] ? std::nearbyint(x) : x;
+  }
+  return v;
 }
 
 }  // namespace
@@ -322,14 +331,25 @@ Study load_study(const std::string& path) {
   std::snprintf(hash, sizeof hash, "%016llx",
                 static_cast<unsigned long long>(fnv1a(st.model_text, fnv1a(read_text(path)))));
   st.hash = hash;
-  // Build every variant's model now: a bad override fails before any output exists.
-  const int n = static_cast<int>(st.variants.size());
-  st.models.resize(n);
+  // The nominal model: variant 0 when the values are written in the file, the medians when drawn.
+  st.drawn = !st.listed && st.design.kind != DesignKind::kGrid && st.design.kind != DesignKind::kCentered;
+  try {
+    st.nominal = make_variant_model(st, st.drawn ? make_nominal_variant(st) : st.variants.front());
+  } catch (const ConfigError& e) {
+    if (!st.drawn) throw;
+    throw ConfigError(e.file(), e.line(), e.key(), e.message() + " (at the design's nominal point, every variable at its median)");
+  }
+  // Written values: every variant's model built now (and dropped), so a bad value fails before any
+  // output exists.
+  const std::size_t nmoves = st.nominal.spec.trajectory.moves.size();
+  const int n = st.drawn ? 0 : static_cast<int>(st.variants.size());
   std::vector<std::exception_ptr> errors(n);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int i = 0; i < n; ++i) {
     try {
-      st.models[i] = make_variant_model(st, st.variants[i]);
+      if (make_variant_model(st, st.variants[i]).spec.trajectory.moves.size() != nmoves)
+        throw std::invalid_argument(st.source + ": every variant of a study needs the same number of moves (eval_id " +
+                                    std::to_string(i) + " differs from eval_id 0)");
     } catch (...) {
       errors[i] = std::current_exception();
     }
@@ -339,10 +359,29 @@ Study load_study(const std::string& path) {
   return st;
 }
 
-Model make_variant_model(const Study& study, const Variant& v) {
+std::vector<Assignment> make_variant_set(const Study& study, const Variant& v) {
   std::vector<Assignment> set = study.set;
-  set.insert(set.end(), v.set.begin(), v.set.end());
-  Model m = make_model_with(YAML::Load(study.model_text), study.model_path, set);
+  if (study.listed) {
+    const auto& run = study.run_sets[v.eval_id];
+    set.insert(set.end(), run.begin(), run.end());
+    return set;
+  }
+  std::size_t j0 = 0;  // the first variable's column in v.params
+  if (!study.case_labels.empty()) {
+    const auto& c = study.case_sets[static_cast<std::size_t>(v.params[0])];
+    set.insert(set.end(), c.begin(), c.end());
+    j0 = 1;
+  }
+  for (std::size_t j = 0; j < study.variables.size(); ++j) {
+    const std::string& path = study.variables[j].path;
+    set.push_back({path, value_node(v.params[j0 + j]), study.source, study.variable_lines[j],
+                   "variables[" + std::to_string(j) + "] (" + path + ")"});
+  }
+  return set;
+}
+
+Model make_variant_model(const Study& study, const Variant& v) {
+  Model m = make_model_with(YAML::Load(study.model_text), study.model_path, make_variant_set(study, v));
   m.spec.simulation.seed = v.seed;  // each variant its own sensor noise
   return m;
 }

@@ -22,7 +22,6 @@ struct Variant {
   std::uint64_t seed = 0;       // calc_variant_seed(study seed, eval_id)
   std::string label;            // legend and table name
   std::vector<double> params;   // value of each study parameter (Study::params), NaN = not numeric
-  std::vector<Assignment> set;  // the overrides that make this variant
 };
 
 struct Study {
@@ -36,18 +35,32 @@ struct Study {
   DesignSpec design;            // kind, sample counts and seed (ignored for a list of runs)
   bool listed = false;          // runs given one by one (`runs:`) rather than by a design
   std::vector<Variable> variables;
+  std::vector<bool> integer;    // (variables) rounded to whole numbers
+  std::vector<int> variable_lines;          // (variables) where each is written in the study file
+  std::vector<std::vector<Assignment>> run_sets;   // a list of runs: each run's overrides
   std::vector<std::string> case_labels;     // `cases:` crossed with the design (parameter `case` = index)
+  std::vector<std::vector<Assignment>> case_sets;  // (case_labels) each case's overrides
   std::vector<std::string> params;          // parameter columns: variable paths, or the paths the runs set
   std::vector<Variant> variants;
-  std::vector<Model> models;                // (variants), built and checked when the study is loaded
+  Model nominal;                // the study-wide overrides (and case 0's) with every variable at its nominal
+                                // value: the result table's columns; a bad override fails at load
+  bool drawn = false;           // the values are drawn from distributions, not written in the file
   std::map<std::string, double> specs;      // response -> limit a run must not exceed (Monte Carlo summaries)
   bool keep_traces = false;     // write every variant's trace (default: when there are at most 50)
   std::string hash;             // fingerprint of the study and model text: journals refuse another study's rows
 };
 
-// Loads and checks a study: every variant's model is built here (on all cores), so a bad value
-// fails before anything is written; the first bad variant by eval_id is the one reported.
+// Loads and checks a study. Values written in the file (a list of runs, a grid, a centered design)
+// are checked here by building every variant's model on all cores (and dropping it), so a bad value
+// fails before anything is written; the first bad variant by eval_id is the one reported. Drawn values
+// (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at their nominal point only: a draw from a
+// distribution's tail that the model rejects is a result of the run (status `invalid`), not an error.
+// Models are built again, per batch, when the variants run: memory does not grow with the study.
 Study load_study(const std::string& path);
+
+// The overrides that make a variant, in the order applied: the study's `set:`, then its run's or its
+// case's, then its variables' values (Variant::params).
+std::vector<Assignment> make_variant_set(const Study& study, const Variant& v);
 
 // The model of one variant. Errors in an overridden value name the study file, line and key.
 Model make_variant_model(const Study& study, const Variant& v);

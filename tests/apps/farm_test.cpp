@@ -20,6 +20,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <random>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -122,6 +123,32 @@ Journal read_journal(const fs::path& p) {
   return j;
 }
 
+// `mpirun -np RANKS ` for a shell command. As root in a container: OpenMPI refuses root unless told
+// twice (--allow-run-as-root and the two OMPI_ALLOW_RUN_AS_ROOT* variables; harmless for other
+// users). --oversubscribe: more ranks than cores (OpenMPI counts cores as slots and refuses -np
+// above them). --mca btl self,vader: shared memory only, no probing of the container's network
+// interfaces; the vader single-copy mechanism (CMA, process_vm_readv) needs ptrace rights containers
+// often lack, so it is turned off. `timeout`: a rank stuck in a barrier must not hang the test suite.
+std::string mpirun(int ranks) {
+  return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout 300 mpirun -np " + std::to_string(ranks) +
+         " --oversubscribe --allow-run-as-root --mca btl self,vader --mca btl_vader_single_copy_mechanism none ";
+}
+
+// The pid of a process whose environment holds `entry` (e.g. OMPI_COMM_WORLD_RANK=1) and whose
+// working directory is `cwd`; -1 if none.
+pid_t find_process(const std::string& entry, const fs::path& cwd) {
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::error_code ec;
+    if (fs::read_symlink(e.path() / "cwd", ec) != cwd) continue;
+    std::string env = read_text(e.path() / "environ");
+    std::replace(env.begin(), env.end(), '\0', '\n');
+    if (("\n" + env).find("\n" + entry + "\n") != std::string::npos) return std::stoi(name);
+  }
+  return -1;
+}
+
 // Sum of the `variants` column of a timings file's rows (first_eval_id,variants,seconds).
 int timed_variants(const std::string& rows) {
   int n = 0;
@@ -132,10 +159,13 @@ int timed_variants(const std::string& rows) {
   return n;
 }
 
-// `flexfarm run mc_small.yaml --out OUT --threads 1` in the background, started directly (no shell in
-// between) so that the pid is flexfarm's own; its output goes to `log`. -1 when fork fails.
-pid_t start_run(const fs::path& out, const std::string& log) {
-  const std::vector<std::string> argv = {kBinary, "run", kStudy, "--out", out.string(), "--threads", "1"};
+// `flexfarm run STUDY --out OUT ARGS` (by default mc_small.yaml, --threads 1) in the background,
+// started directly (no shell in between) so that the pid is flexfarm's own; its output goes to `log`.
+// -1 when fork fails.
+pid_t start_run(const fs::path& out, const std::string& log, const std::string& study = kStudy,
+                const std::vector<std::string>& args = {"--threads", "1"}) {
+  std::vector<std::string> argv = {kBinary, "run", study, "--out", out.string()};
+  argv.insert(argv.end(), args.begin(), args.end());
   std::vector<char*> cargv;
   for (const auto& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
   cargv.push_back(nullptr);
@@ -273,6 +303,22 @@ class Farm : public ::testing::Test {
         << what << ": results.sqlite dump differs; " << first_difference(r.tables.sqlite, t.sqlite);
   }
 
+  // A study of many cheap variants in `dir` (two segments, a 0.3 s move), so that its time is the
+  // farm's rather than the kernel's.
+  void write_cheap_study(const std::string& name, int samples) const {
+    write_text(dir / name, "name: many\n"
+                           "model: " + kModel + "\n"
+                           "set:\n"
+                           "  segments: 2\n"
+                           "  trajectory.moves: [{target: 0.5, hold: 0.3}]\n"
+                           "variables:\n"
+                           "  - path: payload.mass\n"
+                           "    distribution: {type: normal, mean: 328.7, std: 40}\n"
+                           "  - path: joints.stiffness\n"
+                           "    distribution: {type: normal, mean: 39.5e3, std: 2.0e3}\n"
+                           "design: {type: monte_carlo, samples: " + std::to_string(samples) + "}\n");
+  }
+
   // A small study in `dir` (absolute model path): `samples` Monte Carlo variants of the payload mass.
   void write_small_study(const std::string& name, int seed = 3, int samples = 24,
                          const std::string& model = kModel) const {
@@ -372,6 +418,139 @@ TEST_F(Farm, ResumeAfterKill9IsByteIdentical) {
   std::printf("killed after %.2f s with %d of %d variants journalled; resume: %.1f s\n", killed_after, done, n, r.seconds);
 }
 
+
+// kill -9 at random moments of one study, resumed after each: in the end no variant is lost or
+// computed twice and results.csv is byte-identical to an uninterrupted run. In ctest: 3 kills of a
+// 300-variant study; the figure in docs/validation.md: FLEXFARM_KILLS=20 FLEXFARM_KILL_VARIANTS=10000.
+TEST_F(Farm, KilledAtRandomMomentsAndResumedLosesAndRepeatsNothing) {
+  const auto env = [](const char* name, int fallback) { return std::getenv(name) ? std::atoi(std::getenv(name)) : fallback; };
+  const int kills = env("FLEXFARM_KILLS", 3), n = env("FLEXFARM_KILL_VARIANTS", 300);
+  write_cheap_study("many.yaml", n);
+  const std::string study = (dir / "many.yaml").string();
+  const auto ref = flexfarm("run many.yaml --out ref --threads 2");
+  ASSERT_EQ(ref.exit_code, 0) << ref.output;
+  const std::string uninterrupted = read_text(dir / "ref" / "results.csv");
+
+  // Each attempt is killed after a random share of the uninterrupted run's time, so that kills land
+  // while the study loads, while batches run, and while rows are written.
+  std::mt19937_64 rng(20261202);
+  std::uniform_real_distribution<double> share(0.1, 1.0);
+  const fs::path out = dir / "out";
+  int mid_run = 0;
+  std::string rows_at_kill;  // journal rows after each attempt
+  for (int k = 0; k < kills; ++k) {
+    const std::string log = (dir / ("attempt-" + std::to_string(k) + ".txt")).string();
+    std::vector<std::string> args = {"--threads", "2"};
+    if (k > 0) args.push_back("--resume");
+    const pid_t pid = start_run(out, log, study, args);
+    ASSERT_GE(pid, 0) << "fork failed";
+    std::this_thread::sleep_for(std::chrono::duration<double>(share(rng) * ref.seconds));
+    int status = 0;
+    const bool ended = ::waitpid(pid, &status, WNOHANG) == pid;
+    if (!ended) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      ++mid_run;
+    } else {
+      ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "attempt " << k << ": status " << status << "\n" << read_text(log);
+    }
+    rows_at_kill += (k ? " " : "") + std::to_string(read_journal(out / "journal-main.csv").ids.size());
+  }
+  const auto last = flexfarm("run many.yaml --out out --resume --threads 2");
+  ASSERT_EQ(last.exit_code, 0) << last.output;
+  const std::string resumed = read_text(out / "results.csv");
+  EXPECT_EQ(fingerprint(resumed), fingerprint(uninterrupted)) << first_difference(uninterrupted, resumed);
+  const Journal journal = read_journal(out / "journal-main.csv");
+  const std::set<int> unique(journal.ids.begin(), journal.ids.end());
+  EXPECT_EQ(unique.size(), journal.ids.size()) << "a variant was journalled twice";
+  EXPECT_EQ(static_cast<int>(unique.size()), n) << "a variant was lost";
+  EXPECT_GE(mid_run, (kills + 1) / 2) << "most kills must land mid-run for the test to mean anything";
+  std::printf("%d variants, uninterrupted %.1f s; %d kills (%d mid-run; rows journalled after each: %s), the final resume %.1f s: "
+              "%zu lost, %zu duplicated, results.csv %s\n",
+              n, ref.seconds, kills, mid_run, rows_at_kill.c_str(), last.seconds, n - unique.size(), journal.ids.size() - unique.size(),
+              resumed == uninterrupted ? "byte-identical" : "DIFFERENT");
+}
+
+// The disk fills mid-run (a 48 KiB tmpfs as --out): one clear error naming the journal and the
+// system's reason, the journal whole up to its last row, nothing half-written; once space is freed
+// (the tmpfs grown), --resume completes and results.csv is byte-identical to an uninterrupted run.
+TEST_F(Farm, DiskFullMidRunKeepsTheJournalWholeAndResumeCompletes) {
+  const int n = 300;
+  write_small_study("small.yaml", 3, n);
+  const auto ref = flexfarm("run small.yaml --out ref --threads 2");
+  ASSERT_EQ(ref.exit_code, 0) << ref.output;
+  const fs::path disk = dir / "disk";
+  fs::create_directories(disk);
+  if (std::system(("mount -t tmpfs -o size=48k tmpfs " + quote(disk.string()) + " 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (needs root): the full-disk test did not run";
+  struct Unmount {
+    std::string path;
+    ~Unmount() { std::system(("umount " + path).c_str()); }
+  } unmount{quote(disk.string())};
+
+  const auto full = flexfarm("run small.yaml --out disk/out --threads 2");
+  EXPECT_NE(full.exit_code, 0) << full.output;
+  EXPECT_NE(full.output.find("journal-main.csv: cannot write the journal: No space left on device"), std::string::npos)
+      << full.output;
+  const fs::path journal = disk / "out" / "journal-main.csv";
+  const std::string text = read_text(journal);
+  const Journal whole = read_journal(journal);
+  EXPECT_EQ(whole.complete, text) << "the journal must end on a whole row";
+  EXPECT_GT(whole.ids.size(), 0u);
+  EXPECT_LT(static_cast<int>(whole.ids.size()), n) << "the disk must fill before the study ends for the test to mean anything";
+  EXPECT_FALSE(fs::exists(disk / "out" / "results.csv"));
+  for (const auto& e : fs::directory_iterator(disk / "out")) EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+
+  ASSERT_EQ(std::system(("mount -o remount,size=32m " + quote(disk.string())).c_str()), 0);
+  const auto resumed = flexfarm("run small.yaml --out disk/out --threads 2 --resume");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const std::string a = read_text(dir / "ref" / "results.csv"), b = read_text(disk / "out" / "results.csv");
+  EXPECT_EQ(fingerprint(b), fingerprint(a)) << first_difference(a, b);
+  std::printf("disk full after %zu of %d rows; resumed to all %d, results.csv %s\n", whole.ids.size(), n, n,
+              a == b ? "byte-identical" : "DIFFERENT");
+}
+
+// One MPI rank killed mid-run: the run stops with a message naming the rank; --resume with another
+// rank count completes it, and results.csv is byte-identical to a single process's.
+TEST_F(Farm, MpiRankKilledMidRunStopsNamingItAndResumeWithOtherRanksCompletes) {
+  if (!on_path("mpirun")) GTEST_SKIP() << "mpirun is not on PATH: install OpenMPI (Debian openmpi-bin; CI has it)";
+  const int n = 600;
+  write_cheap_study("many.yaml", n);
+  const auto ref = flexfarm("run many.yaml --out ref --threads 2");
+  ASSERT_EQ(ref.exit_code, 0) << ref.output;
+  const std::string log = (dir / "mpirun.txt").string();
+  const pid_t launcher = ::fork();
+  if (launcher == 0) {
+    const std::string cmd = "cd " + quote(dir.string()) + " && exec env " + mpirun(2) + quote(kBinary) +
+                            " run many.yaml --out out --threads 1 > " + quote(log) + " 2>&1";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ASSERT_GE(launcher, 0) << "fork failed";
+  int status = 0;
+  std::size_t seen = 0;
+  const fs::path journal1 = dir / "out" / "journal-rank-1-of-2.csv";
+  ASSERT_FALSE(wait_for_rows(launcher, journal1, 20, &status, &seen)) << "mpirun ended first:\n" << read_text(log);
+  const pid_t rank1 = find_process("OMPI_COMM_WORLD_RANK=1", dir);
+  ASSERT_GT(rank1, 0) << "rank 1 not found among the processes";
+  ::kill(rank1, SIGKILL);
+  ::waitpid(launcher, &status, 0);
+  const std::string said = read_text(log);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0) << "status " << status << "\n" << said;
+  EXPECT_NE(said.find("rank 1"), std::string::npos) << said;
+  EXPECT_FALSE(fs::exists(dir / "out" / "results.csv"));
+  const int before = static_cast<int>(read_journal(journal1).ids.size() +
+                                      read_journal(dir / "out" / "journal-rank-0-of-2.csv").ids.size());
+  ASSERT_LT(before, n) << "the kill came after the study had ended";
+
+  const auto resumed = shell(dir, mpirun(3) + quote(kBinary) + " run many.yaml --out out --threads 1 --resume", dir / "resume.txt");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const std::string a = read_text(dir / "ref" / "results.csv"), b = read_text(dir / "out" / "results.csv");
+  EXPECT_EQ(fingerprint(b), fingerprint(a)) << first_difference(a, b);
+  std::printf("rank 1 of 2 killed with %d of %d rows journalled; mpirun said: %s; resumed on 3 ranks: results.csv %s\n", before, n,
+              said.substr(said.find("rank 1") == std::string::npos ? 0 : said.rfind('\n', said.find("rank 1")) + 1, 160).c_str(),
+              a == b ? "byte-identical" : "DIFFERENT");
+}
 
 TEST_F(Farm, TornJournalIsRepairedOnResumeAndTheUserIsTold) {
   const int n = 24;
@@ -546,16 +725,7 @@ TEST_F(Farm, MpiTwoRanksMatchOneProcess) {
   if (!on_path("mpirun"))
     GTEST_SKIP() << "mpirun is not on PATH: install OpenMPI (Debian openmpi-bin, as scripts/bootstrap does; CI has it)";
   ref();
-  // As root in a container: OpenMPI refuses root unless told twice (--allow-run-as-root and the two
-  // OMPI_ALLOW_RUN_AS_ROOT* variables; harmless for other users). --oversubscribe: two ranks even on
-  // a one-core runner (OpenMPI counts cores as slots and refuses -np above them). --mca btl
-  // self,vader: shared memory only, no probing of the container's network interfaces; the vader
-  // single-copy mechanism (CMA, process_vm_readv) needs ptrace rights containers often lack, so it
-  // is turned off. `timeout`: a rank stuck in a barrier must not hang the test suite.
-  const std::string mpirun =
-      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout 300 mpirun -np 2 --oversubscribe "
-      "--allow-run-as-root --mca btl self,vader --mca btl_vader_single_copy_mechanism none ";
-  const auto r = shell(dir, mpirun + quote(kBinary) + " run " + quote(kStudy) + " --out out --threads 1", dir / "mpirun.txt");
+  const auto r = shell(dir, mpirun(2) + quote(kBinary) + " run " + quote(kStudy) + " --out out --threads 1", dir / "mpirun.txt");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const int n = study_size();
   for (int rank = 0; rank < 2; ++rank) {
@@ -633,6 +803,46 @@ TEST_F(FarmDiverging, DivergedVariantHasNoSettlingTime) {
   ASSERT_EQ(cell(2, "status"), "nonfinite");
   for (const std::string name : {"m1_tip_settling_s", "m1_hub_settling_s"})
     EXPECT_EQ(cell(2, name), "") << name << " of the diverged run; its row: " << split_lines(read_text(dir / "out" / "results.csv"))[2];
+}
+
+// Monte Carlo draws from a distribution's tail that the model rejects (a negative stiffness or
+// mass): each such variant has its row with the status `invalid` and no metrics, every other
+// variant runs, and the exit code and message say so, naming the first and why.
+TEST_F(Farm, DrawsTheModelRejectsAreInvalidRowsAndTheStudyFinishes) {
+  write_text(dir / "tails.yaml", "name: tails\n"
+                                 "model: " + kModel + "\n"
+                                 "set:\n"
+                                 "  trajectory.moves: [{target: 0.5, hold: 3.0}]\n"
+                                 "variables:\n"
+                                 "  - path: joints.stiffness\n"
+                                 "    distribution: {type: normal, mean: 39.5e3, std: 4.0e4}\n"
+                                 "  - path: payload.mass\n"
+                                 "    distribution: {type: normal, mean: 328.7, std: 400}\n"
+                                 "design: {type: monte_carlo, samples: 16}\n");
+  const Result r = flexfarm("run tails.yaml --out out");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  const auto lines = split_lines(read_text(dir / "out" / "results.csv"));
+  ASSERT_EQ(lines.size(), 17u) << r.output;
+  const auto head = split_csv(lines[0]);
+  const auto col = [&](const std::string& name) { return std::find(head.begin(), head.end(), name) - head.begin(); };
+  int invalid = 0, first = -1;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const auto row = split_csv(lines[i]);
+    // The model's own rules, applied here to the drawn values: stiffness > 0, mass >= 0.
+    const bool rejected = std::stod(row[col("joints.stiffness")]) <= 0 || std::stod(row[col("payload.mass")]) < 0;
+    EXPECT_EQ(row[col("status")] == "invalid", rejected) << lines[i];
+    if (rejected) {
+      EXPECT_EQ(row[col("m1_peak_torque_Nm")], "") << "an invalid variant has no metrics: " << lines[i];
+      if (first < 0) first = static_cast<int>(i - 1);
+      ++invalid;
+    } else {
+      EXPECT_NE(row[col("m1_peak_torque_Nm")], "") << lines[i];
+    }
+  }
+  ASSERT_GT(invalid, 0) << "seed 1 draws six rejected variants of 16; without one this test means nothing";
+  EXPECT_NE(r.output.find(std::to_string(invalid) + " variant(s) invalid"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the first, eval_id " + std::to_string(first) + ": "), std::string::npos) << r.output;
+  EXPECT_NE(read_text(dir / "out" / "table.md").find(std::to_string(invalid) + " invalid"), std::string::npos);
 }
 
 // ---- rejected studies: exit 2, one line naming the file, line and key, nothing written -----

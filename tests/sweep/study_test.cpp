@@ -64,14 +64,16 @@ TEST(PaperStudy, LoadsFourVariantsWithLabelsAndIds) {
   for (int i = 0; i < 4; ++i) {
     EXPECT_EQ(st.variants[i].eval_id, i);
     EXPECT_EQ(st.variants[i].label, labels[i]);
-    ASSERT_EQ(st.variants[i].set.size(), 2u);
-    EXPECT_EQ(st.variants[i].set[0].path, "trajectory.moves[0].target");
-    EXPECT_EQ(st.variants[i].set[0].key, "runs[" + std::to_string(i) + "].set.trajectory.moves[0].target");
-    EXPECT_EQ(st.variants[i].set[1].path, "notch.enabled");
+    const auto set = ff::make_variant_set(st, st.variants[i]);
+    ASSERT_EQ(set.size(), st.set.size() + 2u);
+    const ff::Assignment* own = &set[st.set.size()];  // the run's own overrides follow the study's
+    EXPECT_EQ(own[0].path, "trajectory.moves[0].target");
+    EXPECT_EQ(own[0].key, "runs[" + std::to_string(i) + "].set.trajectory.moves[0].target");
+    EXPECT_EQ(own[1].path, "notch.enabled");
   }
   // Line numbers of the set entries in the study file: runs start at line 14, four lines each.
-  EXPECT_EQ(st.variants[0].set[0].line, 16);
-  EXPECT_EQ(st.variants[1].set[1].line, 21);
+  EXPECT_EQ(ff::make_variant_set(st, st.variants[0])[st.set.size()].line, 16);
+  EXPECT_EQ(ff::make_variant_set(st, st.variants[1])[st.set.size() + 1].line, 21);
 }
 
 TEST(PaperStudy, VariantOneHasTheNotchAtTheClosedLoopResonances) {
@@ -353,3 +355,51 @@ TEST_F(StudyFiles, NegativeMassInStudyWideSetNamesTheStudyLine) {
 }
 
 }  // namespace
+
+// ---- drawn values: a distribution's tail is a result, the nominal point is the file's ----------
+
+// A normal stiffness of mean 39.5e3 and std 4e4 draws negative values about 16 % of the time: the
+// study still loads (those variants run as `invalid`), and its nominal model has the medians.
+TEST_F(StudyFiles, DrawsTheModelRejectsDoNotStopTheLoad) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\nvariables:\n"
+                                        "  - path: joints.stiffness\n"
+                                        "    distribution: {type: normal, mean: 39.5e3, std: 4.0e4}\n"
+                                        "  - path: segments\n"
+                                        "    integer: true\n"
+                                        "    distribution: {type: uniform, lower: 3.2, upper: 8.0}\n"
+                                        "design: {type: monte_carlo, samples: 64}\n");
+  const ff::Study st = ff::load_study(path);
+  ASSERT_EQ(st.variants.size(), 64u);
+  EXPECT_TRUE(st.drawn);
+  int negative = 0;
+  for (const auto& v : st.variants) negative += v.params[0] <= 0;
+  EXPECT_GT(negative, 0) << "the draw must reach the rejected tail for this test to mean anything";
+  EXPECT_DOUBLE_EQ(st.nominal.spec.joints.stiffness, 39.5e3);  // the normal's median
+  EXPECT_EQ(st.nominal.spec.segments, 6);                      // uniform median 5.6, rounded
+  for (const auto& v : st.variants)
+    if (v.params[0] <= 0) EXPECT_THROW(ff::make_variant_model(st, v), ff::ConfigError) << v.label;
+}
+
+TEST_F(StudyFiles, ARejectedNominalPointIsAnErrorOfTheFile) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\nvariables:\n"
+                                        "  - path: joints.stiffness\n"
+                                        "    distribution: {type: normal, mean: -1.0e3, std: 4.0e4}\n"
+                                        "design: {type: monte_carlo, samples: 8}\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.message().find("nominal point"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, ARejectedGridLevelIsAnErrorOfTheFile) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\nvariables:\n"
+                                        "  - path: payload.mass\n"
+                                        "    levels: [300, -5, 400]\n"
+                                        "design: {type: grid}\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.message().find(">= 0"), std::string::npos) << e.what();
+}
