@@ -768,7 +768,11 @@ class FarmDiverging : public Farm {
                                    "      simulation.substeps: 1\n"
                                    "  - label: stable after\n"
                                    "    set:\n"
-                                   "      controller.kd: 3.5e4\n");
+                                   "      controller.kd: 3.5e4\n"
+                                   "  - label: CVODE fails\n"
+                                   "    set:\n"
+                                   "      controller.kp: 1.0e12\n"
+                                   "      simulation.integrator: cvode_dense\n");
     result = flexfarm("run study.yaml --out out");
     for (const auto& l : split_lines(read_text(dir / "out" / "results.csv"))) rows.push_back(split_csv(l));
     if (!rows.empty())
@@ -783,15 +787,17 @@ class FarmDiverging : public Farm {
 
 TEST_F(FarmDiverging, DivergingVariantIsRecordedAndExitCodeSaysSo) {
   EXPECT_EQ(result.exit_code, 3) << result.output;
-  EXPECT_NE(result.output.find("flexfarm: error: 1 variant(s) failed"), std::string::npos) << result.output;
-  ASSERT_EQ(rows.size(), 4u) << "every run has its row, the one after the diverging one too:\n" << result.output;
+  EXPECT_NE(result.output.find("flexfarm: error: 2 variant(s) failed"), std::string::npos) << result.output;
+  ASSERT_EQ(rows.size(), 5u) << "every run has its row, the one after the diverging one too:\n" << result.output;
   EXPECT_EQ(cell(2, "label"), "diverging");
   EXPECT_EQ(cell(2, "status"), "nonfinite");
+  EXPECT_EQ(cell(4, "label"), "CVODE fails");
+  EXPECT_EQ(cell(4, "status"), "solver_fail");
   for (std::size_t row : {1u, 3u}) {
     const std::string st = cell(row, "status");
     EXPECT_TRUE(st == "ok" || st == "not_settled") << "row " << row << " (" << cell(row, "label") << "): " << st;
   }
-  EXPECT_EQ(static_cast<int>(read_journal(dir / "out" / "journal-main.csv").ids.size()), 3);
+  EXPECT_EQ(static_cast<int>(read_journal(dir / "out" / "journal-main.csv").ids.size()), 4);
   EXPECT_TRUE(fs::exists(dir / "out" / "results.sqlite"));
   EXPECT_TRUE(fs::exists(dir / "out" / "table.md"));
 }
@@ -799,7 +805,7 @@ TEST_F(FarmDiverging, DivergingVariantIsRecordedAndExitCodeSaysSo) {
 // A run whose state became NaN never settled: its settling cells must be empty ("not settled"),
 // not 0 s, which reads as the best possible result and enters every statistic of the column.
 TEST_F(FarmDiverging, DivergedVariantHasNoSettlingTime) {
-  ASSERT_EQ(rows.size(), 4u) << result.output;
+  ASSERT_EQ(rows.size(), 5u) << result.output;
   ASSERT_EQ(cell(2, "status"), "nonfinite");
   for (const std::string name : {"m1_tip_settling_s", "m1_hub_settling_s"})
     EXPECT_EQ(cell(2, name), "") << name << " of the diverged run; its row: " << split_lines(read_text(dir / "out" / "results.csv"))[2];
