@@ -14,7 +14,10 @@ double Mode::frequency_hz() const { return omega_n / (2.0 * std::numbers::pi); }
 Eigen::MatrixXd calc_mass_matrix(const Model& m, const Eigen::VectorXd& q) {
   const int n = m.nseg;
   // Composite inertias, tip to root: IC_parent += X^T IC X (planar spatial inertia, body frames).
-  std::vector<Eigen::Matrix3d> ic(n), x(n);
+  // Scratch kept per thread: the replay calls this at every stage of every step.
+  thread_local std::vector<Eigen::Matrix3d> ic, x;
+  ic.resize(n);
+  x.resize(n);
   for (int i = 0; i < n; ++i) {
     const auto& b = m.body[i];
     ic[i] << b.inertia, 0, b.first, 0, b.mass, 0, b.first, 0, b.mass;

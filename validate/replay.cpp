@@ -146,24 +146,29 @@ Prediction inverse_dynamics(const Model& model, const Record& r) {
   std::vector<double> z(st.z), zdot(nz), zero_tau(1, 0.0);
   q(0) = theta[0];
   v(0) = omega[0];
-  // Beam accelerations and the hub torque at (q, v, z) with hub acceleration a0.
+  // Beam accelerations and the hub torque at (q, v, z) with hub acceleration a0. Buffers are kept
+  // across calls: this runs four times per substep of every sample.
+  Eigen::MatrixXd M(n, n);
+  Eigen::VectorXd rr(n), rhs(std::max(n - 1, 0));
+  Eigen::LDLT<Eigen::MatrixXd> beam(std::max(n - 1, 0));
   auto hybrid = [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv, const double* zz, double a0,
                     Eigen::VectorXd& acc, double* zd) {
     compute_acceleration(bm, qq.data(), vv.data(), zz, zero_tau.data(), qdd.data(), zd, ws);
-    const Eigen::MatrixXd M = calc_mass_matrix(m, qq);
-    const Eigen::VectorXd rr = M * qdd;
+    M = calc_mass_matrix(m, qq);
+    rr.noalias() = M * qdd;
     acc.resize(n);
     acc(0) = a0;
     if (n > 1) {
-      const Eigen::VectorXd rhs = rr.tail(n - 1) - M.block(1, 0, n - 1, 1) * a0;
-      acc.tail(n - 1) = M.bottomRightCorner(n - 1, n - 1).ldlt().solve(rhs);
+      rhs = rr.tail(n - 1) - M.block(1, 0, n - 1, 1) * a0;
+      beam.compute(M.bottomRightCorner(n - 1, n - 1));
+      acc.tail(n - 1) = beam.solve(rhs);
     }
-    return (M.row(0) * acc)(0) - rr(0);
+    return M.row(0).dot(acc) - rr(0);
   };
   Trace tr;
   const int sub = std::max(1, m.substeps);
   const double h = T / sub;
-  Eigen::VectorXd a1, a2, a3, a4;
+  Eigen::VectorXd a1(n), a2(n), a3(n), a4(n), v1(n), v2(n), v3(n), v4(n), qs(n), vs(n);
   std::vector<double> k1(nz), k2(nz), k3(nz), k4(nz), zs(nz);
   for (long k = 0; k < ns; ++k) {
     q(0) = theta[k];
@@ -180,20 +185,24 @@ Prediction inverse_dynamics(const Model& model, const Record& r) {
     for (int j = 0; j < sub; ++j) {
       const double u0 = static_cast<double>(j) / sub, u1 = (j + 0.5) / sub, u2 = (j + 1.0) / sub;
       auto a_at = [&](double u) { return alpha[k] + u * (alpha[k + 1] - alpha[k]); };
-      auto stage = [&](const Eigen::VectorXd& dq, const Eigen::VectorXd& dv, const std::vector<double>& dz, double c,
+      // One stage at (q + c dq, v + c dv, z + c dz); the first (c = 0) at the state itself.
+      auto stage = [&](const Eigen::VectorXd* dq, const Eigen::VectorXd* dv, const std::vector<double>* dz, double c,
                        double u, Eigen::VectorXd& acc, std::vector<double>& kz, Eigen::VectorXd& qv) {
-        Eigen::VectorXd qs = q + c * dq, vs = v + c * dv;
-        for (int i = 0; i < nz; ++i) zs[i] = z[i] + c * dz[i];
+        qs = q;
+        vs = v;
+        for (int i = 0; i < nz; ++i) zs[i] = z[i];
+        if (dq) {
+          qs += c * *dq;
+          vs += c * *dv;
+          for (int i = 0; i < nz; ++i) zs[i] += c * (*dz)[i];
+        }
         hybrid(qs, vs, zs.data(), a_at(u), acc, kz.data());
         qv = vs;
       };
-      Eigen::VectorXd v1, v2, v3, v4;
-      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
-      const std::vector<double> zz(nz, 0.0);
-      stage(zero, zero, zz, 0.0, u0, a1, k1, v1);
-      stage(v1, a1, k1, 0.5 * h, u1, a2, k2, v2);
-      stage(v2, a2, k2, 0.5 * h, u1, a3, k3, v3);
-      stage(v3, a3, k3, h, u2, a4, k4, v4);
+      stage(nullptr, nullptr, nullptr, 0.0, u0, a1, k1, v1);
+      stage(&v1, &a1, &k1, 0.5 * h, u1, a2, k2, v2);
+      stage(&v2, &a2, &k2, 0.5 * h, u1, a3, k3, v3);
+      stage(&v3, &a3, &k3, h, u2, a4, k4, v4);
       q += h / 6.0 * (v1 + 2.0 * v2 + 2.0 * v3 + v4);
       v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
       for (int i = 0; i < nz; ++i) z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
