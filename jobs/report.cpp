@@ -57,12 +57,6 @@ namespace {
 const std::vector<std::string> kKeyMetrics = {"m1_tip_settling_s", "m1_tip_overshoot_pct", "m1_peak_tip_deflection_m",
                                               "m1_residual_vibration_m", "m1_peak_torque_Nm"};
 
-std::string file_safe(const std::string& s) {
-  std::string out;
-  for (char c : s) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return out;
-}
-
 // Grid and centred designs: settling time over the first two parameters, and against each.
 std::string report_grid(const Study& study, const ResultTable& t, const std::string& dir) {
   const auto& p = t.params;
@@ -112,7 +106,7 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
       series.hi.push_back(s.p95);
     }
     b.series.push_back(series);
-    render_band_plot(b, dir + "/settling_vs_" + file_safe(name) + ".png");
+    render_band_plot(b, dir + "/settling_vs_" + make_file_stem(name) + ".png");
   }
   return md;
 }
@@ -191,7 +185,7 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
     if (any_unsettled) plot.hlines.push_back({unsettled_line, "x above: not settled", true});
     md += "\n";
     std::string file = metric;
-    render_line_plot(plot, dir + "/cases_" + file_safe(file) + ".png");
+    render_line_plot(plot, dir + "/cases_" + make_file_stem(file) + ".png");
   }
   md += "\"-\": not settled within the run. Plots: cases_<metric>.png.\n";
   return md;

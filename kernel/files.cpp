@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -28,6 +29,12 @@ void write_file_atomic(const std::string& path, const std::string& text) {
   }
   std::filesystem::rename(tmp, path, ec);
   if (ec) fail("cannot rename into place: " + ec.message());
+}
+
+std::string make_file_stem(const std::string& name) {
+  std::string out;
+  for (char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
+  return out;
 }
 
 void make_directories(const std::string& path) {

@@ -8,6 +8,10 @@ namespace ff {
 // Writes `text` to `path` atomically. Throws std::runtime_error naming the path on failure.
 void write_file_atomic(const std::string& path, const std::string& text);
 
+// A file name made from a name read from an input (a parameter path, a case label, a channel):
+// letters, digits, '_' and '-' kept, anything else '_', so it cannot leave its directory.
+std::string make_file_stem(const std::string& name);
+
 // Creates a directory and its parents. Throws std::runtime_error naming the path on failure.
 void make_directories(const std::string& path);
 

@@ -89,12 +89,6 @@ std::string json_failure(const ResidualAnalysis& a, const ResidualOptions& o) {
 
 // ---------------------------------------------------------------- plots
 
-std::string file_safe(const std::string& s) {
-  std::string o;
-  for (char c : s) o += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
-  return o;
-}
-
 std::vector<double> lags_of(const Correlation& c) { return {c.lag.begin(), c.lag.end()}; }
 
 void plot_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path) {
@@ -365,7 +359,7 @@ std::vector<std::string> write_compare_report(const CompareResult& r, const std:
   write_file_atomic(put("report.md"), format_compare_report(r));
   write_file_atomic(put("compare.json"), format_compare_json(r));
   for (const auto& c : r.channels) {
-    const std::string ch = file_safe(c.name);
+    const std::string ch = make_file_stem(c.name);
     plot_overlay(r, c, put("overlay_" + ch + ".png"));
     if (!c.free_analysis.valid && !c.k_analysis.valid) continue;
     plot_correlation(c, false, r.input, put("acf_" + ch + ".png"));
@@ -373,7 +367,7 @@ std::vector<std::string> write_compare_report(const CompareResult& r, const std:
     plot_spectrum(c, put("spectrum_" + ch + ".png"));
     const auto& a = c.free_analysis.valid ? c.free_analysis : c.k_analysis;
     for (std::size_t i = 0; i < a.binned.size(); ++i)
-      plot_binned(c, i, put("binned_" + ch + "_" + file_safe(a.binned[i].state) + ".png"));
+      plot_binned(c, i, put("binned_" + ch + "_" + make_file_stem(a.binned[i].state) + ".png"));
   }
   return files;
 }

@@ -851,6 +851,35 @@ TEST_F(Farm, DrawsTheModelRejectsAreInvalidRowsAndTheStudyFinishes) {
   EXPECT_NE(read_text(dir / "out" / "table.md").find(std::to_string(invalid) + " invalid"), std::string::npos);
 }
 
+// Names a study file chooses (parameter paths, case labels, labels) become file names only through
+// make_file_stem: a run writes nothing outside --out, whatever they say.
+TEST_F(Farm, HostileNamesInAStudyWriteNothingOutsideOut) {
+  const std::string absolute = "/tmp/ff_hostile_" + std::to_string(::getpid());
+  write_text(dir / "hostile.yaml", "name: ../../hostile\n"
+                                   "model: " + kModel + "\n"
+                                   "set:\n"
+                                   "  trajectory.moves: [{target: 0.5, hold: 3.0}]\n"
+                                   "cases:\n"
+                                   "  - label: ../../outside\n"
+                                   "  - label: " + absolute + "\n"
+                                   "variables:\n"
+                                   "  - path: trajectory.moves[0].target\n"
+                                   "    levels: [0.3, 0.5]\n"
+                                   "design: {type: grid}\n");
+  const auto r = flexfarm("run hostile.yaml --out out");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    const fs::path rel = fs::relative(e.path(), dir);
+    const bool ours = *rel.begin() == "out" || rel == "hostile.yaml" || rel.string().rfind("log-", 0) == 0;
+    EXPECT_TRUE(ours) << "written outside --out: " << e.path();
+  }
+  EXPECT_TRUE(fs::exists(dir / "out" / "cases_m1_tip_settling_s.png"));
+  for (const auto& e : fs::directory_iterator(dir.parent_path()))
+    EXPECT_EQ(e.path().filename().string().find("outside"), std::string::npos) << e.path();
+  for (const auto& e : fs::directory_iterator("/tmp"))
+    EXPECT_NE(e.path().string().rfind(absolute, 0), 0u) << e.path();
+}
+
 // ---- rejected studies: exit 2, one line naming the file, line and key, nothing written -----
 
 TEST_F(Farm, BadStudyWritesNothing) {
