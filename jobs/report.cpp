@@ -63,11 +63,27 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   std::string md = "## Tip settling time by " + p[0] + (p.size() > 1 ? " and " + p[1] : "") + "\n\n";
   md += format_groupby_md(t, std::vector<std::string>(p.begin(), p.begin() + std::min<std::size_t>(2, p.size())),
                           {"m1_tip_settling_s", "m1_tip_overshoot_pct"}, study.specs);
+  // Settling times are right-censored (not settled: known only to exceed the run's horizon), so each
+  // cell and group is summarised by calc_summary(values, horizons): the restricted mean, Kaplan-Meier
+  // percentiles, and a percentile above the horizon drawn at the horizon (a lower bound).
   const auto settle = column_values(t, "m1_tip_settling_s");
+  const auto horizon = horizon_values(t, "m1_tip_settling_s");
+  const auto summary_of = [&](const std::vector<int>& rows) {
+    std::vector<double> v, hz;
+    for (int r : rows) {
+      v.push_back(settle[r]);
+      if (!horizon.empty()) hz.push_back(horizon[r]);
+    }
+    return calc_summary(v, hz);
+  };
+  const auto at_most_horizon = [](double x, const Summary& s) { return std::isinf(x) ? s.horizon : x; };
+  bool censored = false;
+  for (std::size_t r = 0; r < settle.size() && !horizon.empty(); ++r) censored |= std::isnan(settle[r]) && !std::isnan(horizon[r]);
   if (p.size() >= 2) {
-    // Heat map: mean settling over the other parameters; NaN where no variant of the cell settled.
+    // Heat map: mean settling over the other parameters (restricted mean where some did not settle).
     HeatMap h;
-    h.title = "tip settling time (mean over the other parameters)";
+    h.title = censored ? "tip settling time (restricted mean over the other parameters; not settled counted at the horizon)"
+                       : "tip settling time (mean over the other parameters)";
     h.x_label = p[0];
     h.y_label = p[1];
     h.value_label = "tip settling time (s)";
@@ -80,11 +96,10 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
     std::sort(h.y.begin(), h.y.end());
     h.values.assign(h.x.size() * h.y.size(), NAN);
     for (const auto& g : groups) {
-      std::vector<double> v;
-      for (int r : g.rows) v.push_back(settle[r]);
       const auto ix = std::find(h.x.begin(), h.x.end(), g.key[0]) - h.x.begin();
       const auto iy = std::find(h.y.begin(), h.y.end(), g.key[1]) - h.y.begin();
-      h.values[iy * h.x.size() + ix] = calc_summary(v).mean;
+      const Summary s = summary_of(g.rows);
+      h.values[iy * h.x.size() + ix] = at_most_horizon(s.mean, s);
     }
     render_heat_map(h, dir + "/heatmap_settling.png");
   }
@@ -95,15 +110,14 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
     b.x_label = name;
     b.y_label = "tip settling time (s)";
     BandSeries series;
-    series.label = "p50, band p5-p95 over the other parameters";
+    series.label = censored ? "p50, band p5-p95 over the other parameters (Kaplan-Meier; above the horizon: at it)"
+                            : "p50, band p5-p95 over the other parameters";
     for (const auto& g : make_groups({column_values(t, name)})) {
-      std::vector<double> v;
-      for (int r : g.rows) v.push_back(settle[r]);
-      const Summary s = calc_summary(v);
+      const Summary s = summary_of(g.rows);
       series.x.push_back(g.key[0]);
-      series.mid.push_back(s.p50);
-      series.lo.push_back(s.p5);
-      series.hi.push_back(s.p95);
+      series.mid.push_back(at_most_horizon(s.p50, s));
+      series.lo.push_back(at_most_horizon(s.p5, s));
+      series.hi.push_back(at_most_horizon(s.p95, s));
     }
     b.series.push_back(series);
     render_band_plot(b, dir + "/settling_vs_" + make_file_stem(name) + ".png");

@@ -215,10 +215,35 @@ std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::s
   return out;
 }
 
+std::vector<double> calc_restricted_values(const ResultTable& t, const std::string& metric, double* tau) {
+  std::vector<double> v = column_values(t, metric);
+  const std::vector<double> h = horizon_values(t, metric);
+  *tau = kStatsNaN;
+  for (std::size_t i = 0; i < h.size(); ++i)
+    if (std::isnan(v[i]) && !std::isnan(h[i]) && !(h[i] >= *tau)) *tau = h[i];
+  if (std::isnan(*tau)) return v;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!std::isnan(v[i])) v[i] = std::min(v[i], *tau);
+    else if (!std::isnan(h[i])) v[i] = *tau;
+  return v;
+}
+
+namespace {
+// The response a sensitivity estimator sees, and its name in the table.
+std::pair<std::string, std::vector<double>> sensitivity_response(const ResultTable& t, const std::string& metric) {
+  double tau = kStatsNaN;
+  std::vector<double> v = calc_restricted_values(t, metric, &tau);
+  return {std::isnan(tau) ? metric : metric + " (restricted to " + num(tau, "%.3g") + " s)", std::move(v)};
+}
+}  // namespace
+
 std::map<std::string, SobolIndices> calc_sobol_for(const ResultTable& t, const std::vector<std::string>& metrics,
                                                    int nparams, std::uint64_t seed) {
   std::map<std::string, SobolIndices> out;
-  for (const auto& m : metrics) out[m] = calc_sobol_indices(column_values(t, m), nparams, 1000, seed);
+  for (const auto& m : metrics) {
+    auto [name, y] = sensitivity_response(t, m);
+    out[name] = calc_sobol_indices(y, nparams, 1000, seed);
+  }
   return out;
 }
 
@@ -235,7 +260,10 @@ std::map<std::string, MorrisIndices> calc_morris_for(const ResultTable& t, const
                                                      const std::vector<std::vector<double>>& x_unit) {
   std::map<std::string, MorrisIndices> out;
   const int d = x_unit.empty() ? 0 : static_cast<int>(x_unit[0].size());
-  for (const auto& m : metrics) out[m] = calc_morris_indices(x_unit, column_values(t, m), d);
+  for (const auto& m : metrics) {
+    auto [name, y] = sensitivity_response(t, m);
+    out[name] = calc_morris_indices(x_unit, y, d);
+  }
   return out;
 }
 

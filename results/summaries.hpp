@@ -50,12 +50,21 @@ std::string format_groupby_csv(const ResultTable& t, const std::vector<std::stri
 std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::string>& metrics,
                                   const std::map<std::string, double>& specs, std::uint64_t seed);
 
-// Sobol' first-order and total indices of each metric from a Saltelli design over `params`.
+// A censored metric as a restricted response min(T, tau) (Royston & Parmar 2013): tau is the smallest
+// horizon of the not-settled runs, so every run's restricted value is known exactly (a not-settled
+// run's is tau). Values past tau become tau; NaN without a horizon stays NaN (a diverged run). With
+// nothing censored, the values as they are and *tau = NaN.
+std::vector<double> calc_restricted_values(const ResultTable& t, const std::string& metric, double* tau);
+
+// Sobol' first-order and total indices of each metric from a Saltelli design over `params`. A
+// censored metric is taken as its restricted response (calc_restricted_values), keyed
+// "METRIC (restricted to TAU s)", so no base point is dropped for a run that did not settle.
 std::map<std::string, SobolIndices> calc_sobol_for(const ResultTable& t, const std::vector<std::string>& metrics,
                                                    int nparams, std::uint64_t seed);
 std::string format_sobol_md(const std::map<std::string, SobolIndices>& idx, const std::vector<std::string>& params);
 
-// Morris mu*, mu and sigma of each metric, given the design in the unit cube.
+// Morris mu*, mu and sigma of each metric, given the design in the unit cube; censored metrics as
+// for calc_sobol_for.
 std::map<std::string, MorrisIndices> calc_morris_for(const ResultTable& t, const std::vector<std::string>& metrics,
                                                      const std::vector<std::vector<double>>& x_unit);
 std::string format_morris_md(const std::map<std::string, MorrisIndices>& idx, const std::vector<std::string>& params);

@@ -92,3 +92,54 @@ TEST(Summaries, TableWithoutHorizonsCountsNotSettledAsMissing) {
 
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+
+// min(T, tau) with tau the smallest horizon of the not-settled runs: known for every run.
+TEST(Summaries, RestrictedResponseIsKnownForEveryRun) {
+  ResultTable t;
+  t.params = {"x"};
+  t.columns = {"m1_tip_settling_s", "m1_settling_horizon_s"};
+  const double settle[] = {1.0, kNaN, 7.5, kNaN, 3.0, kNaN};
+  const double horizon[] = {9.0, 5.0, 9.0, 6.0, 9.0, kNaN};  // the last: no horizon, a diverged run
+  for (int i = 0; i < 6; ++i) t.rows.push_back({i, 0, "", "", {0.0}, {settle[i], horizon[i]}});
+  double tau = 0;
+  const auto y = calc_restricted_values(t, "m1_tip_settling_s", &tau);
+  EXPECT_EQ(tau, 5.0);
+  const double want[] = {1.0, 5.0, 5.0, 5.0, 3.0};
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(y[i], want[i]) << i;
+  EXPECT_TRUE(std::isnan(y[5])) << "a run with no value and no horizon stays unknown";
+  // Nothing censored: the values themselves.
+  ResultTable u = t;
+  u.rows.resize(1);
+  EXPECT_EQ(calc_restricted_values(u, "m1_tip_settling_s", &tau), std::vector<double>{1.0});
+  EXPECT_TRUE(std::isnan(tau));
+}
+
+// Morris on a settling time T = 10 x0 that does not settle (horizon 5 s) where x0 > 0.5, and does
+// not depend on x1: the restricted response min(10 x0, 5) keeps every trajectory, so x0's mu* is its
+// known mean elementary effect over the grid and x1's is 0. Dropping the not-settled runs instead
+// would leave only the trajectories that never cross x0 = 0.5.
+TEST(Summaries, MorrisOfACensoredResponseUsesEveryRun) {
+  ResultTable t;
+  t.params = {"x0", "x1"};
+  t.columns = {"m1_tip_settling_s", "m1_settling_horizon_s"};
+  // Two trajectories on the p = 4 grid (Delta = 2/3): x0 moves 0 -> 2/3, then x1; and the reverse order.
+  const std::vector<std::vector<double>> x = {{0, 0}, {2.0 / 3, 0}, {2.0 / 3, 2.0 / 3},
+                                              {1.0 / 3, 0}, {1.0 / 3, 2.0 / 3}, {1, 2.0 / 3}};
+  for (int i = 0; i < 6; ++i) {
+    const double T = 10.0 * x[i][0];
+    t.rows.push_back({i, 0, "", "", x[i], {T > 5.0 ? kNaN : T, 5.0}});
+  }
+  const auto idx = calc_morris_for(t, {"m1_tip_settling_s"}, x);
+  ASSERT_EQ(idx.size(), 1u);
+  EXPECT_EQ(idx.begin()->first, "m1_tip_settling_s (restricted to 5 s)");
+  const MorrisIndices& m = idx.begin()->second;
+  // Elementary effects of x0: (min(20/3, 5) - 0) / (2/3) = 7.5 and (5 - 10/3) / (2/3) = 2.5.
+  EXPECT_NEAR(m.mu_star[0], 5.0, 1e-12);
+  EXPECT_NEAR(m.mu_star[1], 0.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace ff
