@@ -431,10 +431,13 @@ TEST_F(Farm, KilledAtRandomMomentsAndResumedLosesAndRepeatsNothing) {
   ASSERT_EQ(ref.exit_code, 0) << ref.output;
   const std::string uninterrupted = read_text(dir / "ref" / "results.csv");
 
-  // Each attempt is killed after a random share of the uninterrupted run's time, so that kills land
-  // while the study loads, while batches run, and while rows are written.
+  // Each attempt is killed after a random share of the time the work it has left would take (the
+  // time of a run with nothing left to compute, plus the uninterrupted run's time per variant), so
+  // that kills land while the study loads, while batches run, and while rows and results are
+  // written, until the last.
+  const double idle = flexfarm("run many.yaml --out ref --threads 2 --resume").seconds;
   std::mt19937_64 rng(20261202);
-  std::uniform_real_distribution<double> share(0.1, 1.0);
+  std::uniform_real_distribution<double> share(0.1, 0.9);
   const fs::path out = dir / "out";
   int mid_run = 0;
   std::string rows_at_kill;  // journal rows after each attempt
@@ -444,7 +447,8 @@ TEST_F(Farm, KilledAtRandomMomentsAndResumedLosesAndRepeatsNothing) {
     if (k > 0) args.push_back("--resume");
     const pid_t pid = start_run(out, log, study, args);
     ASSERT_GE(pid, 0) << "fork failed";
-    std::this_thread::sleep_for(std::chrono::duration<double>(share(rng) * ref.seconds));
+    const int left = n - static_cast<int>(read_journal(out / "journal-main.csv").ids.size());
+    std::this_thread::sleep_for(std::chrono::duration<double>(share(rng) * (idle + ref.seconds * left / n)));
     int status = 0;
     const bool ended = ::waitpid(pid, &status, WNOHANG) == pid;
     if (!ended) {
