@@ -45,9 +45,18 @@ struct Study {
   std::string hash;             // fingerprint of the study and model text: journals refuse another study's rows
 };
 
+// The most variants a study may have: the farm holds every variant's model (about 3 KB each).
+inline constexpr int kMaxStudyVariants = 1000000;
+
 // Loads and checks a study: every variant's model is built here (on all cores), so a bad value
 // fails before anything is written; the first bad variant by eval_id is the one reported.
 Study load_study(const std::string& path);
+
+// The two halves of load_study. read_study reads and checks the file and makes the variants (no
+// models yet); a study of more than `max_variants` variants is refused before its design is drawn.
+Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
+// Builds every variant's model (Study::models); the first bad variant by eval_id is the one reported.
+void build_models(Study& st);
 
 // The model of one variant. Errors in an overridden value name the study file, line and key.
 Model make_variant_model(const Study& study, const Variant& v);
