@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
 #include "kernel/errors.hpp"
 
@@ -139,39 +140,64 @@ void YamlReader::only(std::initializer_list<std::string> known) const {
 }
 
 namespace {
-void check_keys(const YAML::Node& n, const std::string& file, const std::string& path) {
-  if (n.IsSequence()) {
-    for (std::size_t i = 0; i < n.size(); ++i) check_keys(n[i], file, path + "[" + std::to_string(i) + "]");
-  } else if (n.IsMap()) {
-    std::map<std::string, int> seen;  // key -> line
-    for (const auto& kv : n) {
-      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "";
-      const std::string full = path.empty() ? key : path + "." + key;
-      if (const auto it = seen.find(key); it != seen.end())
-        throw ConfigError(file, line_of(kv.first), full,
-                          "written twice (lines " + std::to_string(it->second) + " and " + std::to_string(line_of(kv.first)) + ")");
-      seen.emplace(key, line_of(kv.first));
-      check_keys(kv.second, file, full);
+// Walks every map and list of a document: a key written twice, a key that is not a plain value, and an
+// alias inside the node it names (yaml-cpp makes `&a [*a]` a cycle) are errors. Aliases of aliases can
+// make a short file a huge tree: the walk stops past kMaxYamlNodes values.
+struct KeyCheck {
+  const std::string& file;
+  std::vector<YAML::Node> open;  // the maps and lists being walked, outermost first
+  long visited = 0;
+
+  void walk(const YAML::Node& n, const std::string& path) {
+    if (++visited > kMaxYamlNodes)
+      throw ConfigError(file, line_of(n), path,
+                        "the document holds more than " + std::to_string(kMaxYamlNodes) + " values (aliases of aliases?)");
+    if (!n.IsSequence() && !n.IsMap()) return;
+    for (const auto& o : open)
+      if (o.is(n)) throw ConfigError(file, line_of(n), path, "an alias inside the list or map it names (a cycle)");
+    open.push_back(n);
+    if (n.IsSequence()) {
+      for (std::size_t i = 0; i < n.size(); ++i) walk(n[i], path + "[" + std::to_string(i) + "]");
+    } else {
+      std::map<std::string, int> seen;  // key -> line
+      for (const auto& kv : n) {
+        if (!kv.first.IsScalar())
+          throw ConfigError(file, line_of(kv.first), path, "a key must be a plain name, not a list, a map or empty");
+        const std::string& key = kv.first.Scalar();
+        const std::string full = path.empty() ? key : path + "." + key;
+        if (const auto it = seen.find(key); it != seen.end())
+          throw ConfigError(file, line_of(kv.first), full,
+                            "written twice (lines " + std::to_string(it->second) + " and " + std::to_string(line_of(kv.first)) + ")");
+        seen.emplace(key, line_of(kv.first));
+        walk(kv.second, full);
+      }
     }
+    open.pop_back();
   }
-}
+};
 }  // namespace
 
 void check_unique_keys(const YAML::Node& doc, const std::string& file, const std::string& prefix) {
-  check_keys(doc, file, prefix);
+  KeyCheck{file, {}, 0}.walk(doc, prefix);
+}
+
+YAML::Node load_yaml_text(const std::string& text, const std::string& source) {
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source, e.mark.is_null() ? 0 : e.mark.line + 1, "", e.msg);
+  }
+  check_unique_keys(doc, source);
+  return doc;
 }
 
 YAML::Node load_yaml_file(const std::string& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path, 0, "", "cannot open file");
-  YAML::Node doc;
-  try {
-    doc = YAML::Load(in);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(path, e.mark.line + 1, "", e.msg);
-  }
-  check_unique_keys(doc, path);
-  return doc;
+  std::stringstream text;
+  text << in.rdbuf();
+  return load_yaml_text(text.str(), path);
 }
 
 }  // namespace ff

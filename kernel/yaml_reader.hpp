@@ -60,11 +60,17 @@ class YamlReader {
   std::set<std::string> used_;
 };
 
+// The most values (scalars, lists and maps, aliases counted again) a document may hold.
+inline constexpr long kMaxYamlNodes = 1000000;
+
 // Loads a YAML file, turning parse errors into ConfigError with the file and line, and a key written
-// twice in one map into one naming both lines.
+// twice in one map into one naming both lines (check_unique_keys).
 YAML::Node load_yaml_file(const std::string& path);
-// The duplicate-key check alone (for YAML parsed from elsewhere, e.g. a --set value).
-// `prefix`: the path the document sits under, for the error's key.
+// The same for YAML text; errors name `source`.
+YAML::Node load_yaml_text(const std::string& text, const std::string& source);
+// The checks of every loaded document, alone (for YAML parsed from elsewhere, e.g. a --set value):
+// no key written twice in one map, every key a plain name, no alias inside the node it names, at most
+// kMaxYamlNodes values. `prefix`: the path the document sits under, for the error's key.
 void check_unique_keys(const YAML::Node& doc, const std::string& file, const std::string& prefix = "");
 
 }  // namespace ff

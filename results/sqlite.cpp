@@ -36,10 +36,16 @@ void SqliteDb::exec(const std::string& sql) {
   }
 }
 
-sqlite3_stmt* SqliteDb::prepare(const std::string& sql) {
+SqliteStmt SqliteDb::prepare(const std::string& sql) {
   sqlite3_stmt* st = nullptr;
   if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &st, nullptr) != SQLITE_OK) fail();
-  return st;
+  return SqliteStmt(st);
+}
+
+bool SqliteDb::next_row(sqlite3_stmt* st) {
+  const int rc = sqlite3_step(st);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) fail();
+  return rc == SQLITE_ROW;
 }
 
 void SqliteDb::step(sqlite3_stmt* st) {
@@ -54,13 +60,13 @@ void write_results_sqlite(const ResultTable& t, const std::map<std::string, std:
     SqliteDb d(tmp, path);
     d.exec("BEGIN");
     d.exec("CREATE TABLE study (key TEXT PRIMARY KEY, value TEXT)");
-    sqlite3_stmt* si = d.prepare("INSERT INTO study VALUES (?, ?)");
+    const SqliteStmt statement = d.prepare("INSERT INTO study VALUES (?, ?)");
+    sqlite3_stmt* si = statement.get();
     for (const auto& [k, v] : info) {
       sqlite3_bind_text(si, 1, k.c_str(), -1, SQLITE_TRANSIENT);
       sqlite3_bind_text(si, 2, v.c_str(), -1, SQLITE_TRANSIENT);
       d.step(si);
     }
-    sqlite3_finalize(si);
 
     // One REAL column per parameter and metric; NULL where the CSV cell is empty.
     std::string cols = "eval_id INTEGER PRIMARY KEY, seed INTEGER, label TEXT, status TEXT";
@@ -71,7 +77,8 @@ void write_results_sqlite(const ResultTable& t, const std::map<std::string, std:
         marks += ", ?";
       }
     d.exec("CREATE TABLE results (" + cols + ")");
-    sqlite3_stmt* st = d.prepare("INSERT INTO results VALUES (" + marks + ")");
+    const SqliteStmt insert = d.prepare("INSERT INTO results VALUES (" + marks + ")");
+    sqlite3_stmt* st = insert.get();
     for (const auto& r : t.rows) {
       sqlite3_bind_int64(st, 1, r.eval_id);
       sqlite3_bind_int64(st, 2, static_cast<sqlite3_int64>(r.seed));
@@ -85,7 +92,6 @@ void write_results_sqlite(const ResultTable& t, const std::map<std::string, std:
         }
       d.step(st);
     }
-    sqlite3_finalize(st);
     d.exec("COMMIT");
   } catch (...) {
     std::error_code ignored;

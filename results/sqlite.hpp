@@ -5,11 +5,19 @@
 #include <sqlite3.h>
 
 #include <map>
+#include <memory>
 #include <string>
 
 #include "results/table.hpp"
 
 namespace ff {
+
+// A prepared statement, finalised when it goes out of scope (also when a step throws: a statement
+// left open keeps sqlite3_close from closing the database).
+struct SqliteFinalize {
+  void operator()(sqlite3_stmt* st) const { sqlite3_finalize(st); }
+};
+using SqliteStmt = std::unique_ptr<sqlite3_stmt, SqliteFinalize>;
 
 // An open SQLite database whose every failure throws std::runtime_error naming `name`.
 class SqliteDb {
@@ -20,8 +28,10 @@ class SqliteDb {
   SqliteDb(const SqliteDb&) = delete;
   SqliteDb& operator=(const SqliteDb&) = delete;
   void exec(const std::string& sql);
-  sqlite3_stmt* prepare(const std::string& sql);  // the caller finalises it
+  SqliteStmt prepare(const std::string& sql);
   void step(sqlite3_stmt* st);                    // runs a statement to SQLITE_DONE and resets it
+  // Steps a query: true for a row, false when done; an error throws.
+  bool next_row(sqlite3_stmt* st);
   sqlite3* handle() { return db_; }
   [[noreturn]] void fail() const;
 

@@ -30,7 +30,7 @@ std::string fmt(const char* f, double x) {
 std::string format_results_header(const ResultTable& t) {
   std::string out = "eval_id,seed,label,status";
   for (const auto& c : t.params) out += "," + csv_quote(c);
-  for (const auto& c : t.columns) out += "," + c;
+  for (const auto& c : t.columns) out += "," + csv_quote(c);
   return out + "\n";
 }
 
@@ -41,7 +41,7 @@ std::string format_results_row(const ResultRow& r) {
   out += ',';
   out += csv_quote(r.label);
   out += ',';
-  out += r.status;
+  out += csv_quote(r.status);
   for (const auto* v : {&r.params, &r.values})
     for (double x : *v) {
       out += ',';
@@ -73,6 +73,7 @@ std::vector<std::string> split_csv_line(const std::string& line) {
       cells.back() += c;
     }
   }
+  if (quoted) throw std::invalid_argument("a quote is not closed");
   return cells;
 }
 
@@ -88,19 +89,25 @@ ResultTable parse_results_csv(const std::string& text, const std::string& source
     pos = end == std::string::npos ? text.size() : end + 1;
     ++line_no;
     if (line.empty() || line[0] == '#') continue;
-    auto cells = split_csv_line(line);
     auto bad = [&](const std::string& col, const std::string& why) {
       throw std::runtime_error(source + ":" + std::to_string(line_no) + ": " + col + ": " + why);
     };
+    std::vector<std::string> cells;
+    try {
+      cells = split_csv_line(line);
+    } catch (const std::invalid_argument& e) {
+      bad(header.empty() ? "header" : "row", e.what());
+    }
     if (header.empty()) {
       header = cells;
       if (header.size() < 4 || header[0] != "eval_id" || header[1] != "seed" || header[2] != "label" || header[3] != "status")
         bad("header", "expected eval_id,seed,label,status,...");
-      // Parameters come before the metrics; metric names start with "m<digit>".
+      // Parameters come before the metrics: from the first name "m<digit>..." on, every column is a metric.
       for (std::size_t c = 4; c < header.size(); ++c) {
+        if (header[c].empty()) bad("header", "column " + std::to_string(c + 1) + " has no name");
         const bool metric = header[c].size() > 1 && header[c][0] == 'm' && std::isdigit(static_cast<unsigned char>(header[c][1]));
         if (metric && nparams < 0) nparams = static_cast<int>(c) - 4;
-        (metric ? t.columns : t.params).push_back(header[c]);
+        (nparams >= 0 ? t.columns : t.params).push_back(header[c]);
       }
       if (nparams < 0) nparams = static_cast<int>(header.size()) - 4;
       continue;

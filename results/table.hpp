@@ -26,11 +26,14 @@ struct ResultTable {
 // CSV header: eval_id,seed,label,status,<params>,<columns>.
 std::string format_results_header(const ResultTable& table);
 // One CSV row (with its newline); NaN cells are empty; numbers with 17 significant digits (exact).
+// Labels, status and names holding a comma or a quote are quoted: what parse_results_csv reads, these
+// write back the same.
 std::string format_results_row(const ResultRow& row);
 // Header and every row.
 std::string format_results_csv(const ResultTable& table);
 
-// Splits one CSV line (no newline) into cells; "..." quotes may hold commas and doubled quotes.
+// Splits one CSV line (no newline) into cells; "..." quotes may hold commas and doubled quotes. A
+// quote left open throws std::invalid_argument.
 std::vector<std::string> split_csv_line(const std::string& line);
 
 // Reads a results CSV (as written by format_results_csv). Throws std::runtime_error naming

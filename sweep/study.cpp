@@ -192,7 +192,7 @@ void cross_cases(Study& st, YamlReader& top) {
     }
 }
 
-void parse_design(Study& st, YamlReader& top) {
+void parse_design(Study& st, YamlReader& top, int max_variants) {
   const bool has_runs = top.has("runs"), has_vars = top.has("variables");
   if (has_runs == has_vars) top.fail("runs", "give either `runs:` (a list of runs) or `variables:` with a `design:`");
   if (has_runs && top.has("cases")) top.fail("cases", "cases are crossed with `variables:`; a list of `runs:` takes none");
@@ -202,6 +202,8 @@ void parse_design(Study& st, YamlReader& top) {
     if (top.has("design")) top.fail("design", "a list of `runs:` takes no design");
     auto runs = top.sequence("runs", true);
     if (runs.empty()) top.fail("runs", "needs at least one run");
+    if (runs.size() > static_cast<std::size_t>(max_variants))
+      top.fail("runs", std::to_string(runs.size()) + " runs exceed the limit of " + std::to_string(max_variants) + " variants");
     for (std::size_t i = 0; i < runs.size(); ++i) {
       Variant v;
       v.eval_id = static_cast<int>(i);
@@ -253,8 +255,15 @@ void parse_design(Study& st, YamlReader& top) {
       vars[i].fail("distribution", "a " + type + " design needs a `distribution:` for every variable");
   }
 
+  // The variant count (design rows times cases) is checked before the design is drawn.
+  const YAML::Node cases = top.raw("cases");
+  const long long ncases = cases && cases.IsSequence() ? static_cast<long long>(cases.size()) : 1;
   std::vector<std::vector<double>> rows;
   try {
+    const long long n = static_cast<long long>(calc_design_size(spec, st.variables)) * ncases;
+    if (n > max_variants)
+      design.fail("type", "the design has " + std::to_string(n) + " variants, over the limit of " +
+                              std::to_string(max_variants));
     rows = make_design(spec, st.variables);
   } catch (const std::invalid_argument& e) {
     throw ConfigError(st.source, design.line(), "design", e.what());
@@ -287,7 +296,7 @@ Variant make_nominal_variant(const Study& st) {
 
 }  // namespace
 
-Study load_study(const std::string& path) {
+Study read_study(const std::string& path, int max_variants) {
   Study st;
   st.source = path;
   const YAML::Node doc = load_yaml_file(path);
@@ -310,7 +319,7 @@ Study load_study(const std::string& path) {
   st.model_text = read_text(st.model_path);
   st.set = read_assignments(top, "set");
 
-  parse_design(st, top);
+  parse_design(st, top, max_variants);
   for (auto& v : st.variants) v.seed = calc_variant_seed(st.seed, static_cast<std::uint64_t>(v.eval_id));
 
   if (const YAML::Node specs = top.raw("specs")) {
@@ -331,8 +340,12 @@ Study load_study(const std::string& path) {
   std::snprintf(hash, sizeof hash, "%016llx",
                 static_cast<unsigned long long>(fnv1a(st.model_text, fnv1a(read_text(path)))));
   st.hash = hash;
-  // The nominal model: variant 0 when the values are written in the file, the medians when drawn.
   st.drawn = !st.listed && st.design.kind != DesignKind::kGrid && st.design.kind != DesignKind::kCentered;
+  return st;
+}
+
+void check_models(Study& st) {
+  // The nominal model: variant 0 when the values are written in the file, the medians when drawn.
   try {
     st.nominal = make_variant_model(st, st.drawn ? make_nominal_variant(st) : st.variants.front());
   } catch (const ConfigError& e) {
@@ -356,6 +369,11 @@ Study load_study(const std::string& path) {
   }
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
+}
+
+Study load_study(const std::string& path) {
+  Study st = read_study(path);
+  check_models(st);  // a bad override fails before any output exists
   return st;
 }
 

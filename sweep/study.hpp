@@ -50,13 +50,24 @@ struct Study {
   std::string hash;             // fingerprint of the study and model text: journals refuse another study's rows
 };
 
-// Loads and checks a study. Values written in the file (a list of runs, a grid, a centered design)
-// are checked here by building every variant's model on all cores (and dropping it), so a bad value
-// fails before anything is written; the first bad variant by eval_id is the one reported. Drawn values
-// (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at their nominal point only: a draw from a
-// distribution's tail that the model rejects is a result of the run (status `invalid`), not an error.
-// Models are built again, per batch, when the variants run: memory does not grow with the study.
+// The most variants a study may have: the farm holds every variant's values and, when it assembles
+// the results, every row (about 1.4 kB a variant).
+inline constexpr int kMaxStudyVariants = 1000000;
+
+// Loads and checks a study: read_study, then check_models.
 Study load_study(const std::string& path);
+
+// The two halves of load_study. read_study reads and checks the file and makes the variants (no
+// models); a study of more than `max_variants` variants is refused before its design is drawn.
+Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
+// Builds the nominal model (Study::nominal) and checks the values written in the file (a list of
+// runs, a grid, a centered design) by building every variant's model on all cores (and dropping it),
+// so a bad value fails before anything is written; the first bad variant by eval_id is the one
+// reported. Drawn values (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at their nominal
+// point only: a draw from a distribution's tail that the model rejects is a result of the run (status
+// `invalid`), not an error. Models are built again, per batch, when the variants run: memory does not
+// grow with the study.
+void check_models(Study& st);
 
 // The overrides that make a variant, in the order applied: the study's `set:`, then its run's or its
 // case's, then its variables' values (Variant::params).

@@ -43,18 +43,19 @@ struct Ledger {
   }
   // The latest version of a model file fitted to this record in this mode, or 0.
   long find(const std::string& model, const std::string& record, const std::string& mode) {
-    sqlite3_stmt* st = db.prepare("SELECT MAX(version) FROM versions WHERE model = ? AND record = ? AND mode = ?");
+    const SqliteStmt query = db.prepare("SELECT MAX(version) FROM versions WHERE model = ? AND record = ? AND mode = ?");
+    sqlite3_stmt* st = query.get();
     sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 2, record.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 3, mode.c_str(), -1, SQLITE_TRANSIENT);
     long v = 0;
-    if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) v = sqlite3_column_int64(st, 0);
-    sqlite3_finalize(st);
+    if (db.next_row(st) && sqlite3_column_type(st, 0) != SQLITE_NULL) v = sqlite3_column_int64(st, 0);
     return v;
   }
   long add(const std::string& model, long parent, const std::string& effect, const std::string& params,
            const std::string& record, const std::string& mode, const std::map<std::string, Fit>& fits) {
-    sqlite3_stmt* st = db.prepare("INSERT INTO versions (model, parent, effect, params, record, mode) VALUES (?, ?, ?, ?, ?, ?)");
+    const SqliteStmt insert = db.prepare("INSERT INTO versions (model, parent, effect, params, record, mode) VALUES (?, ?, ?, ?, ?, ?)");
+    sqlite3_stmt* st = insert.get();
     sqlite3_bind_text(st, 1, model.c_str(), -1, SQLITE_TRANSIENT);
     if (parent > 0) sqlite3_bind_int64(st, 2, parent); else sqlite3_bind_null(st, 2);
     sqlite3_bind_text(st, 3, effect.c_str(), -1, SQLITE_TRANSIENT);
@@ -62,9 +63,9 @@ struct Ledger {
     sqlite3_bind_text(st, 5, record.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 6, mode.c_str(), -1, SQLITE_TRANSIENT);
     db.step(st);
-    sqlite3_finalize(st);
     const long v = sqlite3_last_insert_rowid(db.handle());
-    sqlite3_stmt* fs = db.prepare("INSERT OR REPLACE INTO fits VALUES (?, ?, ?, ?)");
+    const SqliteStmt insert_fit = db.prepare("INSERT OR REPLACE INTO fits VALUES (?, ?, ?, ?)");
+    sqlite3_stmt* fs = insert_fit.get();
     for (const auto& [c, f] : fits) {
       sqlite3_bind_int64(fs, 1, v);
       sqlite3_bind_text(fs, 2, c.c_str(), -1, SQLITE_TRANSIENT);
@@ -72,10 +73,15 @@ struct Ledger {
       sqlite3_bind_double(fs, 4, f.rmse);
       db.step(fs);
     }
-    sqlite3_finalize(fs);
     return v;
   }
 };
+
+// A text cell; NULL (a ledger edited by hand) reads as "".
+std::string text_column(sqlite3_stmt* st, int col) {
+  const unsigned char* text = sqlite3_column_text(st, col);
+  return text ? reinterpret_cast<const char*>(text) : "";
+}
 
 std::map<std::string, Fit> fits_of(const Model& m, const Record& r, ReplayMode mode) {
   std::map<std::string, Fit> out;
@@ -101,24 +107,27 @@ std::string record_calibration(const std::string& ledger_path, const std::string
   }
   led.add(after_path, parent, fit.effect, params, r.source, replay_mode_name(mode), fits_of(after, r, mode));
   led.db.exec("COMMIT");
+  return report_ledger(ledger_path, r.source, mode);
+}
 
+std::string report_ledger(const std::string& ledger_path, const std::string& record, ReplayMode mode) {
+  Ledger led(ledger_path);
   // Read back the versions fitted to this record in this mode: a text table and the plot of the
   // error (100 - fit %) per channel by version.
-  sqlite3_stmt* st = led.db.prepare(
+  const SqliteStmt query = led.db.prepare(
       "SELECT v.version, v.model, v.effect, f.channel, f.fit_percent, f.rmse FROM versions v JOIN fits f "
       "ON f.version = v.version WHERE v.record = ? AND v.mode = ? ORDER BY v.version, f.channel");
-  sqlite3_bind_text(st, 1, r.source.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_stmt* st = query.get();
+  sqlite3_bind_text(st, 1, record.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(st, 2, replay_mode_name(mode), -1, SQLITE_TRANSIENT);
-  std::string text = "ledger " + ledger_path + ", " + r.source + " (" + replay_mode_name(mode) +
+  std::string text = "ledger " + ledger_path + ", " + record + " (" + replay_mode_name(mode) +
                      "):\n  version  effect                     channel          fit %        RMSE  model\n";
   std::vector<double> versions;
   std::vector<std::string> version_labels;  // "2 +coulomb_friction": the effect each version added
   std::map<std::string, Series> lines;
-  while (sqlite3_step(st) == SQLITE_ROW) {
+  while (led.db.next_row(st)) {
     const long v = sqlite3_column_int64(st, 0);
-    const std::string model = reinterpret_cast<const char*>(sqlite3_column_text(st, 1));
-    const std::string effect = reinterpret_cast<const char*>(sqlite3_column_text(st, 2));
-    const std::string channel = reinterpret_cast<const char*>(sqlite3_column_text(st, 3));
+    const std::string model = text_column(st, 1), effect = text_column(st, 2), channel = text_column(st, 3);
     const double pct = sqlite3_column_double(st, 4), rmse = sqlite3_column_double(st, 5);
     char buf[512];
     std::snprintf(buf, sizeof buf, "  %7ld  %-26s %-14s %7.2f  %10.4g  %s\n", v, effect.c_str(), channel.c_str(), pct, rmse,
@@ -134,9 +143,8 @@ std::string record_calibration(const std::string& ledger_path, const std::string
       version_labels.push_back(std::to_string(v) + (effect == "base" ? " base" : " +" + effect));
     }
   }
-  sqlite3_finalize(st);
   LinePlot plot;
-  plot.title = "error of each model version on " + std::filesystem::path(r.source).filename().string() + " (" +
+  plot.title = "error of each model version on " + std::filesystem::path(record).filename().string() + " (" +
                replay_mode_name(mode) + ")";
   plot.x_label = "model version";
   plot.y_label = "error: 100 - fit (%)";

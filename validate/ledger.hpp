@@ -21,4 +21,9 @@ std::string record_calibration(const std::string& ledger_path, const std::string
                                const std::string& after_path, const Model& after, const EffectFit& fit,
                                const Record& r, ReplayMode mode);
 
+// The ledger's part of that: the versions at `ledger_path` fitted to the record `record` in `mode`, as the
+// text table, and the plot ledger_path + ".png". A file that is no ledger (another schema, a damaged
+// database) throws std::runtime_error naming it.
+std::string report_ledger(const std::string& ledger_path, const std::string& record, ReplayMode mode);
+
 }  // namespace ff

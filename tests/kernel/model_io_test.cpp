@@ -4,7 +4,6 @@
 #include "kernel/model_io.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -16,6 +15,7 @@
 #include <vector>
 
 #include "kernel/errors.hpp"
+#include "tests/temp_dir.hpp"
 
 namespace {
 
@@ -77,23 +77,8 @@ void expect_rejected(const std::string& text, int line, const std::string& key, 
 }
 
 // A fresh directory, removed with its contents.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() /
-           ("ff_model_io_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path / name) << text;
-    return (path / name).string();
-  }
+struct TempDir : ff::test::TempDir {
+  TempDir() : ff::test::TempDir("ff_model_io") {}
 };
 
 // ---- the reference file ----------------------------------------------------------------

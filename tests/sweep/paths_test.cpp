@@ -210,6 +210,19 @@ TEST(ApplyAssignment, KeyWrittenTwiceInTheValueIsRejected) {
   }
 }
 
+// An alias inside the map it names (`&x {a: *x}`) made a cyclic value; checking its keys overflowed
+// the stack (found while writing fuzz_set).
+TEST(ApplyAssignment, ValueHoldingItselfIsRejected) {
+  try {
+    ff::parse_assignment("payload=&x {a: *x}");
+    ADD_FAILURE() << "a cyclic value was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), "--set");
+    EXPECT_EQ(e.key(), "payload.a") << e.what();
+    EXPECT_NE(e.message().find("cycle"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ApplyAssignment, ValueMayContainEqualsSigns) {
   auto d = doc();
   assign(d, "name=a=b");

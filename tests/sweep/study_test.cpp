@@ -3,7 +3,6 @@
 #include "sweep/study.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -12,6 +11,7 @@
 #include <string>
 
 #include "kernel/errors.hpp"
+#include "tests/temp_dir.hpp"
 
 namespace {
 
@@ -24,21 +24,9 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 // A fresh directory per test, removed with its contents.
 class StudyFiles : public ::testing::Test {
  protected:
-  fs::path dir;
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("ff_study_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-  std::string write(const std::string& name, const std::string& text) {
-    std::ofstream(dir / name) << text;
-    return (dir / name).string();
-  }
+  ff::test::TempDir temp{"ff_study"};
+  const fs::path& dir = temp.path;
+  std::string write(const std::string& name, const std::string& text) { return temp.write(name, text); }
   // Loads `path`, which must fail; returns the error.
   static ff::ConfigError load_error(const std::string& path) {
     try {
@@ -47,6 +35,16 @@ class StudyFiles : public ::testing::Test {
       return e;
     }
     ADD_FAILURE() << path << " was accepted";
+    return ff::ConfigError("", 0, "", "");
+  }
+  // Reads `path` with a limit of `max_variants`, which must fail; returns the error.
+  static ff::ConfigError read_error(const std::string& path, int max_variants) {
+    try {
+      ff::read_study(path, max_variants);
+    } catch (const ff::ConfigError& e) {
+      return e;
+    }
+    ADD_FAILURE() << path << " was accepted with at most " << max_variants << " variants";
     return ff::ConfigError("", 0, "", "");
   }
 };
@@ -352,6 +350,84 @@ TEST_F(StudyFiles, NegativeMassInStudyWideSetNamesTheStudyLine) {
   EXPECT_EQ(e.file(), path) << e.what();
   EXPECT_EQ(e.line(), 3) << e.what();
   EXPECT_EQ(e.key(), "set.payload.mass") << e.what();
+}
+
+// ---- keys written twice, and the variant limit ------------------------------------------------
+
+TEST_F(StudyFiles, StudyKeyWrittenTwiceNamesBothLines) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nseed: 3\nruns:\n  - label: a\nseed: 4\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.key(), "seed");
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_NE(e.message().find("lines 2 and 5"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, KeyWrittenTwiceInARunsSetNamesItsFullPath) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set:\n      payload.mass: 300\n      payload.mass: 400\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.key(), "runs[0].set.payload.mass");
+  EXPECT_NE(e.message().find("lines 4 and 5"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, KeyWrittenTwiceInADistributionNamesItsFullPath) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\nvariables:\n  - path: payload.mass\n    distribution: {type: uniform, lower: 1, "
+                                        "upper: 2, lower: 0}\ndesign: {type: monte_carlo, samples: 2}\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.key(), "variables[0].distribution.lower");
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(e.message().find("written twice"), std::string::npos) << e.what();
+}
+
+// `runs: &r [*r]` is a list holding itself: refused when the file is loaded (it overflowed the stack).
+TEST_F(StudyFiles, RunsHoldingThemselvesAreRejected) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns: &r [*r]\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.key(), "runs[0]");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_NE(e.message().find("cycle"), std::string::npos) << e.what();
+}
+
+// A design of two million Monte Carlo samples is refused at once, before it is drawn.
+TEST_F(StudyFiles, DesignOverTheVariantLimitIsRefusedBeforeItIsDrawn) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\nvariables:\n  - path: payload.mass\n    distribution: {type: uniform, lower: 1, "
+                                        "upper: 2}\ndesign:\n  type: monte_carlo\n  samples: 2000000\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.key(), "design.type");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(e.message().find("2000000 variants, over the limit of 1000000"), std::string::npos) << e.what();
+}
+
+// The limit counts the design's rows times its cases, and a list of runs.
+TEST_F(StudyFiles, CasesAndRunsCountTowardsTheVariantLimit) {
+  const auto crossed = write("c.yaml", "model: " + kModel +
+                                           "\nvariables:\n  - path: payload.mass\n    levels: [1, 2, 3]\ndesign: {type: grid}\n"
+                                           "cases:\n  - label: a\n  - label: b\n");
+  EXPECT_EQ(ff::read_study(crossed, 6).variants.size(), 6u);
+  const auto e = read_error(crossed, 5);
+  EXPECT_NE(e.message().find("6 variants, over the limit of 5"), std::string::npos) << e.what();
+  const auto runs = write("r.yaml", "model: " + kModel + "\nruns:\n  - label: a\n  - label: b\n  - label: c\n");
+  const auto r = read_error(runs, 2);
+  EXPECT_EQ(r.key(), "runs");
+  EXPECT_NE(r.message().find("3 runs exceed the limit of 2"), std::string::npos) << r.what();
+}
+
+// read_study makes the variants without checking their models; check_models checks them (and
+// builds the nominal one) as load_study does.
+TEST_F(StudyFiles, ReadStudyThenCheckModelsIsLoadStudy) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nruns:\n  - set: {payload.mass: 400}\n  - set: {payload.mass: -5}\n");
+  ff::Study st = ff::read_study(path);
+  EXPECT_EQ(st.variants.size(), 2u);
+  EXPECT_THROW(ff::check_models(st), ff::ConfigError);
+  EXPECT_THROW(ff::load_study(path), ff::ConfigError);
+  const auto good = write("g.yaml", "model: " + kModel + "\nruns:\n  - set: {payload.mass: 400}\n  - set: {payload.mass: 500}\n");
+  ff::Study g = ff::read_study(good);
+  ff::check_models(g);
+  EXPECT_DOUBLE_EQ(g.nominal.spec.payload_mass, 400.0);  // a list of runs: run 0
+  EXPECT_DOUBLE_EQ(ff::make_variant_model(g, g.variants[1]).spec.payload_mass, 500.0);
 }
 
 }  // namespace

@@ -1,0 +1,85 @@
+// Tests of the checks every loaded YAML document passes (kernel/yaml_reader.hpp, load_yaml_text and
+// check_unique_keys): keys written twice, keys that are not plain names, aliases that make a cycle or
+// expand without end. Each input is the smallest one that showed the fault.
+#include "kernel/yaml_reader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "kernel/errors.hpp"
+
+namespace {
+
+// Loads `text`, which must fail; returns the error.
+ff::ConfigError load_error(const std::string& text) {
+  try {
+    ff::load_yaml_text(text, "t.yaml");
+  } catch (const ff::ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "accepted: " << text;
+  return ff::ConfigError("", 0, "", "");
+}
+
+}  // namespace
+
+TEST(YamlReader, KeyWrittenTwiceInTextNamesBothLines) {
+  const auto e = load_error("a: 1\nb:\n  c: 2\n  c: 3\n");
+  EXPECT_EQ(e.file(), "t.yaml");
+  EXPECT_EQ(e.key(), "b.c");
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(e.message().find("lines 3 and 4"), std::string::npos) << e.what();
+}
+
+// `&x [*x]` is a list holding itself (yaml-cpp makes the alias the list); walking it overflowed the
+// stack: `flexfarm modes` on this file (found while writing fuzz_model).
+TEST(YamlReader, AliasInsideTheListItNamesIsAnError) {
+  const auto e = load_error("a: &x [*x]\n");
+  EXPECT_EQ(e.key(), "a[0]");
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_NE(e.message().find("cycle"), std::string::npos) << e.what();
+}
+
+TEST(YamlReader, AliasInsideTheMapItNamesIsAnError) {
+  const auto e = load_error("&x {b: *x}\n");
+  EXPECT_EQ(e.key(), "b");
+  EXPECT_NE(e.message().find("cycle"), std::string::npos) << e.what();
+}
+
+TEST(YamlReader, AnAliasOfASiblingIsNoCycle) {
+  const YAML::Node doc = ff::load_yaml_text("a: &x {m: 1}\nb: *x\nc: [*x, *x]\n", "t.yaml");
+  EXPECT_EQ(doc["b"]["m"].as<int>(), 1);
+  EXPECT_EQ(doc["c"][1]["m"].as<int>(), 1);
+}
+
+// Seven levels of ten aliases each: 10^7 values from a few hundred bytes.
+TEST(YamlReader, AliasesOfAliasesStopPastTheLimit) {
+  std::string text = "l0: &l0 [0, 0, 0, 0, 0, 0, 0, 0, 0, 0]\n";
+  for (int i = 1; i <= 7; ++i) {
+    const std::string prev = "*l" + std::to_string(i - 1);
+    text += "l" + std::to_string(i) + ": &l" + std::to_string(i) + " [";
+    for (int k = 0; k < 10; ++k) text += (k ? ", " : "") + prev;
+    text += "]\n";
+  }
+  const auto e = load_error(text);
+  EXPECT_NE(e.message().find("more than " + std::to_string(ff::kMaxYamlNodes) + " values"), std::string::npos) << e.what();
+}
+
+TEST(YamlReader, AListAsAKeyIsAnError) {
+  const auto e = load_error("beam:\n  ? [1, 2]\n  : 3\n");
+  EXPECT_EQ(e.key(), "beam");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_NE(e.message().find("plain name"), std::string::npos) << e.what();
+}
+
+TEST(YamlReader, AMapAsAKeyIsAnError) {
+  const auto e = load_error("{a: 1}: 2\n");
+  EXPECT_NE(e.message().find("plain name"), std::string::npos) << e.what();
+}
+
+TEST(YamlReader, SyntaxErrorInTextNamesTheLine) {
+  const auto e = load_error("a: 1\nb: [1, 2\n");
+  EXPECT_EQ(e.file(), "t.yaml");
+  EXPECT_GE(e.line(), 2);
+}
