@@ -454,7 +454,9 @@ TEST_F(StudyFiles, DrawsTheModelRejectsDoNotStopTheLoad) {
   EXPECT_DOUBLE_EQ(st.nominal.spec.joints.stiffness, 39.5e3);  // the normal's median
   EXPECT_EQ(st.nominal.spec.segments, 6);                      // uniform median 5.6, rounded
   for (const auto& v : st.variants)
-    if (v.params[0] <= 0) EXPECT_THROW(ff::make_variant_model(st, v), ff::ConfigError) << v.label;
+    if (v.params[0] <= 0) {
+      EXPECT_THROW(ff::make_variant_model(st, v), ff::ConfigError) << v.label;
+    }
 }
 
 TEST_F(StudyFiles, ARejectedNominalPointIsAnErrorOfTheFile) {
