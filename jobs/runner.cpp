@@ -41,13 +41,10 @@ ResultRow make_result_row(const Study& study, int i, const Model& model, const T
 }
 
 std::string explain_invalid_variant(const Study& study, int i) {
-  const std::size_t nmoves = study.nominal.spec.trajectory.moves.size();
   const std::string who = "eval_id " + std::to_string(study.variants[i].eval_id) + ": ";
   try {
-    const Model m = make_variant_model(study, study.variants[i]);
-    if (m.spec.trajectory.moves.size() != nmoves)
-      return who + study.source + ": " + std::to_string(m.spec.trajectory.moves.size()) + " moves where the study's nominal model has " +
-             std::to_string(nmoves) + " (every variant of a study needs the same number of moves)";
+    const std::string mismatch = explain_moves_mismatch(study, make_variant_model(study, study.variants[i]));
+    if (!mismatch.empty()) return who + mismatch;
   } catch (const ConfigError& e) {
     return who + e.what();
   }
@@ -76,7 +73,7 @@ void evaluate_variants(const Study& study, const std::vector<int>& pending, cons
     for (int k = 0; k < n; ++k) {
       try {
         models[k] = make_variant_model(study, study.variants[pending[c0 + k]]);
-        valid[k] = models[k].spec.trajectory.moves.size() == study.nominal.spec.trajectory.moves.size();
+        valid[k] = explain_moves_mismatch(study, models[k]).empty();
       } catch (const ConfigError&) {
       } catch (...) {
         keep_error();

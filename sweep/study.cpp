@@ -282,10 +282,11 @@ void parse_design(Study& st, YamlReader& top, int max_variants) {
   if (top.has("cases")) cross_cases(st, top);
 }
 
-// The nominal point of a drawn design: variant 0 (case 0) with every variable at the median of its
-// distribution.
-Variant make_nominal_variant(const Study& st) {
+// The nominal point of case c of a drawn design: variant 0 with that case and every variable at the
+// median of its distribution.
+Variant make_nominal_variant(const Study& st, std::size_t c) {
   Variant v = st.variants.front();
+  if (!st.case_labels.empty()) v.params[0] = static_cast<double>(c);
   const std::size_t first = v.params.size() - st.variables.size();  // after the case index
   for (std::size_t j = 0; j < st.variables.size(); ++j) {
     const double x = calc_quantile(st.variables[j].dist, 0.5);
@@ -345,24 +346,27 @@ Study read_study(const std::string& path, int max_variants) {
 }
 
 void check_models(Study& st) {
-  // The nominal model: variant 0 when the values are written in the file, the medians when drawn.
-  try {
-    st.nominal = make_variant_model(st, st.drawn ? make_nominal_variant(st) : st.variants.front());
-  } catch (const ConfigError& e) {
-    if (!st.drawn) throw;
-    throw ConfigError(e.file(), e.line(), e.key(), e.message() + " (at the design's nominal point, every variable at its median)");
-  }
-  // Written values: every variant's model built now (and dropped), so a bad value fails before any
-  // output exists.
-  const std::size_t nmoves = st.nominal.spec.trajectory.moves.size();
-  const int n = st.drawn ? 0 : static_cast<int>(st.variants.size());
+  // What is written in the file is checked now, so a bad value fails before any output exists: every
+  // variant when the values are written; when they are drawn, each case's nominal point (its written
+  // set, every variable at its median). A draw the model rejects is a result (`invalid`), not an error.
+  const std::size_t n = st.drawn ? std::max<std::size_t>(1, st.case_labels.size()) : st.variants.size();
+  auto point = [&](std::size_t i) { return st.drawn ? make_nominal_variant(st, i) : st.variants[i]; };
+  auto build = [&](std::size_t i) {
+    try {
+      return make_variant_model(st, point(i));
+    } catch (const ConfigError& e) {
+      if (!st.drawn) throw;
+      throw ConfigError(e.file(), e.line(), e.key(), e.message() + " (at the design's nominal point, every variable at its median)");
+    }
+  };
+  st.nominal = build(0);  // variant 0, or case 0's nominal point
   std::vector<std::exception_ptr> errors(n);
 #pragma omp parallel for schedule(dynamic, 8)
-  for (int i = 0; i < n; ++i) {
+  for (std::size_t i = 1; i < n; ++i) {
     try {
-      if (make_variant_model(st, st.variants[i]).spec.trajectory.moves.size() != nmoves)
-        throw std::invalid_argument(st.source + ": every variant of a study needs the same number of moves (eval_id " +
-                                    std::to_string(i) + " differs from eval_id 0)");
+      const std::string mismatch = explain_moves_mismatch(st, build(i));
+      if (!mismatch.empty())
+        throw std::invalid_argument((st.drawn ? "case " + st.case_labels[i] : "eval_id " + std::to_string(i)) + ": " + mismatch);
     } catch (...) {
       errors[i] = std::current_exception();
     }
@@ -402,6 +406,14 @@ Model make_variant_model(const Study& study, const Variant& v) {
   Model m = make_model_with(YAML::Load(study.model_text), study.model_path, make_variant_set(study, v));
   m.spec.simulation.seed = v.seed;  // each variant its own sensor noise
   return m;
+}
+
+std::string explain_moves_mismatch(const Study& study, const Model& m) {
+  const std::size_t n = m.spec.trajectory.moves.size(), nominal = study.nominal.spec.trajectory.moves.size();
+  if (n == nominal) return "";
+  auto moves = [](std::size_t k) { return std::to_string(k) + (k == 1 ? " move" : " moves"); };
+  return study.source + ": " + moves(n) + " where the study's nominal model has " + moves(nominal) +
+         " (every variant of a study needs the same number of moves)";
 }
 
 }  // namespace ff

@@ -63,8 +63,8 @@ Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
 // Builds the nominal model (Study::nominal) and checks the values written in the file (a list of
 // runs, a grid, a centered design) by building every variant's model on all cores (and dropping it),
 // so a bad value fails before anything is written; the first bad variant by eval_id is the one
-// reported. Drawn values (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at their nominal
-// point only: a draw from a distribution's tail that the model rejects is a result of the run (status
+// reported. Drawn values (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at each case's
+// nominal point (its written set, every variable at its median) only: a draw from a distribution's tail that the model rejects is a result of the run (status
 // `invalid`), not an error. Models are built again, per batch, when the variants run: memory does not
 // grow with the study.
 void check_models(Study& st);
@@ -75,5 +75,9 @@ std::vector<Assignment> make_variant_set(const Study& study, const Variant& v);
 
 // The model of one variant. Errors in an overridden value name the study file, line and key.
 Model make_variant_model(const Study& study, const Variant& v);
+
+// Every variant of a study has the nominal model's number of moves (its metric columns): "" when m
+// does, else why not.
+std::string explain_moves_mismatch(const Study& study, const Model& m);
 
 }  // namespace ff

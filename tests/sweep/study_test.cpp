@@ -471,6 +471,41 @@ TEST_F(StudyFiles, ARejectedNominalPointIsAnErrorOfTheFile) {
   EXPECT_NE(e.message().find("nominal point"), std::string::npos) << e.what();
 }
 
+// A run's metric columns follow its moves: a run with another number of moves than the first is refused
+// at load, naming it and both counts.
+TEST_F(StudyFiles, RunsWithDifferentNumbersOfMovesAreRefused) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\nruns:\n"
+                                        "  - label: one\n"
+                                        "  - label: two\n"
+                                        "    set: {trajectory.moves: [{target: 0.5, hold: 2}]}\n");
+  try {
+    ff::load_study(path);
+    FAIL() << "loaded";
+  } catch (const std::invalid_argument& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("eval_id 1: " + path + ": 1 move where the study's nominal model has 2 moves"), std::string::npos) << m;
+  }
+}
+
+// A case's set is written in the file: a bad value in the second case of a drawn design fails at load,
+// naming its line, though case 0's nominal point is fine.
+TEST_F(StudyFiles, ABadValueInACaseOfADrawnDesignIsAnErrorOfTheFile) {
+  const auto path = write("s.yaml", "model: " + kModel +
+                                        "\ncases:\n"
+                                        "  - label: light\n"
+                                        "  - label: broken\n"
+                                        "    set: {payload.mass: -5}\n"
+                                        "variables:\n"
+                                        "  - path: joints.stiffness\n"
+                                        "    distribution: {type: normal, mean: 39.5e3, std: 1.0e3}\n"
+                                        "design: {type: monte_carlo, samples: 8}\n");
+  const auto e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_NE(e.message().find(">= 0"), std::string::npos) << e.what();
+}
+
 TEST_F(StudyFiles, ARejectedGridLevelIsAnErrorOfTheFile) {
   const auto path = write("s.yaml", "model: " + kModel +
                                         "\nvariables:\n"
