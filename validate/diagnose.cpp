@@ -69,6 +69,51 @@ double sum_squares(const std::vector<double>& r) {
   return s;
 }
 
+// The hub torque's band power, the scored channel `hub_torque.power` (closed loop): what a drive rattling
+// in its free play, or a loop chattering on its encoder, does on average. No replay follows such a limit
+// cycle's phase (the record's noise sets it off at other instants), so its samples leave every model, the
+// true one included, far from the record; the power of the torque's first differences, window by window,
+// does not depend on the phase. Window w of W record samples: P_w(y) = mean (y_k - y_{k-1})^2; the
+// record's white noise of variance s^2 adds 2 s^2 (the variance of its differences) to it, the model's
+// noise-free prediction does not. Scored: ln(P_w(y) + c) against ln(P_w(yhat) + 2 s^2 + c), c = 2 s_f^2
+// from the channel's noise floor s_f (at least kRelevantError of its sd: a noise-free record's windows of
+// constant torque stay finite). White noise alone gives var(P_w) = (2 / W) sum_j gamma_j^2 = 12 s^4 / W
+// (gamma the autocovariance of the differenced noise: 2 s^2, -s^2), so with s = s_f the residual
+// sqrt(W / 0.75) (ln(P_w(y) + c) - ln(P_w(yhat) + 2 s^2 + c)) has unit variance where the model explains
+// the torque's power.
+constexpr const char* kPowerChannel = "hub_torque.power";
+constexpr double kPowerWindow = 0.032;  // s (at least 16 record samples)
+
+// A torque whose band power the base model misses by this factor of the power's noise (RMS of the
+// normalised residual) has a high band no replay follows: its samples are then scored low-passed.
+constexpr double kPowerMisfit = 3.0;
+
+// Three passes of a centred moving average of `window` samples (shorter at the ends): a low-pass whose
+// gain is 0.707 at 0.264 / window of the sample rate and below 1 % (the sidelobes cubed) above 2 / window.
+std::vector<double> calc_low_pass(std::vector<double> y, std::size_t window) {
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(y.size()), h = static_cast<std::ptrdiff_t>(window / 2);
+  std::vector<double> sum(y.size() + 1);
+  for (int pass = 0; pass < 3; ++pass) {
+    sum[0] = 0.0;
+    for (std::ptrdiff_t k = 0; k < n; ++k) sum[k + 1] = sum[k] + y[k];
+    for (std::ptrdiff_t k = 0; k < n; ++k) {
+      const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, k - h), hi = std::min(n, k + h + 1);
+      y[k] = (sum[hi] - sum[lo]) / static_cast<double>(hi - lo);
+    }
+  }
+  return y;
+}
+
+std::vector<double> calc_log_band_power(const std::vector<double>& y, std::size_t window, double offset) {
+  std::vector<double> out;
+  for (std::size_t k0 = 1; k0 + window <= y.size(); k0 += window) {
+    double s2 = 0.0;
+    for (std::size_t k = k0; k < k0 + window; ++k) s2 += (y[k] - y[k - 1]) * (y[k] - y[k - 1]);
+    out.push_back(std::log(s2 / window + offset));
+  }
+  return out;
+}
+
 // The record's scored channels, decimated and weighted by their noise: residual = (y - yhat) / sigma_c,
 // sigma_c the channel's noise floor, channel-major (channel c's samples at [c n_idx, (c + 1) n_idx)).
 // Weighted least squares with each channel's own noise is the maximum-likelihood fit of channels whose
@@ -83,8 +128,36 @@ struct Scorer {
   std::vector<double> scale;       // 1 / sigma_c per channel: the residual's weight
   std::vector<double> noise;       // the record's noise floor per channel, as a fraction of sd(y) (reports)
   std::vector<double> input;       // the loop's external input at the decimated samples (for the CCF)
+  struct BandPower {               // kPowerChannel, scored after the samples (closed loop, with a torque)
+    bool on = false;
+    std::size_t window = 0;        // record samples per window
+    double offset = 0.0;           // c = 2 s_f^2, N^2 m^2
+    double noise_power = 0.0;      // 2 s^2 (the record's own noise, unclamped)
+    double scale = 0.0;            // sqrt(W / 0.75): 1 / the noise's sd of ln(P_w + c)
+    std::vector<double> measured;  // ln(P_w(y) + c) of the record
+    std::vector<double> input;     // the input at each window's start (for the CCF)
+  } power;
+  // The torque's samples low-passed (the record's and each prediction's, calc_low_pass over the band
+  // power's window) when the record's torque has high-band power the base model lacks (kPowerMisfit):
+  // its high band is then scored by its power alone.
+  bool split = false;
+  std::size_t low_pass = 0;        // samples of calc_low_pass: kPowerWindow, at least 3
+  std::vector<double> torque_low;  // the record's torque, low-passed
 
-  int size() const { return static_cast<int>(channels.size() * index.size()); }
+  // The record's and the prediction's samples of channel c as scored.
+  std::vector<double> predicted(const Prediction& p, std::size_t c) const {
+    const auto& yh = p.channels.at(channels[c]);
+    return split && channels[c] == "hub_torque" ? calc_low_pass(yh, low_pass) : yh;
+  }
+  const std::vector<double>& measured(std::size_t c) const {
+    return split && channels[c] == "hub_torque" ? torque_low : rec->at(channels[c]);
+  }
+  double cutoff_hz() const {
+    return split ? 0.264 / (low_pass * (rec->t[1] - rec->t[0])) : NAN;
+  }
+
+  std::size_t samples() const { return channels.size() * index.size(); }
+  int size() const { return static_cast<int>(samples() + (power.on ? power.measured.size() : 0)); }
 
   // What each model predicts for the record: one batch of the models that share a shape (groups of
   // equal substeps, one at a time when they differ in more: segments, the drive's parts).
@@ -113,9 +186,13 @@ struct Scorer {
       if (!p[i].ok) continue;
       auto& r = out[i];
       for (std::size_t c = 0; c < channels.size(); ++c) {
-        const auto& y = rec->at(channels[c]);
-        const auto& yh = p[i].channels.at(channels[c]);
+        const auto& y = measured(c);
+        const auto yh = predicted(p[i], c);
         for (std::size_t k : index) r.push_back((y[k] - yh[k]) * scale[c]);
+      }
+      if (power.on) {
+        const auto lp = calc_log_band_power(p[i].channels.at("hub_torque"), power.window, power.noise_power + power.offset);
+        for (std::size_t w = 0; w < power.measured.size(); ++w) r.push_back((power.measured[w] - lp[w]) * power.scale);
       }
       for (double x : r)
         if (!std::isfinite(x)) {
@@ -126,8 +203,10 @@ struct Scorer {
     return out;
   }
 
+  // Channel c's residual (c = channels.size(): the band power's).
   std::vector<double> channel_of(const std::vector<double>& r, std::size_t c) const {
     const std::size_t n = index.size();
+    if (c == channels.size()) return std::vector<double>(r.begin() + samples(), r.end());
     return std::vector<double>(r.begin() + c * n, r.begin() + (c + 1) * n);
   }
 
@@ -135,13 +214,14 @@ struct Scorer {
   std::map<std::string, ChannelTest> tests(const std::vector<double>& r, double* n_eff) const {
     std::map<std::string, ChannelTest> out;
     double ne = 0.0;
-    for (std::size_t c = 0; c < channels.size(); ++c) {
+    for (std::size_t c = 0; c < channels.size() + power.on; ++c) {
+      const bool band = c == channels.size();
       const auto e = channel_of(r, c);
       ChannelTest t;
-      t.rms = std::sqrt(sum_squares(e) / e.size()) * noise[c];  // as a fraction of sd(y)
-      t.noise = noise[c];
+      t.noise = band ? 1.0 / power.scale : noise[c];               // as a fraction of sd(y); ln P_w's own sd
+      t.rms = std::sqrt(sum_squares(e) / e.size()) * t.noise;
       const Correlation acf = calc_autocorrelation(e, kTestLags);
-      const Correlation ccf = calc_cross_correlation(e, input, kTestLags);
+      const Correlation ccf = calc_cross_correlation(e, band ? power.input : input, kTestLags);
       t.acf_outside = acf.fraction_outside;
       t.ccf_outside = ccf.fraction_outside;
       t.white = t.acf_outside <= kTestFraction;
@@ -149,7 +229,10 @@ struct Scorer {
       t.at_floor = t.rms * t.rms <= kFloorFactor * t.noise * t.noise;
       t.rss = sum_squares(e);
       t.n_eff = calc_effective_samples(e, kEffectiveLags);
-      out[channels[c]] = t;
+      double mean = 0.0;
+      for (double x : e) mean += x / e.size();
+      t.unbiased = std::abs(mean) <= 2.58 * std::sqrt(std::max(t.rss / e.size() - mean * mean, 0.0) / std::max(t.n_eff, 1.0));
+      out[band ? kPowerChannel : channels[c]] = t;
       ne += t.n_eff;
     }
     if (n_eff) *n_eff = ne;
@@ -157,12 +240,17 @@ struct Scorer {
   }
 
   // The residual sum of squares of noise alone (each channel's weighted noise has unit variance).
-  double floor_rss() const { return static_cast<double>(noise.size() * index.size()); }
+  double floor_rss() const { return static_cast<double>(size()); }
 
   std::map<std::string, double> fit_percent(const Model& m) const {
     std::map<std::string, double> out;
     const auto p = predict({m})[0];
-    for (const auto& c : channels) out[c] = p.ok ? calc_fit(rec->at(c), p.channels.at(c)).percent : -INFINITY;
+    for (std::size_t c = 0; c < channels.size(); ++c)
+      out[channels[c]] = p.ok ? calc_fit(measured(c), predicted(p, c)).percent : -INFINITY;
+    if (power.on)
+      out[kPowerChannel] = p.ok ? calc_fit(power.measured, calc_log_band_power(p.channels.at("hub_torque"), power.window,
+                                                                               power.noise_power + power.offset)).percent
+                                : -INFINITY;
     return out;
   }
 };
@@ -318,7 +406,7 @@ double search_grid(const Scorer& sc, const Effect& e, const std::vector<double>&
 }
 
 // The global scan's points in the box of coordinates: 16 evenly spaced for one parameter, an 8 x 8
-// grid for two, 64 Sobol' points for more; the starting point first.
+// grid for two, 64 Sobol' points for three, 128 for more; the starting point first.
 std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<double>& start) {
   const std::size_t p = e.params.size();
   std::vector<double> lo(p), hi(p);
@@ -333,7 +421,7 @@ std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<
     for (int i = 0; i < 8; ++i)
       for (int j = 0; j < 8; ++j) u.push_back({i / 7.0, j / 7.0});
   } else {
-    const auto s = make_sobol_points_unscrambled(65, static_cast<int>(p));
+    const auto s = make_sobol_points_unscrambled(p == 3 ? 65 : 129, static_cast<int>(p));
     for (std::size_t i = 1; i < s.size(); ++i) u.push_back(s[i]);  // row 0 is the origin, a corner
   }
   std::vector<std::vector<double>> out = {start};
@@ -509,6 +597,20 @@ Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOption
   // in inverse dynamics.
   const auto& u = r.at(opt.mode == ReplayMode::kClosedLoop ? "ref" : opt.mode == ReplayMode::kOpenLoop ? "hub_torque" : "hub_angle");
   for (std::size_t k : sc.index) sc.input.push_back(u[k]);
+  const auto torque = std::find(sc.channels.begin(), sc.channels.end(), "hub_torque");
+  const double dt = r.size() > 1 ? r.t[1] - r.t[0] : 0.0;
+  if (opt.mode == ReplayMode::kClosedLoop && torque != sc.channels.end() && dt > 0) {
+    auto& bp = sc.power;
+    bp.window = std::max<std::size_t>(16, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
+    const std::size_t c = static_cast<std::size_t>(torque - sc.channels.begin());
+    const double sf = 1.0 / sc.scale[c], s = calc_noise_floor(r.at("hub_torque"));  // N m
+    bp.offset = 2.0 * sf * sf;
+    bp.noise_power = 2.0 * s * s;
+    bp.scale = std::sqrt(bp.window / 0.75);
+    bp.measured = calc_log_band_power(r.at("hub_torque"), bp.window, bp.offset);
+    for (std::size_t k0 = 1; k0 + bp.window <= r.size(); k0 += bp.window) bp.input.push_back(u[k0]);
+    bp.on = bp.measured.size() >= 8;
+  }
   return sc;
 }
 
@@ -645,11 +747,22 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   const Model base = build_model(fit_src);
   Diagnosis d;
   d.mode = opt.mode;
-  const Scorer sc = make_scorer(fit_src, r, opt);
+  Scorer scorer = make_scorer(fit_src, r, opt);
+  auto r0 = scorer.residuals({base});
+  if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
+  if (scorer.power.on) {  // a high band of the torque the base lacks: its samples are scored low-passed
+    const ChannelTest t = scorer.tests(r0[0], nullptr).at(kPowerChannel);
+    if (t.rms >= kPowerMisfit * t.noise) {
+      scorer.split = true;
+      scorer.low_pass = std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(kPowerWindow / (r.t[1] - r.t[0]))));
+      scorer.torque_low = calc_low_pass(r.at("hub_torque"), scorer.low_pass);
+      r0 = scorer.residuals({base});
+    }
+  }
+  const Scorer& sc = scorer;
   d.channels = sc.channels;
   d.n = sc.size();
-  const auto r0 = sc.residuals({base});
-  if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
+  d.torque_cutoff_hz = sc.cutoff_hz();
   d.base_rss = sum_squares(r0[0]);
   d.base_fit = sc.fit_percent(base);
   const EffectScales scales = make_scales(base, r, opt.mode);
@@ -833,7 +946,7 @@ std::string json_tests(const std::map<std::string, ChannelTest>& tests) {
     out += (out.size() > 1 ? ", " : "") + json_string(c) + ": {\"rms\": " + json_number(t.rms) + ", \"noise\": " +
            json_number(t.noise) + ", \"acf_outside\": " + json_number(t.acf_outside) + ", \"ccf_outside\": " +
            json_number(t.ccf_outside) + ", \"white\": " + json_bool(t.white) + ", \"uncorrelated\": " +
-           json_bool(t.uncorrelated) + ", \"at_floor\": " + json_bool(t.at_floor) + ", \"rss\": " + json_number(t.rss) +
+           json_bool(t.uncorrelated) + ", \"unbiased\": " + json_bool(t.unbiased) + ", \"at_floor\": " + json_bool(t.at_floor) + ", \"rss\": " + json_number(t.rss) +
            ", \"n_eff\": " + json_number(t.n_eff) + "}";
   return out + "}";
 }
@@ -853,6 +966,7 @@ std::vector<const EffectFit*> partial_candidates(const Diagnosis& d, std::size_t
 std::string format_diagnosis_json(const Diagnosis& d) {
   std::string out = "{\n  \"mode\": \"" + std::string(replay_mode_name(d.mode)) + "\",\n";
   out += "  \"samples\": " + std::to_string(d.n) + ",\n";
+  out += "  \"torque_cutoff_hz\": " + json_number(d.torque_cutoff_hz) + ",\n";
   out += "  \"baseline\": {\"fit_percent\": " + json_map(d.base_fit) + ", \"params\": " + json_map(d.base_params) +
          ", \"refit\": " + json_list(d.refit) + ", \"rss\": " + json_number(d.base_rss) + ", \"n_eff\": " +
          json_number(d.base_n_eff) + ", \"explained\": " + json_bool(d.base_explained) + ", \"tests\": " +
@@ -895,6 +1009,12 @@ std::string format_diagnosis_text(const Diagnosis& d) {
       std::snprintf(buf, sizeof buf, " %s = %.4g", p.c_str(), v);
       out += buf;
     }
+  }
+  if (std::isfinite(d.torque_cutoff_hz)) {
+    std::snprintf(buf, sizeof buf,
+                  "\n  hub_torque has high-band power the model lacks: its samples scored below %.3g Hz, its band by its power",
+                  d.torque_cutoff_hz);
+    out += buf;
   }
   out += "\n  residual (RMS / noise floor, white, uncorrelated with the input):";
   for (const auto& [c, t] : d.base_tests) {

@@ -50,8 +50,10 @@ struct ChannelTest {
   double acf_outside = NAN;     // fraction of autocorrelation lags 1..L outside the 99 % band
   double ccf_outside = NAN;     // fraction of cross-correlation lags with the input outside its band
   bool white = false, uncorrelated = false;
+  bool unbiased = false;        // its mean within the 99 % band of zero: |mean| <= 2.58 sd / sqrt(n_eff) (the
+                                // whiteness tests centre the residual, so a constant misfit passes them)
   bool at_floor = false;        // rms^2 <= kFloorFactor noise^2: what is left is mostly noise
-  bool explained() const { return (white && uncorrelated) || at_floor; }
+  bool explained() const { return (white && uncorrelated && unbiased) || at_floor; }
 };
 // A residual whose mean square is within this factor of the noise floor's is at the floor.
 inline constexpr double kFloorFactor = 2.0;
@@ -96,6 +98,10 @@ struct EffectFit {
 struct Diagnosis {
   ReplayMode mode = ReplayMode::kClosedLoop;
   std::vector<std::string> channels;
+  // Closed loop: the torque's band power (window by window, the channel `hub_torque.power`) is scored
+  // beside its samples; when the base model misses that power (a drive rattling in its free play), the
+  // torque's samples are scored low-passed, below this frequency (NaN: not).
+  double torque_cutoff_hz = NAN;
   int n = 0;                                   // residuals
   double base_rss = NAN;
   std::map<std::string, double> base_fit;      // fit % per channel of the base model (after its re-fit)

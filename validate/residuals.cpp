@@ -123,13 +123,51 @@ double calc_standard_deviation(const std::vector<double>& x) {
   return x.empty() ? 0.0 : std::sqrt(s / x.size());
 }
 
+namespace {
+
+// The spectral floor of one window of m samples: its least-squares line removed, Hann-weighted, the
+// periodogram |X_k|^2 / sum(w^2) at the bins k = m/8 .. m/2 - 1 (an eighth of the sample rate up to
+// just below Nyquist); white noise of variance s^2 makes each bin exponential with mean s^2, so the
+// median over the bins is ln 2 s^2. A ring or a rattle fills a few bins and leaves the median.
+double window_spectral_floor(const double* y, std::size_t m) {
+  double st = 0.0, sy = 0.0, stt = 0.0, sty = 0.0;
+  for (std::size_t j = 0; j < m; ++j) {
+    st += j;
+    sy += y[j];
+    stt += static_cast<double>(j) * j;
+    sty += j * y[j];
+  }
+  const double slope = (m * sty - st * sy) / (m * stt - st * st), icept = (sy - slope * st) / m;
+  std::vector<double> x(m);
+  double w2 = 0.0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const double w = 0.5 - 0.5 * std::cos(2.0 * M_PI * j / m);
+    x[j] = w * (y[j] - icept - slope * j);
+    w2 += w * w;
+  }
+  std::vector<double> p;
+  for (std::size_t k = m / 8; k < m / 2; ++k) {
+    double re = 0.0, im = 0.0;
+    for (std::size_t j = 0; j < m; ++j) {
+      const double a = 2.0 * M_PI * static_cast<double>(k * j % m) / m;
+      re += x[j] * std::cos(a);
+      im -= x[j] * std::sin(a);
+    }
+    p.push_back((re * re + im * im) / w2);
+  }
+  std::nth_element(p.begin(), p.begin() + p.size() / 2, p.end());
+  return p[p.size() / 2] / std::log(2.0);
+}
+
+}  // namespace
+
 double calc_noise_floor(const std::vector<double>& y) {
   const std::size_t n = y.size();
   if (n < 8) return 0.0;
   // Window by window, then the median over windows: a ring or a rattle that fills a minority of the
   // record (a move's end, a drive's free play crossed) is signal, not noise.
   const std::size_t w = std::max<std::size_t>(16, std::min<std::size_t>(64, (n - 4) / 8));
-  std::vector<double> v2, v4;
+  std::vector<double> v2, v4, vs;
   double s2 = 0.0, s4 = 0.0;
   std::size_t m = 0;
   for (std::size_t k = 2; k + 2 < n; ++k) {
@@ -148,11 +186,16 @@ double calc_noise_floor(const std::vector<double>& y) {
     v2.push_back(s2 / (6.0 * m));
     v4.push_back(s4 / (70.0 * m));
   }
+  // And the spectral floor, windows of 64 samples: a ring or a rattle in every window, whose samples
+  // look like noise to the differences (a drive rattling at a quarter of the sample rate), stays out.
+  for (std::size_t k0 = 0; k0 + 64 <= n; k0 += 64) vs.push_back(window_spectral_floor(y.data() + k0, 64));
   auto median = [](std::vector<double>& v) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
   };
-  return std::sqrt(std::min(median(v2), median(v4)));
+  double v = std::min(median(v2), median(v4));
+  if (vs.size() >= 4) v = std::min(v, median(vs));
+  return std::sqrt(v);
 }
 
 Spectrum calc_amplitude_spectrum(const std::vector<double>& t, const std::vector<double>& e) {

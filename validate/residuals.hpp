@@ -44,9 +44,12 @@ double calc_effective_samples(const std::vector<double>& e, int max_lag = 100);
 // The (population) standard deviation of x: sqrt(mean((x - mean x)^2)); 0 when x is empty.
 double calc_standard_deviation(const std::vector<double>& x);
 
-// The standard deviation of the white noise on a smooth signal y, from its second and fourth
-// differences: var(d2 y) = 6 sigma^2, var(d4 y) = 70 sigma^2 for white noise, the signal's share
-// falling as h^4 and h^8 with the sample spacing h; the smaller estimate. 0 for fewer than 8 samples.
+// The standard deviation of the white noise on a smooth signal y, the least of three estimates, each
+// the median over windows of 64 samples (so a ring in a minority of the record is signal): from its
+// second and fourth differences, var(d2 y) = 6 sigma^2 and var(d4 y) = 70 sigma^2 for white noise (the
+// signal's share falling as h^4 and h^8 with the sample spacing h); and from its spectrum, the median
+// of each window's Hann periodogram over the upper three quarters of its band, over ln 2 (a ring or
+// a rattle in every window fills a few bins, not the median). 0 for fewer than 8 samples.
 double calc_noise_floor(const std::vector<double>& y);
 
 // One-sided amplitude spectrum. e(t) is resampled linearly onto M equally spaced times over
