@@ -64,9 +64,9 @@ Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
 // runs, a grid, a centered design) by building every variant's model on all cores (and dropping it),
 // so a bad value fails before anything is written; the first bad variant by eval_id is the one
 // reported. Drawn values (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at each case's
-// nominal point (its written set, every variable at its median) only: a draw from a distribution's tail that the model rejects is a result of the run (status
-// `invalid`), not an error. Models are built again, per batch, when the variants run: memory does not
-// grow with the study.
+// nominal point only (its written set, every variable at its median): a draw from a distribution's
+// tail that the model rejects is a result of the run (status `invalid`), not an error. Models are
+// built again, per batch, when the variants run: memory does not grow with the study.
 void check_models(Study& st);
 
 // The overrides that make a variant, in the order applied: the study's `set:`, then its run's or its

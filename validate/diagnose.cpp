@@ -142,7 +142,7 @@ struct Scorer {
   // its high band is then scored by its power alone.
   bool split = false;
   std::size_t low_pass = 0;        // samples of calc_low_pass: kPowerWindow, at least 3
-  std::vector<double> torque_low;  // the record's torque, low-passed
+  std::vector<double> torque_low;  // the record's torque, low-passed (when split)
 
   // The record's and the prediction's samples of channel c as scored.
   std::vector<double> predicted(const Prediction& p, std::size_t c) const {
@@ -586,11 +586,13 @@ Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOption
   sc.channels = scored_channels(opt.mode, r);
   const std::size_t stride = std::max<std::size_t>(1, r.size() / std::max(1, opt.max_samples));
   for (std::size_t k = 0; k < r.size(); k += stride) sc.index.push_back(k);
+  std::vector<double> floor;  // per channel, in its unit (unclamped)
   for (const auto& c : sc.channels) {
     const auto& y = r.at(c);
     const double sd = calc_standard_deviation(y);
     const double unit = sd > 0 ? sd : 1.0;
-    sc.noise.push_back(std::max(calc_noise_floor(y) / unit, kRelevantError));
+    floor.push_back(calc_noise_floor(y));
+    sc.noise.push_back(std::max(floor.back() / unit, kRelevantError));
     sc.scale.push_back(1.0 / (sc.noise.back() * unit));
   }
   // The loop's external input: the reference in closed loop, the torque in open loop, the hub angle
@@ -602,8 +604,9 @@ Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOption
   if (opt.mode == ReplayMode::kClosedLoop && torque != sc.channels.end() && dt > 0) {
     auto& bp = sc.power;
     bp.window = std::max<std::size_t>(16, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
+    sc.low_pass = std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
     const std::size_t c = static_cast<std::size_t>(torque - sc.channels.begin());
-    const double sf = 1.0 / sc.scale[c], s = calc_noise_floor(r.at("hub_torque"));  // N m
+    const double sf = 1.0 / sc.scale[c], s = floor[c];  // N m
     bp.offset = 2.0 * sf * sf;
     bp.noise_power = 2.0 * s * s;
     bp.scale = std::sqrt(bp.window / 0.75);
@@ -754,7 +757,6 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
     const ChannelTest t = scorer.tests(r0[0], nullptr).at(kPowerChannel);
     if (t.rms >= kPowerMisfit * t.noise) {
       scorer.split = true;
-      scorer.low_pass = std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(kPowerWindow / (r.t[1] - r.t[0]))));
       scorer.torque_low = calc_low_pass(r.at("hub_torque"), scorer.low_pass);
       r0 = scorer.residuals({base});
     }

@@ -125,36 +125,18 @@ double calc_standard_deviation(const std::vector<double>& x) {
 
 namespace {
 
-// The spectral floor of one window of m samples: its least-squares line removed, Hann-weighted, the
-// periodogram |X_k|^2 / sum(w^2) at the bins k = m/8 .. m/2 - 1 (an eighth of the sample rate up to
-// just below Nyquist); white noise of variance s^2 makes each bin exponential with mean s^2, so the
-// median over the bins is ln 2 s^2. A ring or a rattle fills a few bins and leaves the median.
+// The spectral floor of one window of m samples (m a power of two): its Hann periodogram |X_k|^2 /
+// sum(w^2) from calc_amplitude_spectrum (line removed, Hann-weighted; A_k = 2 |X_k| / sum(w), and for
+// the Hann window sum(w) = m / 2, sum(w^2) = 3 m / 8, so |X_k|^2 / sum(w^2) = A_k^2 m / 6) at the bins
+// k = m/8 .. m/2 - 1 (an eighth of the sample rate up to just below Nyquist). White noise of variance
+// s^2 makes each bin exponential with mean s^2, so the median over the bins is ln 2 s^2. A ring or a
+// rattle fills a few bins and leaves the median.
 double window_spectral_floor(const double* y, std::size_t m) {
-  double st = 0.0, sy = 0.0, stt = 0.0, sty = 0.0;
-  for (std::size_t j = 0; j < m; ++j) {
-    st += j;
-    sy += y[j];
-    stt += static_cast<double>(j) * j;
-    sty += j * y[j];
-  }
-  const double slope = (m * sty - st * sy) / (m * stt - st * st), icept = (sy - slope * st) / m;
-  std::vector<double> x(m);
-  double w2 = 0.0;
-  for (std::size_t j = 0; j < m; ++j) {
-    const double w = 0.5 - 0.5 * std::cos(2.0 * M_PI * j / m);
-    x[j] = w * (y[j] - icept - slope * j);
-    w2 += w * w;
-  }
+  std::vector<double> t(m);
+  for (std::size_t j = 0; j < m; ++j) t[j] = static_cast<double>(j);
+  const Spectrum s = calc_amplitude_spectrum(t, std::vector<double>(y, y + m));
   std::vector<double> p;
-  for (std::size_t k = m / 8; k < m / 2; ++k) {
-    double re = 0.0, im = 0.0;
-    for (std::size_t j = 0; j < m; ++j) {
-      const double a = 2.0 * M_PI * static_cast<double>(k * j % m) / m;
-      re += x[j] * std::cos(a);
-      im -= x[j] * std::sin(a);
-    }
-    p.push_back((re * re + im * im) / w2);
-  }
+  for (std::size_t k = m / 8; k < m / 2; ++k) p.push_back(s.amplitude[k] * s.amplitude[k] * static_cast<double>(m) / 6.0);
   std::nth_element(p.begin(), p.begin() + p.size() / 2, p.end());
   return p[p.size() / 2] / std::log(2.0);
 }
