@@ -753,9 +753,12 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   Scorer scorer = make_scorer(fit_src, r, opt);
   auto r0 = scorer.residuals({base});
   if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
-  if (scorer.power.on) {  // a high band of the torque the base lacks: its samples are scored low-passed
+  // The torque's samples are scored low-passed, its high band by its power, when the base lacks that
+  // band (kPowerMisfit) or when its own loop chatters on a quantised hub angle (an encoder's limit cycle,
+  // whose phase no replay follows either).
+  if (scorer.power.on) {
     const ChannelTest t = scorer.tests(r0[0], nullptr).at(kPowerChannel);
-    if (t.rms >= kPowerMisfit * t.noise) {
+    if (t.rms >= kPowerMisfit * t.noise || base.spec.sensors.hub_angle.resolution > 0) {
       scorer.split = true;
       scorer.torque_low = calc_low_pass(r.at("hub_torque"), scorer.low_pass);
       r0 = scorer.residuals({base});

@@ -126,8 +126,9 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
       out.push_back({std::string("sensor_delay.") + c, std::string("latency of the recorded ") + c + " (output only)",
                      {}, {}, std::string("sensors.") + c + ".delay", delays, true, ""});
   if (closed) {
+    // Binary encoders of 9 to 22 bits a turn (12 to 0.0015 mrad): a count is 2 pi / 2^b rad.
     std::vector<double> quanta;
-    for (int i = 0; i <= 12; ++i) quanta.push_back(1e-6 * std::pow(10.0, i / 3.0));  // 1e-6 .. 1e-2 rad
+    for (int b = 9; b <= 22; ++b) quanta.push_back(2.0 * M_PI / std::ldexp(1.0, b));
     out.push_back({"sensor_quantization", "quantisation of the hub angle encoder", {}, {},
                    "sensors.hub_angle.resolution", quanta, false, ""});
   }
