@@ -77,6 +77,11 @@ void check_body(int i, const BodySpec& b) {
   if (b.mass < 0.0) fail(i, b, "mass " + fmt(b.mass) + " kg is negative");
   if (!std::isfinite(b.armature) || b.armature < 0.0)
     fail(i, b, "armature " + fmt(b.armature) + " must be non-negative and finite");
+  if (!std::isfinite(b.stiffness) || b.stiffness < 0.0)
+    fail(i, b, "stiffness " + fmt(b.stiffness) + " must be non-negative and finite");
+  if (!std::isfinite(b.damping) || b.damping < 0.0)
+    fail(i, b, "damping " + fmt(b.damping) + " must be non-negative and finite");
+  if (!std::isfinite(b.spring_reference)) fail(i, b, "spring reference is not finite");
   if (!finite(b.com)) fail(i, b, "centre of mass is not finite");
   check_inertia(i, b);
 }
@@ -111,6 +116,9 @@ Tree make_tree(const TreeSpec& spec) {
       b.dof = t.nv_++;
       b.axis = s.axis.normalized();
       b.armature = s.armature;
+      b.stiffness = s.stiffness;
+      b.damping = s.damping;
+      b.spring_reference = s.spring_reference;
       if (s.joint == JointType::kRevolute)
         b.S.head<3>() = b.axis;
       else

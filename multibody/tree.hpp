@@ -30,6 +30,11 @@ struct BodySpec {
   Vec3 com = Vec3::Zero();                // centre of mass in the body frame, m
   Mat3 inertia = Mat3::Zero();            // rotational inertia about the centre of mass, body axes, kg·m²
   double armature = 0.0;                  // rotor inertia on M's diagonal, kg·m² (prismatic: kg); unused when fixed
+  // The joint's passive spring and damper: tau = -stiffness (q - spring_reference) - damping qd
+  // (N·m/rad and N·m·s/rad; prismatic N/m and N·s/m); unused when fixed.
+  double stiffness = 0.0;
+  double damping = 0.0;
+  double spring_reference = 0.0;          // rad (prismatic: m)
 };
 
 struct TreeSpec {
@@ -51,6 +56,7 @@ struct Body {
   Mat3 inertia_com = Mat3::Zero();        // kg·m² about the centre of mass
   SpatialMatrix inertia = SpatialMatrix::Zero();  // spatial inertia about the body origin (RBDA eq. 2.63)
   double armature = 0.0;
+  double stiffness = 0.0, damping = 0.0, spring_reference = 0.0;  // the passive spring-damper (BodySpec)
 };
 
 class Tree {
@@ -74,7 +80,8 @@ class Tree {
 
 // Derives and validates the tree. Throws std::invalid_argument naming the body on: a parent not
 // before its child (or out of range), a zero or non-finite axis, a rotation that is not proper
-// orthonormal, a negative or non-finite mass or armature, a non-finite centre of mass or
+// orthonormal, a negative or non-finite mass, armature, stiffness or damping (or a non-finite
+// spring reference), a non-finite centre of mass or
 // position, an inertia tensor that is not symmetric, not positive definite (for a body with mass;
 // a massless body's must be zero) or whose principal moments violate the triangle inequality
 // (I_a + I_b >= I_c); and on non-finite gravity. Not checked: that M(q) is positive definite when
