@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "kernel/model.hpp"
+#include "sweep/paths.hpp"  // load_model_with: a model file with --set overrides
 
 namespace ff {
 
@@ -28,8 +29,5 @@ void add_diagnose_verb(CLI::App& app);
 void add_calibrate_verb(CLI::App& app);
 void add_record_verb(CLI::App& app);
 void add_compare_verb(CLI::App& app);
-
-// Loads a model file and applies `--set PATH=VALUE` overrides (sweep/paths.hpp).
-Model load_model_with(const std::string& path, const std::vector<std::string>& sets);
 
 }  // namespace ff

@@ -140,4 +140,28 @@ Model make_model_with(YAML::Node doc, const std::string& model_source, const std
   }
 }
 
+namespace {
+std::vector<Assignment> parse_assignments(const std::vector<std::string>& sets) {
+  std::vector<Assignment> out;
+  for (const auto& s : sets) out.push_back(parse_assignment(s));
+  return out;
+}
+}  // namespace
+
+Model load_model_with(const std::string& path, const std::vector<std::string>& sets) {
+  return make_model_with(load_yaml_file(path), path, parse_assignments(sets));
+}
+
+ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets) {
+  ModelSource src{load_yaml_file(path), path, parse_assignments(sets)};
+  build_model(src);
+  return src;
+}
+
+Model build_model(const ModelSource& src, const std::vector<Assignment>& extra) {
+  std::vector<Assignment> all = src.set;
+  all.insert(all.end(), extra.begin(), extra.end());
+  return make_model_with(YAML::Clone(src.doc), src.path, all);
+}
+
 }  // namespace ff

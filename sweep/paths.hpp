@@ -36,4 +36,19 @@ Assignment parse_assignment(const std::string& text);
 // names `model_source` and its line.
 Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set);
 
+// The one way to load a model file with its --set overrides ("path=value"):
+// the model itself,
+Model load_model_with(const std::string& path, const std::vector<std::string>& sets);
+// or its source: the document, so that more paths can be set on it later (diagnose's candidates,
+// calibrate's additions), and where it came from. The model is built once here, so that a bad file or
+// override fails before any other input is read.
+struct ModelSource {
+  YAML::Node doc;
+  std::string path;
+  std::vector<Assignment> set;  // --set overrides, applied first
+};
+ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets);
+// The model of a source, with `extra` assignments after its own.
+Model build_model(const ModelSource& src, const std::vector<Assignment>& extra = {});
+
 }  // namespace ff

@@ -18,21 +18,6 @@
 
 namespace ff {
 
-ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets) {
-  ModelSource src;
-  src.doc = load_yaml_file(path);
-  src.path = path;
-  for (const auto& s : sets) src.set.push_back(parse_assignment(s));
-  build_model(src);  // a bad model or override fails here, before any fitting
-  return src;
-}
-
-Model build_model(const ModelSource& src, const std::vector<Assignment>& extra) {
-  std::vector<Assignment> all = src.set;
-  all.insert(all.end(), extra.begin(), extra.end());
-  return make_model_with(YAML::Clone(src.doc), src.path, all);
-}
-
 namespace {
 
 Assignment assign(const std::string& path, const YAML::Node& value) {

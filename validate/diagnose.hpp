@@ -31,14 +31,6 @@ inline constexpr double kSignificantDeltaBic = -10.0;
 // record whose residual is rounding, any parameter "explains" a share of it, and BIC alone says yes.
 inline constexpr double kMinFitGain = 0.02;
 
-// The model to diagnose: its document (so effects can be set by path) and where it came from.
-struct ModelSource {
-  YAML::Node doc;
-  std::string path;
-  std::vector<Assignment> set;  // --set overrides, applied first
-};
-ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets);
-Model build_model(const ModelSource& src, const std::vector<Assignment>& extra = {});
 
 // Residual tests of one scored channel (decimated, normalised residual): is what is left noise?
 struct ChannelTest {
