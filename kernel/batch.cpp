@@ -35,30 +35,39 @@ int calc_sensor_hold(const ChannelSpec& ch, double controller_rate) {
   return ch.rate > 0 ? static_cast<int>(std::lround(controller_rate / ch.rate)) : 1;
 }
 
+BatchShape batch_shape_of(const Model& m) {
+  const auto& ss = m.spec.sensors;
+  BatchShape b;
+  b.nseg = m.nseg;
+  b.notch_sections = m.spec.notch.enabled ? 2 * m.spec.notch.order + 1 : 0;
+  b.substeps = m.substeps;
+  b.control_period = m.control_period;
+  b.duration = m.duration;
+  b.integrator = static_cast<int>(m.spec.simulation.integrator);
+  b.drive_parts = (m.spec.hydraulics.enabled ? 1 : 0) + (m.spec.drive.enabled ? 2 : 0) +
+                  (m.spec.friction.model == "lugre" ? 4 : 0);
+  b.recorded = (ss.strain_gauge.enabled ? 1 : 0) + (ss.tip_accelerometer.enabled ? 2 : 0) +
+               (ss.tip_position.enabled ? 4 : 0);
+  return b;
+}
+
 BatchModel make_batch(std::span<const Model> models) {
   if (models.empty()) throw std::invalid_argument("make_batch: no models");
   if (models.size() > static_cast<std::size_t>(kMaxLanes)) throw std::invalid_argument("make_batch: more than kMaxLanes lanes");
   const Model& m0 = models[0];
   BatchModel bm;
   bm.W = static_cast<int>(models.size());
-  bm.nseg = m0.nseg;
-  bm.nsections = m0.spec.notch.enabled ? 2 * m0.spec.notch.order + 1 : 0;
-  bm.substeps = m0.substeps;
-  bm.control_period = m0.control_period;
-  bm.duration = m0.duration;
-  for (const auto& m : models) {
-    const int ns = m.spec.notch.enabled ? 2 * m.spec.notch.order + 1 : 0;
-    if (m.nseg != bm.nseg || ns != bm.nsections || m.substeps != bm.substeps ||
-        m.control_period != bm.control_period || m.duration != bm.duration ||
-        m.spec.hydraulics.enabled != m0.spec.hydraulics.enabled || m.spec.drive.enabled != m0.spec.drive.enabled ||
-        m.spec.friction.model != m0.spec.friction.model ||
-        m.spec.sensors.strain_gauge.enabled != m0.spec.sensors.strain_gauge.enabled ||
-        m.spec.sensors.tip_accelerometer.enabled != m0.spec.sensors.tip_accelerometer.enabled ||
-        m.spec.sensors.tip_position.enabled != m0.spec.sensors.tip_position.enabled)
+  const BatchShape shape = batch_shape_of(m0);
+  bm.nseg = shape.nseg;
+  bm.nsections = shape.notch_sections;
+  bm.substeps = shape.substeps;
+  bm.control_period = shape.control_period;
+  bm.duration = shape.duration;
+  for (const auto& m : models)
+    if (batch_shape_of(m) != shape)
       throw std::invalid_argument(
-          "make_batch: models differ in shape (segments, notch order, rate, substeps, duration, hub drive parts or "
-          "recorded sensors)");
-  }
+          "make_batch: models differ in shape (segments, notch order, rate, substeps, duration, integrator, hub "
+          "drive parts or recorded sensors)");
   bm.layout = make_drive_layout(m0.spec);
   for (const auto& m : models) bm.drive.push_back(make_lane_drive(m));
   bm.models.assign(models.begin(), models.end());

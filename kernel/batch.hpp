@@ -68,9 +68,21 @@ struct BatchModel {
   std::vector<LaneDrive> drive;     // (W) the hub drive's constants (kernel/drive.hpp)
 };
 
-// Gathers models of equal shape (segments, notch order and enablement, rate, substeps, duration,
-// hub drive parts, recorded sensors enabled)
-// into lanes. Throws std::invalid_argument when shapes differ.
+// Everything the lanes of one batch must share: what sizes the state and the step loop.
+struct BatchShape {
+  int nseg = 0;
+  int notch_sections = 0;     // 2 order + 1 when the notch is on, else 0
+  int substeps = 0;
+  double control_period = 0;  // s
+  double duration = 0;        // s
+  int integrator = 0;         // Integrator
+  int drive_parts = 0;        // bits: hydraulic actuator 1, drive train 2, LuGre friction 4
+  int recorded = 0;           // bits: strain gauge 1, tip accelerometer 2, tip position 4
+  auto operator<=>(const BatchShape&) const = default;
+};
+BatchShape batch_shape_of(const Model& m);
+
+// Gathers models of one BatchShape into lanes. Throws std::invalid_argument when shapes differ.
 BatchModel make_batch(std::span<const Model> models);
 
 // Controller samples per sample of a sensor channel: controller.rate / rate (1 when rate = 0).
