@@ -29,9 +29,8 @@ double calc_hub_friction_damping(const BatchModel& bm, int l, double w) {
 }
 
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
-                           Workspace& ws) {
+                           double* tj) {
   const int W = bm.W, N = bm.nseg;
-  double* tj = ws.tau_joint.data();
   const double* k = bm.joint_k.data();
   const double* c = bm.joint_c.data();
   const double* k3 = bm.joint_k3.data();
@@ -56,14 +55,13 @@ void compute_sincos(int n, const double* x, double* s, double* c) {
 }
 }  // namespace
 
-void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, double* qdd, Workspace& ws) {
+void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, const double* tau,
+                              const double* arm, double* qdd, Workspace& ws) {
   const int W = bm.W, N = bm.nseg;
   const double* bmass = bm.body_mass.data();
   const double* bfirst = bm.body_first.data();
   const double* binert = bm.body_inertia.data();
   const double* len = bm.seg_length.data();
-  const double* tau = ws.tau_joint.data();
-  const double* arm = ws.armature.data();
   double *cq = ws.cq.data(), *sq = ws.sq.data(), *vw = ws.vw.data(), *vx = ws.vx.data(), *vy = ws.vy.data();
   double *cy = ws.cy.data(), *cz = ws.cz.data();
   double *i00 = ws.i00.data(), *i01 = ws.i01.data(), *i02 = ws.i02.data();
@@ -185,8 +183,8 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
 void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* z,
                           const double* tau_cmd, double* qdd, double* zdot, Workspace& ws) {
   compute_hub_drive(bm, q, v, z, tau_cmd, ws.tau_hub.data(), zdot);
-  compute_joint_torques(bm, q, v, ws.tau_hub.data(), ws);
-  compute_forward_dynamics(bm, q, v, qdd, ws);
+  compute_joint_torques(bm, q, v, ws.tau_hub.data(), ws.tau_joint.data());
+  compute_forward_dynamics(bm, q, v, ws.tau_joint.data(), ws.armature.data(), qdd, ws);
 }
 
 void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws) {

@@ -6,10 +6,10 @@
 
 namespace ff {
 
-// Joint torques: tau_0 = the hub drive's torque (friction included, W), tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i
-// (i >= 1). Writes ws.tau_joint.
+// Joint torques tau (N x W): tau_0 = the hub drive's torque (friction included, W),
+// tau_i = -k_i q_i - k3_i q_i^3 - c_i v_i (i >= 1).
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
-                           Workspace& ws);
+                           double* tau);
 
 // Hub friction torque at hub rate w of lane l (FrictionSpec), N·m; never adds energy: tau_f w <= 0.
 double calc_hub_friction(const BatchModel& bm, int lane, double w);
@@ -20,8 +20,10 @@ double calc_hub_friction_damping(const BatchModel& bm, int lane, double w);
 
 // Forward dynamics qdd = M(q)^-1 (tau - C(q, v) v) by the articulated-body algorithm
 // (Featherstone, Rigid Body Dynamics Algorithms, 2008, Table 7.1, planar form), O(N) per lane.
-// Reads ws.tau_joint and ws.armature; q, v, qdd are (N x W).
-void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, double* qdd, Workspace& ws);
+// q, v, tau (joint torques), armature (extra joint-space inertia on M's diagonal) and qdd are (N x W);
+// ws is scratch.
+void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, const double* tau,
+                              const double* armature, double* qdd, Workspace& ws);
 
 // Everything at once: the hub drive (torque on the hub and its state rates zdot, nz x W) from the
 // held demand tau_cmd (W), the joint torques, then qdd. zdot may be null when there are no drive states.

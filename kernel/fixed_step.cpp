@@ -164,9 +164,9 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   double *z = s.z.data(), *Z1 = ws.z1.data(), *Z2 = ws.kz[0].data(), *zpre = ws.kz[1].data();
   if (drive) solve_drive_stage(bm, qs, vs, s.tau.data(), z, gh, Z1, ws);
   compute_hub_drive(bm, qs, vs, Z1, s.tau.data(), ws.tau_hub.data(), nullptr);
-  compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws);
+  compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
   set_friction_armature(bm, vs, gh, ws);
-  compute_forward_dynamics(bm, qk, vk, A1, ws);
+  compute_forward_dynamics(bm, qk, vk, ws.tau_joint.data(), ws.armature.data(), A1, ws);
   // Stage 2 (t + h): Q2 = q + (1-g) h V1 + gh V2, V2 = v + (1-g) h A1 + gh A2.
   const double b1 = (1.0 - g) * h;
   double* vpre = ws.v1.data();
@@ -188,9 +188,9 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
     std::copy(Z2, Z2 + nz, z);
   }
   compute_hub_drive(bm, qs, vs, z, s.tau.data(), ws.tau_hub.data(), nullptr);
-  compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws);
+  compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
   set_friction_armature(bm, vs, gh, ws);
-  compute_forward_dynamics(bm, qk, vk, A2, ws);
+  compute_forward_dynamics(bm, qk, vk, ws.tau_joint.data(), ws.armature.data(), A2, ws);
   // The second stage is the new state (stiffly accurate).
 #pragma omp simd
   for (std::size_t j = 0; j < n; ++j) {
@@ -221,11 +221,11 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   if (bm.layout.nz > 0) solve_drive_stage(bm, qs, v, s.tau.data(), z, gh, Z, ws);
   compute_hub_drive(bm, qs, v, Z, s.tau.data(), ws.tau_hub.data(), nullptr);
   for (std::size_t j = 0; j < s.z.size(); ++j) z[j] = 2.0 * Z[j] - z[j];
-  compute_joint_torques(bm, qs, v, ws.tau_hub.data(), ws);
+  compute_joint_torques(bm, qs, v, ws.tau_hub.data(), ws.tau_joint.data());
   // The friction map backward-Euler implicit (armature h F', not h/2 F'): the midpoint rule is not
   // L-stable, and a stuck hub would flip its rate's sign every step.
   set_friction_armature(bm, v, h, ws);
-  compute_forward_dynamics(bm, qs, vk, A, ws);
+  compute_forward_dynamics(bm, qs, vk, ws.tau_joint.data(), ws.armature.data(), A, ws);
   // q += h V, v += h A
 #pragma omp simd
   for (std::size_t j = 0; j < n; ++j) {
