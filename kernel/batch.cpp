@@ -150,6 +150,7 @@ BatchState make_state(const BatchModel& bm) {
   const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
   s.q.assign(nw, 0.0);
   s.v.assign(nw, 0.0);
+  s.a_prev.assign(nw, 0.0);
   s.z.assign(static_cast<std::size_t>(bm.layout.nz) * bm.W, 0.0);
   init_drive_state(bm, s.z.data());
   s.tau.assign(bm.W, 0.0);
@@ -168,7 +169,8 @@ void copy_lane(const BatchModel& bm, BatchState& s, int from, int to) {
   auto copy = [&](std::vector<double>& x) {
     for (std::size_t o = 0; o < x.size(); o += W) x[o + to] = x[o + from];
   };
-  for (auto* x : {&s.q, &s.v, &s.z, &s.tau, &s.integral, &s.notch_state, &s.measured[0], &s.measured[1]}) copy(*x);
+  for (auto* x : {&s.q, &s.v, &s.a_prev, &s.z, &s.tau, &s.integral, &s.notch_state, &s.measured[0], &s.measured[1]})
+    copy(*x);
   for (auto& x : s.recorded) copy(x);
   s.status[to] = s.status[from];
 }
@@ -178,7 +180,7 @@ Workspace make_workspace(const BatchModel& bm) {
   const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
   for (auto* x : {&ws.cq, &ws.sq, &ws.vw, &ws.vx, &ws.vy, &ws.cy, &ws.cz, &ws.i00, &ws.i01, &ws.i02, &ws.i11,
                   &ws.i12, &ws.i22, &ws.p0, &ws.p1, &ws.p2, &ws.d, &ws.u, &ws.a0, &ws.a1, &ws.a2, &ws.armature,
-                  &ws.q1, &ws.v1, &ws.tau_joint, &ws.a_prev})
+                  &ws.q1, &ws.v1, &ws.tau_joint})
     x->assign(nw, 0.0);
   const std::size_t nzw = static_cast<std::size_t>(bm.layout.nz) * bm.W;
   for (int k = 0; k < 4; ++k) {

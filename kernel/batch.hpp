@@ -103,16 +103,17 @@ struct BatchState {
   std::vector<double> notch_state;  // (2 * nsections x W)
   std::vector<double> measured[2];  // (sensor_history x W) ring of past measurements per channel
   std::vector<double> recorded[kRecordedChannels];  // (rec_history x W) rings of the enabled recorded sensors
+  std::vector<double> a_prev;       // (N x W) the last step's accelerations, rad/s^2: SDIRK2's and the
+                                    // midpoint rule's velocity predictor (zero before the first step)
   std::vector<LaneStatus> status;   // (W)
 };
 
 BatchState make_state(const BatchModel& bm);
 
 // Copies everything of lane `from` that changes during a run (plant q, v, drive z, held torque,
-// integral, notch, sensor rings, status) into lane `to`: lane `to` then continues as lane `from`
-// would. Allocates nothing. The integrators' scratch stays the lane's own: RK4 and CVODE carry
-// nothing between samples, SDIRK2 and midpoint their velocity predictor (Workspace::a_prev), so
-// their first step after a copy differs from lane `from`'s at truncation-error level.
+// integral, notch, sensor rings, the integrators' predictor, status) into lane `to`: lane `to` then
+// continues bit for bit as lane `from` would (the fixed-step integrators; CVODE keeps its own
+// history). Allocates nothing.
 void copy_lane(const BatchModel& bm, BatchState& s, int from, int to);
 
 // Scratch for the articulated-body algorithm and the integrators, sized once: nothing is
@@ -128,7 +129,6 @@ struct Workspace {
   std::vector<double> a0, a1, a2;                     // body spatial acceleration
   std::vector<double> armature;                       // extra joint-space inertia (N x W)
   double armature_gh = 0.0;                           // the h gamma `armature` was made for, s
-  std::vector<double> a_prev;                         // last step's acceleration (N x W), implicit predictors
   // fixed-step integrator stages, (N x W) each
   std::vector<double> q1, v1, kq[4], kv[4];
   std::vector<double> tau_joint;                      // (N x W) joint torques

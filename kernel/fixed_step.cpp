@@ -147,7 +147,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   set_armature(bm, ws, gh);
   double* q = s.q.data();
   double* v = s.v.data();
-  double* a_prev = ws.a_prev.data();
+  double* a_prev = s.a_prev.data();
   double *qs = ws.kq[0].data(), *vs = ws.kv[0].data();        // spring state: Qpre + gh Vpre, Vpre
   double *qk = ws.kq[1].data(), *vk = ws.kv[1].data();        // kinematic predictor of the stage
   double *A1 = ws.kq[2].data(), *A2 = ws.kv[2].data();        // stage accelerations
@@ -206,7 +206,7 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   set_armature(bm, ws, gh);
   double* q = s.q.data();
   double* v = s.v.data();
-  double* a_prev = ws.a_prev.data();
+  double* a_prev = s.a_prev.data();
   double *qs = ws.kq[0].data(), *vk = ws.kv[0].data(), *A = ws.kv[1].data();
   // Midpoint t + h/2: V = v + (h/2) A, Q = q + (h/2) V = qs + (h/2)^2 A with qs = q + (h/2) v.
   // Springs and dampers at (qs, v) plus the armature; M and velocity terms at (qs, v + (h/2) a_prev).
