@@ -247,6 +247,83 @@ double calc_potential_energy(const Tree& tree, const ConstVec& q, TreeWorkspace&
   return V;
 }
 
+void calc_passive_forces(const Tree& tree, const ConstVec& q, const ConstVec& qd, Eigen::Ref<Eigen::VectorXd> tau) {
+  const char* fn = "calc_passive_forces";
+  check_size(fn, "q", q.size(), tree.nq());
+  check_size(fn, "qd", qd.size(), tree.nv());
+  check_size(fn, "tau", tau.size(), tree.nv());
+  for (const Body& b : tree.bodies())
+    if (b.dof >= 0) tau[b.dof] = -b.stiffness * (q[b.dof] - b.spring_reference) - b.damping * qd[b.dof];
+}
+
+double calc_spring_energy(const Tree& tree, const ConstVec& q) {
+  check_size("calc_spring_energy", "q", q.size(), tree.nq());
+  double V = 0.0;
+  for (const Body& b : tree.bodies()) {
+    if (b.dof < 0) continue;
+    const double dq = q[b.dof] - b.spring_reference;
+    V += 0.5 * b.stiffness * dq * dq;
+  }
+  return V;
+}
+
+namespace {
+
+// Checks a point-load call and fills ws.X0 (base to body) for q.
+void prepare_point(const char* fn, const Tree& tree, const ConstVec& q, int body, TreeWorkspace& ws) {
+  check_workspace(fn, tree, ws);
+  check_size(fn, "q", q.size(), tree.nq());
+  if (body < 0 || body >= tree.num_bodies())
+    throw std::invalid_argument(std::string(fn) + ": no body " + std::to_string(body) + " (the tree has " +
+                                std::to_string(tree.num_bodies()) + ")");
+  calc_parent_transforms(tree, q, ws);
+  calc_base_transforms(tree, ws);
+}
+
+// Column of joint j (body bj) for the point p (base coordinates): [a; a × (p - o)] or [0; a].
+SpatialMotion point_column(const Body& bj, const Transform& X0j, const Vec3& p) {
+  const Vec3 a = X0j.E.transpose() * bj.axis;  // the axis is the same in the joint and the body frame
+  SpatialMotion col = SpatialMotion::Zero();
+  if (bj.joint == JointType::kRevolute) {
+    col.head<3>() = a;
+    col.tail<3>() = a.cross(p - X0j.r);
+  } else {
+    col.tail<3>() = a;
+  }
+  return col;
+}
+
+}  // namespace
+
+void calc_point_jacobian(const Tree& tree, const ConstVec& q, int body, const Vec3& point,
+                         Eigen::Ref<Eigen::MatrixXd> J, TreeWorkspace& ws) {
+  const char* fn = "calc_point_jacobian";
+  if (J.rows() != 6 || J.cols() != tree.nv())
+    throw std::invalid_argument(std::string(fn) + ": J is " + std::to_string(J.rows()) + " x " +
+                                std::to_string(J.cols()) + ", it must be 6 x nv = 6 x " + std::to_string(tree.nv()));
+  prepare_point(fn, tree, q, body, ws);
+  J.setZero();
+  const Vec3 p = ws.X0[body].apply_inverse_point(point);
+  for (int j = body; j >= 0; j = tree.body(j).parent) {
+    const Body& bj = tree.body(j);
+    if (bj.dof >= 0) J.col(bj.dof) = point_column(bj, ws.X0[j], p);
+  }
+}
+
+void add_point_load(const Tree& tree, const ConstVec& q, int body, const Vec3& point, const Vec3& force,
+                    const Vec3& moment, Eigen::Ref<Eigen::VectorXd> tau, TreeWorkspace& ws) {
+  const char* fn = "add_point_load";
+  check_size(fn, "tau", tau.size(), tree.nv());
+  prepare_point(fn, tree, q, body, ws);
+  SpatialForce w;
+  w << moment, force;
+  const Vec3 p = ws.X0[body].apply_inverse_point(point);
+  for (int j = body; j >= 0; j = tree.body(j).parent) {
+    const Body& bj = tree.body(j);
+    if (bj.dof >= 0) tau[bj.dof] += point_column(bj, ws.X0[j], p).dot(w);
+  }
+}
+
 void calc_body_poses(const Tree& tree, const ConstVec& q, std::span<Pose> poses) {
   check_size("calc_body_poses", "q", q.size(), tree.nq());
   check_size("calc_body_poses", "poses", static_cast<Eigen::Index>(poses.size()), tree.num_bodies());

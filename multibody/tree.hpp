@@ -31,7 +31,8 @@ struct BodySpec {
   Mat3 inertia = Mat3::Zero();            // rotational inertia about the centre of mass, body axes, kg·m²
   double armature = 0.0;                  // rotor inertia on M's diagonal, kg·m² (prismatic: kg); unused when fixed
   // The joint's passive spring and damper: tau = -stiffness (q - spring_reference) - damping qd
-  // (N·m/rad and N·m·s/rad; prismatic N/m and N·s/m); unused when fixed.
+  // (N·m/rad and N·m·s/rad; prismatic N/m and N·s/m); unused when fixed. calc_passive_forces
+  // (algorithms.hpp) evaluates them; the dynamics functions leave them to the caller's tau.
   double stiffness = 0.0;
   double damping = 0.0;
   double spring_reference = 0.0;          // rad (prismatic: m)
