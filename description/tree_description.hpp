@@ -1,0 +1,48 @@
+// A kinematic tree read from a file (tree YAML, description/tree_yaml.hpp, or URDF, description/urdf.hpp):
+// the TreeSpec of multibody/tree.hpp with the names of its bodies and joints and what the file says
+// about each joint that the tree does not use yet.
+#pragma once
+
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "multibody/spatial.hpp"
+#include "multibody/tree.hpp"
+
+namespace ff {
+
+// What a description says about a joint beyond the TreeSpec: kept, not used by the tree (yet).
+struct JointInfo {
+  static constexpr double kNone = std::numeric_limits<double>::infinity();
+  std::string name;
+  double lower = -kNone, upper = kNone;  // position limits, rad (prismatic: m); -inf, +inf = none
+  double effort = kNone;                 // |tau| limit, N·m (prismatic: N); inf = none
+  double velocity = kNone;               // |qd| limit, rad/s (prismatic: m/s); inf = none
+  double friction = 0.0;                 // Coulomb friction, N·m (prismatic: N) (URDF <dynamics friction>)
+};
+
+struct TreeDescription {
+  TreeSpec spec;
+  std::vector<JointInfo> joints;           // one per body, in the order of spec.bodies: the joint to its parent
+  std::string base;                        // the base's name: `base` (YAML) or the URDF root link's
+  std::map<std::string, int> body_index;   // body (URDF: link) name -> index into spec.bodies and Tree::bodies()
+  std::map<std::string, int> dof_index;    // revolute or prismatic joint name -> dof (index into q, qd, tau)
+  std::vector<std::string> notes;          // what was read and ignored, one line each ("FILE:LINE: ...")
+};
+
+// The active rotation of fixed-axis roll, pitch, yaw (rad), URDF's convention:
+// R = Rz(yaw) Ry(pitch) Rx(roll) (roll about x first, then pitch about the fixed y, then yaw about z).
+Mat3 rpy_rotation(double roll, double pitch, double yaw);
+
+// For the readers: why make_tree would reject a body, "" when it would not, in make_tree's words
+// without its "tree: body N" prefix. inertia_fault looks at the mass, centre of mass and inertia
+// alone; joint_fault at everything else of the body (its parent and place in the tree not included).
+std::string inertia_fault(const BodySpec& body);
+std::string joint_fault(const BodySpec& body);
+
+// Fills body_index and dof_index from spec and joints (dofs numbered as make_tree numbers them).
+void index_description(TreeDescription& d);
+
+}  // namespace ff

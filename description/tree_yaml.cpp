@@ -1,0 +1,317 @@
+// Tree YAML (tree_yaml.hpp). Each block's keys are one field table below: the reader reads, bounds and
+// requires from it, and tree_yaml_keys() lists it for the docs test (tests/description/tree_yaml_test.cpp).
+#include "description/tree_yaml.hpp"
+
+#include <array>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <variant>
+
+#include "kernel/errors.hpp"
+
+namespace ff {
+
+namespace {
+
+enum class Bound { kAny, kNonNegative, kNonZero };
+
+// One key of a block: where its value goes, whether it must be given, its bound. The default is the
+// member's initial value in a default-constructed block; a text key's, as the docs write it, `fallback`.
+template <class T>
+struct Field {
+  const char* key;
+  std::variant<double T::*, Vec3 T::*, std::string T::*> member;
+  const char* unit = "";
+  bool required = false;
+  Bound bound = Bound::kAny;
+  bool moving_only = false;        // revolute and prismatic joints only: an error on a fixed joint
+  const char* fallback = nullptr;  // the default of a text key, as the docs write it
+};
+
+constexpr const char* kDefaultJointType = "revolute";
+
+// The blocks as written, before they become a BodySpec.
+struct BodyBlock {
+  std::string name, parent;
+  double mass = 0.0;          // kg
+  Vec3 com = Vec3::Zero();    // m, body frame
+};
+struct JointBlock {
+  std::string name;           // default: the body's name
+  std::string type = kDefaultJointType;
+  Vec3 axis = Vec3::UnitZ();  // joint frame
+  Vec3 position = Vec3::Zero();  // m, parent frame
+  Vec3 rpy = Vec3::Zero();    // rad, fixed-axis roll, pitch, yaw in the parent frame
+  double lower = -JointInfo::kNone, upper = JointInfo::kNone, effort = JointInfo::kNone,
+         velocity = JointInfo::kNone, friction = 0.0;
+};
+struct InertiaBlock {
+  double ixx = 0.0, iyy = 0.0, izz = 0.0, ixy = 0.0, ixz = 0.0, iyz = 0.0;  // kg·m², about the COM, body axes
+};
+
+const std::array<Field<TreeSpec>, 1> kTopFields{{
+    {.key = "gravity", .member = &TreeSpec::gravity, .unit = "m/s²"},
+}};
+
+const std::array<Field<BodyBlock>, 4> kBodyFields{{
+    {.key = "name", .member = &BodyBlock::name, .required = true},
+    {.key = "parent", .member = &BodyBlock::parent, .required = true},
+    {.key = "mass", .member = &BodyBlock::mass, .unit = "kg", .required = true, .bound = Bound::kNonNegative},
+    {.key = "com", .member = &BodyBlock::com, .unit = "m"},
+}};
+
+const std::array<Field<JointBlock>, 10> kJointFields{{
+    {.key = "name", .member = &JointBlock::name, .fallback = "the body's name"},
+    {.key = "type", .member = &JointBlock::type, .fallback = kDefaultJointType},
+    {.key = "axis", .member = &JointBlock::axis, .bound = Bound::kNonZero, .moving_only = true},
+    {.key = "position", .member = &JointBlock::position, .unit = "m"},
+    {.key = "rpy", .member = &JointBlock::rpy, .unit = "rad"},
+    {.key = "lower", .member = &JointBlock::lower, .unit = "rad (m)", .moving_only = true},
+    {.key = "upper", .member = &JointBlock::upper, .unit = "rad (m)", .moving_only = true},
+    {.key = "effort", .member = &JointBlock::effort, .unit = "N·m (N)", .bound = Bound::kNonNegative, .moving_only = true},
+    {.key = "velocity", .member = &JointBlock::velocity, .unit = "rad/s (m/s)", .bound = Bound::kNonNegative,
+     .moving_only = true},
+    {.key = "friction", .member = &JointBlock::friction, .unit = "N·m (N)", .bound = Bound::kNonNegative,
+     .moving_only = true},
+}};
+
+// The passive joint keys go straight into the BodySpec (shared with the URDF sidecar).
+const std::array<Field<BodySpec>, 4> kSpringFields{{
+    {.key = "armature", .member = &BodySpec::armature, .unit = "kg·m² (kg)", .bound = Bound::kNonNegative,
+     .moving_only = true},
+    {.key = "stiffness", .member = &BodySpec::stiffness, .unit = "N·m/rad (N/m)", .bound = Bound::kNonNegative,
+     .moving_only = true},
+    {.key = "damping", .member = &BodySpec::damping, .unit = "N·m·s/rad (N·s/m)", .bound = Bound::kNonNegative,
+     .moving_only = true},
+    {.key = "spring_reference", .member = &BodySpec::spring_reference, .unit = "rad (m)", .moving_only = true},
+}};
+
+const std::array<Field<InertiaBlock>, 6> kInertiaFields{{
+    {.key = "ixx", .member = &InertiaBlock::ixx, .unit = "kg·m²", .required = true},
+    {.key = "iyy", .member = &InertiaBlock::iyy, .unit = "kg·m²", .required = true},
+    {.key = "izz", .member = &InertiaBlock::izz, .unit = "kg·m²", .required = true},
+    {.key = "ixy", .member = &InertiaBlock::ixy, .unit = "kg·m²"},
+    {.key = "ixz", .member = &InertiaBlock::ixz, .unit = "kg·m²"},
+    {.key = "iyz", .member = &InertiaBlock::iyz, .unit = "kg·m²"},
+}};
+
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
+
+std::string format_number(double x) {
+  if (x == JointInfo::kNone || x == -JointInfo::kNone) return "none";
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+
+std::string format_vector(const Vec3& v) {
+  return "[" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + "]";
+}
+
+// A list of exactly three numbers (not YamlReader's one-number-for-all).
+void read_vec3(YamlReader& r, const std::string& key, Vec3& out) {
+  const YAML::Node v = r.raw(key);
+  if (!v.IsSequence() || v.size() != 3) r.fail(key, "expected a list of 3 numbers");
+  double x[3];
+  r.optional_array(key, x, 3);
+  out = Vec3(x[0], x[1], x[2]);
+}
+
+// Reads the fields present in `r` into `out`, checking their bounds; absent ones keep their defaults.
+template <class T, std::size_t N>
+void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) {
+  for (const Field<T>& f : fields) {
+    if (!r.has(f.key)) continue;
+    std::visit(Overloaded{[&](double T::*m) {
+                            r.optional(f.key, out.*m);
+                            if (f.bound == Bound::kNonNegative && out.*m < 0.0)
+                              r.fail(f.key, "must be >= 0, got " + format_number(out.*m));
+                          },
+                          [&](Vec3 T::*m) {
+                            read_vec3(r, f.key, out.*m);
+                            if (f.bound == Bound::kNonZero && (out.*m).norm() == 0.0)
+                              r.fail(f.key, "is zero: a joint axis needs a direction");
+                          },
+                          [&](std::string T::*m) {
+                            r.optional(f.key, out.*m);
+                            if ((out.*m).empty()) r.fail(f.key, "must not be empty");
+                          }},
+               f.member);
+  }
+}
+
+// After finish() (so a misspelt key is reported as unknown, not as the required one it misses).
+template <class T, std::size_t N>
+void require(const YamlReader& r, const std::array<Field<T>, N>& fields) {
+  for (const Field<T>& f : fields)
+    if (f.required && !r.has(f.key)) r.fail(f.key, "missing required value");
+}
+
+// A fixed joint has no coordinate: its dof-only keys are mistakes.
+template <class T, std::size_t N>
+void reject_moving_only(const YamlReader& r, const std::array<Field<T>, N>& fields) {
+  for (const Field<T>& f : fields)
+    if (f.moving_only && r.has(f.key)) r.fail(f.key, "a fixed joint has no degree of freedom: remove this key");
+}
+
+template <class T, std::size_t N>
+void add_keys(std::vector<KeyDoc>& out, const std::string& prefix, const std::array<Field<T>, N>& fields) {
+  const T defaults{};
+  for (const Field<T>& f : fields) {
+    std::string fallback;
+    if (f.fallback)
+      fallback = f.fallback;
+    else if (!f.required)
+      fallback = std::visit(Overloaded{[&](double T::*m) { return format_number(defaults.*m); },
+                                       [&](Vec3 T::*m) { return format_vector(defaults.*m); },
+                                       [&](std::string T::*) { return std::string(); }},
+                            f.member);
+    out.push_back({prefix + f.key, f.unit, f.required ? "yes" : "no", fallback});
+  }
+}
+
+JointType parse_joint_type(const YamlReader& joint, const std::string& type) {
+  if (type == "revolute") return JointType::kRevolute;
+  if (type == "prismatic") return JointType::kPrismatic;
+  if (type == "fixed") return JointType::kFixed;
+  joint.fail("type", "unknown joint type '" + type + "' (revolute, prismatic or fixed)");
+}
+
+struct Named {
+  int index;
+  int line;
+};
+
+}  // namespace
+
+void read_joint_springs(YamlReader& r, BodySpec& body) { read_present(r, kSpringFields, body); }
+
+std::vector<KeyDoc> joint_spring_keys(const std::string& prefix) {
+  std::vector<KeyDoc> out;
+  add_keys(out, prefix, kSpringFields);
+  return out;
+}
+
+std::vector<KeyDoc> tree_yaml_keys() {
+  std::vector<KeyDoc> out;
+  add_keys(out, "", kTopFields);
+  out.push_back({"bodies", "", "yes", ""});
+  add_keys(out, "bodies[i].", kBodyFields);
+  out.push_back({"bodies[i].joint", "", "yes", ""});
+  add_keys(out, "bodies[i].joint.", kJointFields);
+  add_keys(out, "bodies[i].joint.", kSpringFields);
+  out.push_back({"bodies[i].inertia", "kg·m²", "no", "zero"});
+  add_keys(out, "bodies[i].inertia.", kInertiaFields);
+  return out;
+}
+
+TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source) {
+  LineMap lines;
+  YamlReader top(doc, source, "", &lines);
+  if (!doc || doc.IsNull()) top.fail("bodies", "the file is empty");
+  TreeDescription d;
+  d.base = "base";
+  read_present(top, kTopFields, d.spec);
+  const YAML::Node list = top.raw("bodies");
+  std::vector<YamlReader> bodies = top.sequence("bodies");
+  top.finish();
+  if (!top.has("bodies")) top.fail("bodies", "missing required value");
+  if (bodies.empty()) top.fail("bodies", "expected a list of at least one body");
+
+  // Every name in the list, for "defined later" (the first of a name; a second is an error below).
+  std::map<std::string, Named> listed;
+  for (std::size_t i = 0; i < list.size(); ++i)
+    if (list[i].IsMap() && list[i]["name"] && list[i]["name"].IsScalar())
+      listed.try_emplace(list[i]["name"].Scalar(), Named{static_cast<int>(i), list[i]["name"].Mark().line + 1});
+
+  std::map<std::string, Named> body_names, joint_names;  // the bodies read so far
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const int i = static_cast<int>(k);
+    YamlReader& r = bodies[k];
+    BodyBlock bb;
+    read_present(r, kBodyFields, bb);
+    YamlReader jr = r.child("joint");
+    JointBlock jb;
+    read_present(jr, kJointFields, jb);
+    BodySpec b;
+    read_present(jr, kSpringFields, b);
+    YamlReader ir = r.child("inertia");
+    InertiaBlock ib;
+    read_present(ir, kInertiaFields, ib);
+    jr.finish();
+    ir.finish();
+    r.finish();
+    require(r, kBodyFields);
+    if (!r.has("joint")) r.fail("joint", "missing required value");
+    require(jr, kJointFields);
+    if (r.has("inertia")) require(ir, kInertiaFields);
+
+    b.name = bb.name;
+    if (b.name == "base") r.fail("name", "'base' names the fixed base; a body needs another name");
+    if (const auto it = body_names.find(b.name); it != body_names.end())
+      r.fail("name", "'" + b.name + "' is already the name of bodies[" + std::to_string(it->second.index) + "] (line " +
+                         std::to_string(it->second.line) + ")");
+    body_names.emplace(b.name, Named{i, r.line()});
+
+    if (bb.parent == "base") {
+      b.parent = -1;
+    } else if (const auto it = body_names.find(bb.parent); it != body_names.end() && it->second.index < i) {
+      b.parent = it->second.index;
+    } else if (const auto later = listed.find(bb.parent); later != listed.end()) {
+      r.fail("parent", "'" + bb.parent + "' is defined later (bodies[" + std::to_string(later->second.index) +
+                           "], line " + std::to_string(later->second.line) + "): list a parent before its children");
+    } else {
+      r.fail("parent", "no body named '" + bb.parent + "' (a parent is `base` or the name of an earlier body)");
+    }
+
+    b.joint = parse_joint_type(jr, jb.type);
+    if (b.joint == JointType::kFixed) {
+      reject_moving_only(jr, kJointFields);
+      reject_moving_only(jr, kSpringFields);
+    }
+    if (jb.lower > jb.upper)
+      jr.fail("upper", "is below lower (" + format_number(jb.upper) + " < " + format_number(jb.lower) + ")");
+    JointInfo info{.name = jb.name.empty() ? b.name : jb.name,
+                   .lower = jb.lower, .upper = jb.upper, .effort = jb.effort, .velocity = jb.velocity,
+                   .friction = jb.friction};
+    if (const auto it = joint_names.find(info.name); it != joint_names.end()) {
+      const std::string message = "'" + info.name + "' is already the name of the joint of bodies[" +
+                                  std::to_string(it->second.index) + "] (line " + std::to_string(it->second.line) + ")";
+      if (jr.has("name")) jr.fail("name", message);
+      r.fail("name", message + "; this joint is named after its body (set joint.name)");
+    }
+    joint_names.emplace(info.name, Named{i, jr.line()});
+
+    b.axis = jb.axis;
+    b.position = jb.position;
+    b.rotation = rpy_rotation(jb.rpy.x(), jb.rpy.y(), jb.rpy.z());
+    b.mass = bb.mass;
+    b.com = bb.com;
+    b.inertia << ib.ixx, ib.ixy, ib.ixz,
+                 ib.ixy, ib.iyy, ib.iyz,
+                 ib.ixz, ib.iyz, ib.izz;
+    // make_tree's checks, each at the line of what it concerns.
+    if (b.mass > 0.0 && !r.has("inertia"))
+      r.fail("inertia", "missing: a body with mass needs its inertia about the centre of mass");
+    if (const std::string fault = inertia_fault(b); !fault.empty()) r.fail("inertia", fault);
+    if (const std::string fault = joint_fault(b); !fault.empty()) r.fail("joint", fault);
+    d.spec.bodies.push_back(std::move(b));
+    d.joints.push_back(std::move(info));
+  }
+  index_description(d);
+  try {
+    make_tree(d.spec);  // every body passed alone; this is the tree as a whole
+  } catch (const std::invalid_argument& e) {
+    top.fail("bodies", e.what());
+  }
+  return d;
+}
+
+TreeDescription load_tree_yaml(const std::string& path) { return parse_tree_yaml(load_yaml_file(path), path); }
+
+}  // namespace ff

@@ -1,0 +1,36 @@
+// Tree YAML files (docs/formats.md, "Kinematic trees (YAML) and URDF"): a kinematic tree as a list of
+// bodies, parents first, each with the joint to its parent. Read strictly (kernel/yaml_reader.hpp):
+// every error, make_tree's included, is one ConfigError naming the file, the line and the key path.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "description/tree_description.hpp"
+#include "kernel/yaml_reader.hpp"
+
+namespace ff {
+
+// Parses and validates a tree document; errors name `source`. The returned spec passes make_tree.
+TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source);
+// Loads a tree YAML file.
+TreeDescription load_tree_yaml(const std::string& path);
+
+// One key of a format as docs/formats.md lists it (from the readers' field tables, so a test can hold
+// the docs to them).
+struct KeyDoc {
+  std::string key;       // full path, list elements as [i] ("bodies[i].joint.axis")
+  std::string unit;      // "" for none
+  std::string required;  // "yes" or "no"
+  std::string fallback;  // the default ("" when required)
+};
+std::vector<KeyDoc> tree_yaml_keys();
+
+// The joint block's passive keys (armature, stiffness, damping, spring_reference): those present in
+// `r` read into `body` and checked (>= 0 where make_tree wants it); for the URDF sidecar.
+void read_joint_springs(YamlReader& r, BodySpec& body);
+std::vector<KeyDoc> joint_spring_keys(const std::string& prefix);
+
+}  // namespace ff
