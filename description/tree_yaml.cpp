@@ -101,6 +101,8 @@ template <class... F>
 struct Overloaded : F... {
   using F::operator()...;
 };
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;  // clang 14 has no CTAD for aggregates
 
 std::string format_number(double x) {
   if (x == JointInfo::kNone || x == -JointInfo::kNone) return "none";
