@@ -19,10 +19,10 @@ function(flexfarm_library name)
 endfunction()
 
 # The tests that take more than a few seconds in a release build (gtest filter patterns): labelled
-# `slow`, the rest `fast` (and those, like the mapped truth comparison, 30 times slower under the
-# sanitizers). The sanitizer build (.ci/sanitize) runs the fast ones of every program.
+# `slow`, the rest `fast` (and those, like the mapped truth comparison and the truth simulator's longer
+# runs, 30 to 50 times slower under the sanitizers: 20-50 s each there). The sanitizer build (.ci/sanitize) runs the fast ones of every program.
 set(FLEXFARM_SLOW_TESTS
-  "HiddenEffectSuite.*:TruthCompare.TheMappedFlexfarmModelExplainsEachHiddenEffect:EmpsLoop.*:Emps.*:CalibrateLoop.*:Diagnose.*:Farm.ThreadCountAndLaneWidthDoNotChangeResults:Farm.ShardsMergeToTheSameTable:Farm.MpiTwoRanksMatchOneProcess:Farm.MpiRankKilledMidRunStopsNamingItAndResumeWithOtherRanksCompletes:Farm.KilledAtRandomMomentsAndResumedLosesAndRepeatsNothing:Farm.DiskFullMidRunKeepsTheJournalWholeAndResumeCompletes:Cli.DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict"
+  "HiddenEffectSuite.*:TruthCompare.TheMappedFlexfarmModelExplainsEachHiddenEffect:TruthCompare.TheHydraulicRigsModelExplainsTheHydraulicTruth:TruthSim.MatchesTheIndependentReferenceTrace:TruthSim.InLoopHubAngleDelayChangesTheResponse:TruthSim.ConservesEnergyWithoutControlAndDamping:EmpsLoop.*:Emps.*:CalibrateLoop.*:Diagnose.*:Farm.ThreadCountAndLaneWidthDoNotChangeResults:Farm.ShardsMergeToTheSameTable:Farm.MpiTwoRanksMatchOneProcess:Farm.MpiRankKilledMidRunStopsNamingItAndResumeWithOtherRanksCompletes:Farm.KilledAtRandomMomentsAndResumedLosesAndRepeatsNothing:Farm.DiskFullMidRunKeepsTheJournalWholeAndResumeCompletes:Cli.DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict"
   CACHE STRING "gtest filter of the slow tests (labelled slow; the others fast)")
 
 # flexfarm_tests(FOLDER LIBS...): one GoogleTest program per folder of tests/ (its *_test.cpp files and

@@ -33,7 +33,7 @@ namespace {
 
 const std::string kModel = std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml";
 constexpr std::uint64_t kSuiteSeed = 20261201;
-constexpr int kFastRecords = 8;
+constexpr int kFastRecords = 6;  // 0-5: four single effects, one none, one pair
 constexpr int kFullRecords = 72;
 
 // One hidden effect at strength u in [0, 1]: what it sets in flexfarm's truth model and in the

@@ -192,7 +192,7 @@ TEST(TruthSim, CoulombFrictionHoldsTheHubBelowBreakaway) {
 
 TEST(TruthSim, OutputDelayShiftsTheColumnExactly) {
   TruthRig r = reference_rig();
-  r.duration = 6.0;
+  r.duration = 3.0;
   r.sensors.hub_angle.noise = 1e-5;
   r.sensors.hub_torque.noise = 2.0;
   r.sensors.tip_deflection.noise = 1e-4;
@@ -212,7 +212,7 @@ TEST(TruthSim, OutputDelayShiftsTheColumnExactly) {
 
 TEST(TruthSim, InLoopHubAngleDelayChangesTheResponse) {
   TruthRig r = reference_rig();
-  r.duration = 8.0;
+  r.duration = 4.0;
   const TruthRun base = run_truth(r);
   r.sensors.hub_angle.delay = 20;
   const TruthRun late = run_truth(r);
