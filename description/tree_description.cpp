@@ -45,7 +45,7 @@ std::string joint_fault(const BodySpec& body) {
   return fault_alone(std::move(b));
 }
 
-void index_description(TreeDescription& d) {
+std::string finish_description(TreeDescription& d) {
   d.body_index.clear();
   d.dof_index.clear();
   int dof = 0;
@@ -53,6 +53,12 @@ void index_description(TreeDescription& d) {
     d.body_index[d.spec.bodies[i].name] = static_cast<int>(i);
     if (d.spec.bodies[i].joint != JointType::kFixed) d.dof_index[d.joints.at(i).name] = dof++;
   }
+  try {
+    make_tree(d.spec);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace ff

@@ -42,7 +42,9 @@ Mat3 rpy_rotation(double roll, double pitch, double yaw);
 std::string inertia_fault(const BodySpec& body);
 std::string joint_fault(const BodySpec& body);
 
-// Fills body_index and dof_index from spec and joints (dofs numbered as make_tree numbers them).
-void index_description(TreeDescription& d);
+// The readers' last step: fills body_index and dof_index from spec and joints (dofs numbered as
+// make_tree numbers them) and returns make_tree's verdict on the tree as a whole ("" when it builds;
+// every body has passed inertia_fault and joint_fault alone before).
+std::string finish_description(TreeDescription& d);
 
 }  // namespace ff

@@ -305,12 +305,7 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
     d.spec.bodies.push_back(std::move(b));
     d.joints.push_back(std::move(info));
   }
-  index_description(d);
-  try {
-    make_tree(d.spec);  // every body passed alone; this is the tree as a whole
-  } catch (const std::invalid_argument& e) {
-    top.fail("bodies", e.what());
-  }
+  if (const std::string fault = finish_description(d); !fault.empty()) top.fail("bodies", fault);
   return d;
 }
 

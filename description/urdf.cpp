@@ -300,16 +300,17 @@ const TiXmlElement* part_named(const TiXmlElement* element, const std::string& m
     robot.SetAttribute("name", "probe");
     robot.InsertEndChild(*e);
     const std::string name = e->Attribute("name") ? e->Attribute("name") : "";
+    // A joint needs its two links, a material some link: bare ones (a name, nothing else).
+    auto add_bare_link = [&](const std::string& link) {
+      TiXmlElement bare("link");
+      bare.SetAttribute("name", link.c_str());
+      robot.InsertEndChild(bare);
+    };
     if (tag == "joint") {
-      for (const std::string& link : {x.joints.at(name).parent, x.joints.at(name).child}) {
-        TiXmlElement stub("link");
-        stub.SetAttribute("name", link.c_str());
-        robot.InsertEndChild(stub);
-      }
+      add_bare_link(x.joints.at(name).parent);
+      add_bare_link(x.joints.at(name).child);
     } else if (tag == "material") {
-      TiXmlElement stub("link");
-      stub.SetAttribute("name", "probe");
-      robot.InsertEndChild(stub);
+      add_bare_link("probe");
     }
     probe.InsertEndChild(robot);
     TiXmlPrinter printer;
@@ -446,12 +447,7 @@ TreeDescription parse_urdf(const std::string& xml, const std::string& source) {
     d.spec.bodies.push_back(std::move(b));
     d.joints.push_back(std::move(info));
   }
-  index_description(d);
-  try {
-    make_tree(d.spec);  // every body passed alone; this is the tree as a whole
-  } catch (const std::invalid_argument& e) {
-    fail(source, x.robot, "robot", e.what());
-  }
+  if (const std::string fault = finish_description(d); !fault.empty()) fail(source, x.robot, "robot", fault);
   return d;
 }
 

@@ -43,7 +43,7 @@ BatchShape batch_shape_of(const Model& m) {
   b.substeps = m.substeps;
   b.control_period = m.control_period;
   b.duration = m.duration;
-  b.integrator = static_cast<int>(m.spec.simulation.integrator);
+  b.integrator = m.spec.simulation.integrator;
   b.drive_parts = (m.spec.hydraulics.enabled ? 1 : 0) + (m.spec.drive.enabled ? 2 : 0) +
                   (m.spec.friction.model == "lugre" ? 4 : 0);
   b.recorded = (ss.strain_gauge.enabled ? 1 : 0) + (ss.tip_accelerometer.enabled ? 2 : 0) +

@@ -75,7 +75,7 @@ struct BatchShape {
   int substeps = 0;
   double control_period = 0;  // s
   double duration = 0;        // s
-  int integrator = 0;         // Integrator
+  Integrator integrator = Integrator::kRk4;
   int drive_parts = 0;        // bits: hydraulic actuator 1, drive train 2, LuGre friction 4
   int recorded = 0;           // bits: strain gauge 1, tip accelerometer 2, tip position 4
   auto operator<=>(const BatchShape&) const = default;

@@ -290,25 +290,6 @@ TEST(Algorithms, BeadOnASpinningRodFeelsTheCentrifugalAndCoriolisTerms) {
   EXPECT_NEAR(qdd[0], -2 * m * r * rd * w / (J + i + m * r * r), 1e-13);
 }
 
-// One classical RK4 step on x = [q; qd] with tau = 0: k = [qd; ABA(q, qd, 0)]. k[4], tmp (2 nv) and
-// zero (nv) are the caller's: nothing is allocated per step.
-void rk4_step(const Tree& tree, VectorXd& x, double h, TreeWorkspace& ws, VectorXd k[4], VectorXd& tmp,
-              const VectorXd& zero) {
-  const int n = tree.nv();
-  auto f = [&](const VectorXd& y, VectorXd& dy) {
-    dy.head(n) = y.tail(n);
-    calc_forward_dynamics(tree, y.head(n), y.tail(n), zero, dy.tail(n), ws);
-  };
-  f(x, k[0]);
-  tmp = x + 0.5 * h * k[0];
-  f(tmp, k[1]);
-  tmp = x + 0.5 * h * k[1];
-  f(tmp, k[2]);
-  tmp = x + h * k[2];
-  f(tmp, k[3]);
-  x += (h / 6.0) * (k[0] + 2.0 * k[1] + 2.0 * k[2] + k[3]);
-}
-
 TEST(Algorithms, FreeFiveLinkPendulumConservesEnergyUnderRk4) {
   // Five links of 0.3–0.4 m hanging along -z, hinges about y, x, y, z-tilted and x (a 3-D motion),
   // full inertias off the principal axes, gravity, no torques or dissipation. RK4, h = 0.5 ms,
@@ -332,8 +313,8 @@ TEST(Algorithms, FreeFiveLinkPendulumConservesEnergyUnderRk4) {
   const Tree tree = make_tree(s);
   TreeWorkspace ws(tree);
   const int n = tree.nv();
-  VectorXd x(2 * n), k[4], tmp(2 * n), zero = VectorXd::Zero(n);
-  for (auto& ki : k) ki.resize(2 * n);
+  VectorXd x(2 * n);
+  test::Rk4 rk(tree);  // no springs or dampers: tau = 0
   x << 0.8, -0.5, 0.6, 0.4, -0.7, 1.0, 0.0, -1.5, 2.0, 0.5;
   auto energy = [&](const VectorXd& y) {
     return calc_kinetic_energy(tree, y.head(n), y.tail(n), ws) + calc_potential_energy(tree, y.head(n), ws);
@@ -342,7 +323,7 @@ TEST(Algorithms, FreeFiveLinkPendulumConservesEnergyUnderRk4) {
   const double h = 5e-4;
   double drift = 0.0, T_max = 0.0;
   for (int step = 1; step <= 4000; ++step) {
-    rk4_step(tree, x, h, ws, k, tmp, zero);
+    rk.step(x, h);
     if (step % 10 == 0) {  // every 5 ms
       drift = std::max(drift, std::abs(energy(x) - E0));
       T_max = std::max(T_max, calc_kinetic_energy(tree, x.head(n), x.tail(n), ws));

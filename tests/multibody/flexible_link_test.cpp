@@ -446,32 +446,6 @@ TEST(FlexibleLinkModes, PlanarReferenceRigHasTheClampedFrequenciesOfTheReference
   }
 }
 
-// One classical RK4 step on x = [q; qd], tau = the passive forces (nothing else applied).
-struct Rk4 {
-  const Tree& tree;
-  TreeWorkspace ws;
-  VectorXd k[4], tmp, tau;
-  explicit Rk4(const Tree& t) : tree(t), ws(t), tmp(2 * t.nv()), tau(t.nv()) {
-    for (auto& ki : k) ki.resize(2 * t.nv());
-  }
-  void f(const VectorXd& y, VectorXd& dy) {
-    const int n = tree.nv();
-    dy.head(n) = y.tail(n);
-    calc_passive_forces(tree, y.head(n), y.tail(n), tau);
-    calc_forward_dynamics(tree, y.head(n), y.tail(n), tau, dy.tail(n), ws);
-  }
-  void step(VectorXd& x, double h) {
-    f(x, k[0]);
-    tmp = x + 0.5 * h * k[0];
-    f(tmp, k[1]);
-    tmp = x + 0.5 * h * k[1];
-    f(tmp, k[2]);
-    tmp = x + h * k[2];
-    f(tmp, k[3]);
-    x += (h / 6.0) * (k[0] + 2.0 * k[1] + 2.0 * k[2] + k[3]);
-  }
-};
-
 TEST(FlexibleLinkDynamics, FreeLinkOnARevoluteHubConservesEnergyUnderRk4) {
   // A soft polymer bar (E = 30 MPa, G = 10 MPa, 1200 kg/m³, 20 x 40 mm, L = 0.5 m, N = 3: two elastic
   // spherical joints, 6 springs) on a hub spinning freely about the vertical z axis, tilted 0.1 rad off
@@ -508,7 +482,7 @@ TEST(FlexibleLinkDynamics, FreeLinkOnARevoluteHubConservesEnergyUnderRk4) {
     x[j] = twist ? 0.0 : 0.15 * std::sin(1.3 * j + 0.4);
   }
   x[n] = 2.0;  // hub rate, rad/s
-  Rk4 rk(tree);
+  test::Rk4 rk(tree);
   auto energy = [&](const VectorXd& y) {
     return calc_kinetic_energy(tree, y.head(n), y.tail(n), rk.ws) + calc_potential_energy(tree, y.head(n), rk.ws) +
            calc_spring_energy(tree, y.head(n));

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "multibody/algorithms.hpp"
 #include "multibody/spatial.hpp"
 #include "multibody/tree.hpp"
 
@@ -120,5 +121,31 @@ inline std::string sci(double v) {
   o << std::scientific << v;
   return o.str();
 }
+
+// One classical RK4 step on x = [q; qd], tau = the passive forces (nothing else applied).
+struct Rk4 {
+  const Tree& tree;
+  TreeWorkspace ws;
+  Eigen::VectorXd k[4], tmp, tau;
+  explicit Rk4(const Tree& t) : tree(t), ws(t), tmp(2 * t.nv()), tau(t.nv()) {
+    for (auto& ki : k) ki.resize(2 * t.nv());
+  }
+  void f(const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
+    const int n = tree.nv();
+    dy.head(n) = y.tail(n);
+    calc_passive_forces(tree, y.head(n), y.tail(n), tau);
+    calc_forward_dynamics(tree, y.head(n), y.tail(n), tau, dy.tail(n), ws);
+  }
+  void step(Eigen::VectorXd& x, double h) {
+    f(x, k[0]);
+    tmp = x + 0.5 * h * k[0];
+    f(tmp, k[1]);
+    tmp = x + 0.5 * h * k[1];
+    f(tmp, k[2]);
+    tmp = x + h * k[2];
+    f(tmp, k[3]);
+    x += (h / 6.0) * (k[0] + 2.0 * k[1] + 2.0 * k[2] + k[3]);
+  }
+};
 
 }  // namespace ff::test
