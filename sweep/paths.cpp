@@ -154,8 +154,9 @@ Model load_model_with(const std::string& path, const std::vector<std::string>& s
 }
 
 ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets) {
-  ModelSource src{load_yaml_file(path), path, parse_assignments(sets)};
-  build_model(src);
+  YAML::Node doc = load_yaml_file(path);
+  ModelSource src{YAML::Clone(doc), path, parse_assignments(sets)};
+  make_model_with(doc, path, src.set);  // on the document as read, so that an error names its line
   return src;
 }
 

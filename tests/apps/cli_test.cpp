@@ -202,6 +202,19 @@ TEST_F(Cli, ModesBadTypeIsOneLine) {
   expect_one_error_line(r, "bad.yaml:11: segments: expected an integer");
 }
 
+// diagnose and calibrate read the model as a source (its document kept for the candidates' paths): a
+// bad value is still reported at its line.
+TEST_F(Cli, DiagnoseAndCalibrateNameTheLineOfABadModelValue) {
+  write_model("bad.yaml", 11, "segments: six");
+  const std::string data = quote(kSource + "/tests/data/reference-traces/fbtb_n6_pd_0p5rad.csv");
+  expect_one_error_line(run("diagnose --model bad.yaml --data " + data + " --json out.json"),
+                        "bad.yaml:11: segments: expected an integer");
+  expect_one_error_line(run("calibrate --model bad.yaml --data " + data + " --add payload --out new.yaml"),
+                        "bad.yaml:11: segments: expected an integer");
+  EXPECT_FALSE(fs::exists(work / "out.json"));
+  EXPECT_FALSE(fs::exists(work / "new.yaml"));
+}
+
 TEST_F(Cli, SimulateUnparsableModelWritesNothing) {
   write_model("bad.yaml", 6, "   height: 0.3048");
   const auto r = run("simulate bad.yaml --out out");
