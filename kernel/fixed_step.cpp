@@ -6,6 +6,7 @@
 
 #include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
+#include "kernel/stage_arithmetic.hpp"
 
 namespace ff {
 
@@ -127,22 +128,15 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
     std::copy(vs, vs + n, ws.kq[st].data());
     compute_acceleration(bm, qs, vs, zs, tau, ws.kv[st].data(), ws.kz[st].data(), ws);
   }
-  // y += h/6 (k1 + 2 k2 + 2 k3 + k4)
+  rk4_combine(n, ws.kq, ws.kv, h, q, v);
   const double w6 = h / 6.0;
-  const double *kq0 = ws.kq[0].data(), *kq1 = ws.kq[1].data(), *kq2 = ws.kq[2].data(), *kq3 = ws.kq[3].data();
-  const double *kv0 = ws.kv[0].data(), *kv1 = ws.kv[1].data(), *kv2 = ws.kv[2].data(), *kv3 = ws.kv[3].data();
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    q[j] += w6 * (kq0[j] + 2.0 * kq1[j] + 2.0 * kq2[j] + kq3[j]);
-    v[j] += w6 * (kv0[j] + 2.0 * kv1[j] + 2.0 * kv2[j] + kv3[j]);
-  }
   const double *kz0 = ws.kz[0].data(), *kz1 = ws.kz[1].data(), *kz2 = ws.kz[2].data(), *kz3 = ws.kz[3].data();
   for (std::size_t j = 0; j < nz; ++j) z[j] += w6 * (kz0[j] + 2.0 * kz1[j] + 2.0 * kz2[j] + kz3[j]);
 }
 
 void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const std::size_t n = s.q.size();
-  const double g = 1.0 - 0.70710678118654752440;  // gamma
+  const double g = kSdirk2Gamma;
   const double gh = g * h;
   set_armature(bm, ws, gh);
   double* q = s.q.data();
@@ -151,14 +145,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   double *qs = ws.kq[0].data(), *vs = ws.kv[0].data();        // spring state: Qpre + gh Vpre, Vpre
   double *qk = ws.kq[1].data(), *vk = ws.kv[1].data();        // kinematic predictor of the stage
   double *A1 = ws.kq[2].data(), *A2 = ws.kv[2].data();        // stage accelerations
-  // Stage 1 (t + gamma h): Q1 = q + gh V1, V1 = v + gh A1.
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    qs[j] = q[j] + gh * v[j];
-    vs[j] = v[j];
-    qk[j] = qs[j];
-    vk[j] = v[j] + gh * a_prev[j];
-  }
+  sdirk2_stage1(n, q, v, a_prev, gh, qs, vs, qk, vk);
   // The hub drive's stage (implicit, with the chain at the spring state), then its torque on the hub.
   const bool drive = bm.layout.nz > 0;
   double *z = s.z.data(), *Z1 = ws.z1.data(), *Z2 = ws.kz[0].data(), *zpre = ws.kz[1].data();
@@ -167,19 +154,10 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
   set_friction_armature(bm, vs, gh, ws);
   compute_forward_dynamics(bm, qk, vk, ws.tau_joint.data(), ws.armature.data(), A1, ws);
-  // Stage 2 (t + h): Q2 = q + (1-g) h V1 + gh V2, V2 = v + (1-g) h A1 + gh A2.
   const double b1 = (1.0 - g) * h;
   double* vpre = ws.v1.data();
   double* qpre = ws.q1.data();
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    qpre[j] = q[j] + b1 * (v[j] + gh * A1[j]);  // V1 = v + gh A1
-    vpre[j] = v[j] + b1 * A1[j];
-    qs[j] = qpre[j] + gh * vpre[j];
-    vs[j] = vpre[j];
-    qk[j] = qs[j];
-    vk[j] = vpre[j] + gh * A1[j];
-  }
+  sdirk2_stage2(n, q, v, A1, gh, b1, qpre, vpre, qs, vs, qk, vk);
   // Drive: Z2 = z + (1-g) h F1 + gh f(Z2), with F1 = (Z1 - z) / gh from the first stage.
   if (drive) {
     const std::size_t nz = s.z.size();
@@ -191,13 +169,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
   set_friction_armature(bm, vs, gh, ws);
   compute_forward_dynamics(bm, qk, vk, ws.tau_joint.data(), ws.armature.data(), A2, ws);
-  // The second stage is the new state (stiffly accurate).
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    v[j] = vpre[j] + gh * A2[j];
-    q[j] = qpre[j] + gh * v[j];
-    a_prev[j] = A2[j];
-  }
+  sdirk2_finish(n, qpre, vpre, A2, gh, q, v, a_prev);
 }
 
 void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
@@ -210,11 +182,7 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   double *qs = ws.kq[0].data(), *vk = ws.kv[0].data(), *A = ws.kv[1].data();
   // Midpoint t + h/2: V = v + (h/2) A, Q = q + (h/2) V = qs + (h/2)^2 A with qs = q + (h/2) v.
   // Springs and dampers at (qs, v) plus the armature; M and velocity terms at (qs, v + (h/2) a_prev).
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    qs[j] = q[j] + gh * v[j];
-    vk[j] = v[j] + gh * a_prev[j];
-  }
+  midpoint_stage(n, q, v, a_prev, gh, qs, vk);
   // The hub drive by the implicit midpoint rule: Z = z + (h/2) f(Z), z_new = 2 Z - z.
   double* z = s.z.data();
   double* Z = ws.z1.data();
@@ -226,13 +194,7 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   // L-stable, and a stuck hub would flip its rate's sign every step.
   set_friction_armature(bm, v, h, ws);
   compute_forward_dynamics(bm, qs, vk, ws.tau_joint.data(), ws.armature.data(), A, ws);
-  // q += h V, v += h A
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    q[j] += h * (v[j] + gh * A[j]);
-    v[j] += h * A[j];
-    a_prev[j] = A[j];
-  }
+  midpoint_finish(n, A, h, gh, q, v, a_prev);
 }
 
 }  // namespace ff

@@ -91,6 +91,30 @@ inline Tree random_tree(Rng& rng, int n) {
   return make_tree(spec);
 }
 
+// The spec a tree was made from (make_tree(spec_of(t)) rebuilds t), for tests that change a field.
+inline TreeSpec spec_of(const Tree& tree) {
+  TreeSpec spec;
+  spec.gravity = tree.gravity();
+  for (const Body& b : tree.bodies()) {
+    BodySpec bs;
+    bs.name = b.name;
+    bs.parent = b.parent;
+    bs.joint = b.joint;
+    bs.axis = b.axis;
+    bs.position = b.X_tree.position();
+    bs.rotation = b.X_tree.rotation_matrix();
+    bs.mass = b.mass;
+    bs.com = b.com;
+    bs.inertia = b.inertia_com;
+    bs.armature = b.armature;
+    bs.stiffness = b.stiffness;
+    bs.damping = b.damping;
+    bs.spring_reference = b.spring_reference;
+    spec.bodies.push_back(bs);
+  }
+  return spec;
+}
+
 // A random joint position: angles in [-pi, pi] rad, slides in [-0.5, 0.5] m.
 inline Eigen::VectorXd random_q(Rng& rng, const Tree& tree) {
   Eigen::VectorXd q(tree.nq());

@@ -1,0 +1,66 @@
+// W kinematic trees of equal topology in lock-step: the articulated-body algorithm of
+// multibody/algorithms.hpp over lanes (variants), structure-of-arrays with the lane innermost, so
+// every loop over lanes vectorises and a lane's numbers never depend on its neighbours (the same bits
+// in any lane, at any W). The scalar functions of multibody/algorithms.hpp are the oracle.
+//
+// Layout: component k of body i (or dof j) in lane l at [(i * K + k) * W + l], K the components
+// of the quantity (written next to each array); joint coordinates q, qd, qdd, tau at [j * W + l].
+// Spatial conventions as multibody/spatial.hpp: motion [omega; v], force [n; f], B X_A = (E, r).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "multibody/tree.hpp"
+
+namespace ff {
+
+// The immutable parameters of W trees: the topology once, everything else per lane.
+struct TreeLanes {
+  int W = 0;                    // lanes
+  int nb = 0;                   // bodies
+  int nv = 0;                   // joint coordinates
+  std::vector<Tree> trees;      // (W) the source trees (kinematics for output, the scalar oracle)
+  std::vector<int> parent;      // (nb) parent body, -1 = the base
+  std::vector<int> dof;         // (nb) the body's joint coordinate, -1 when fixed
+  std::vector<JointType> joint; // (nb)
+  std::vector<double> axis;     // K = 3: the unit joint axis
+  std::vector<double> X_tree;   // K = 12: joint frame X parent: E row-major (9), then r (3), m
+  std::vector<double> inertia;  // K = 10: mass (kg), h = m c (3, kg·m), I about the body origin
+                                //   (xx, xy, xz, yy, yz, zz, kg·m²): the spatial inertia's blocks
+  std::vector<double> armature, stiffness, damping, spring_reference;  // (nv x W), Body's units
+  std::vector<double> gravity;  // K = 3 per lane: [k * W + l], m/s²
+};
+
+// Gathers trees of one topology (the same number of bodies, parents and joint types) into lanes.
+// Throws std::invalid_argument naming the lane and body where the topology differs, or on no trees
+// or more than kMaxTreeLanes.
+inline constexpr int kMaxTreeLanes = 256;
+TreeLanes make_tree_lanes(std::span<const Tree> trees);
+
+// Scratch of the recursions for every body and lane, sized once: nothing is allocated per call.
+struct TreeLanesWorkspace {
+  TreeLanesWorkspace() = default;
+  explicit TreeLanesWorkspace(const TreeLanes& tl);
+  int W = 0, nb = 0, nv = 0;
+  std::vector<double> Xup;      // K = 12: i X_parent(i) = X_J(q_i) X_tree,i
+  std::vector<double> v, c, a;  // K = 6: velocity, velocity-product acceleration, acceleration
+  std::vector<double> IA;       // K = 21: articulated inertia [A B; B^T C]: A (sym 6), B (9), C (sym 6)
+  std::vector<double> pA;       // K = 6: articulated bias force
+  std::vector<double> U;        // K = 6: I^A S
+  std::vector<double> d, u;     // K = 1: S^T I^A S + armature, tau - S^T p^A
+};
+
+// qdd = M(q)^-1 (tau - C(q, qd) - g(q)) in every lane (ABA, RBDA Table 7.1), the trees' armature
+// and `extra_armature` (nv x W, may be null: an implicit integrator's h gamma c + (h gamma)^2 k) on
+// M's diagonal. q, qd, tau, qdd: (nv x W). tau is the total generalised force, as in
+// calc_forward_dynamics (springs included: compute_tree_passive_forces).
+void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const double* qd, const double* tau,
+                                   const double* extra_armature, double* qdd, TreeLanesWorkspace& ws);
+
+// tau = tau_applied - k (q - q0) - c qd in every lane and dof (calc_passive_forces plus a given
+// force; tau_applied may be null for none). (nv x W) each.
+void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,
+                                 double* tau);
+
+}  // namespace ff
