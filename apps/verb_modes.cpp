@@ -1,8 +1,17 @@
-// flexfarm modes MODEL.yaml: natural frequencies and damping, clamped and in the closed loop.
+// flexfarm modes MODEL: natural frequencies and damping. A flexfarm model (configs/fbtb.yaml): clamped
+// and in the closed loop. A kinematic tree (URDF or tree YAML, description/load.hpp): linearised at a
+// pose, chosen joints locked, the mode shapes optionally to CSV.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <sstream>
 
 #include "apps/verbs.hpp"
+#include "description/load.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/files.hpp"
 #include "kernel/modes.hpp"
+#include "multibody/modes.hpp"
 
 namespace ff {
 
@@ -21,21 +30,108 @@ void print_modes(const char* title, const std::vector<Mode>& modes, int count) {
   }
 }
 
+// The dof of a joint named on the command line; a ConfigError naming the option otherwise.
+int dof_of(const TreeDescription& d, const std::string& name, const std::string& option) {
+  const auto it = d.dof_index.find(name);
+  if (it != d.dof_index.end()) return it->second;
+  std::string known;
+  for (const auto& [n, j] : d.dof_index) known += (known.empty() ? "" : ", ") + n;
+  throw ConfigError(option, 0, name, "no moving joint of that name (joints: " + known + ")");
+}
+
+// Modes of a tree description at a pose (--at JOINT=VALUE, the rest at 0), --lock JOINT held.
+void tree_modes(const std::string& path, const std::string& sidecar, const std::vector<std::string>& at,
+                const std::vector<std::string>& lock, int count, const std::string& shapes) {
+  const TreeDescription d = load_tree_description(path, sidecar);
+  const Tree tree = make_tree(d.spec);
+  Eigen::VectorXd q0 = Eigen::VectorXd::Zero(tree.nv());
+  for (const std::string& a : at) {
+    const auto eq = a.find('=');
+    if (eq == std::string::npos) throw ConfigError("--at", 0, a, "expected JOINT=VALUE");
+    const int j = dof_of(d, a.substr(0, eq), "--at");
+    try {
+      std::size_t used = 0;
+      q0[j] = std::stod(a.substr(eq + 1), &used);
+      if (used != a.size() - eq - 1 || !std::isfinite(q0[j])) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      throw ConfigError("--at", 0, a, "expected a finite number after '=' (rad or m)");
+    }
+  }
+  TreeModeOptions options;
+  for (const std::string& name : lock) options.locked_dofs.push_back(dof_of(d, name, "--lock"));
+  const std::vector<TreeMode> modes = calc_tree_modes(tree, q0, options);
+  std::printf("tree %s: %d bodies, %d moving joints (%zu locked), gravity (%.4g, %.4g, %.4g) m/s^2\n", path.c_str(),
+              tree.num_bodies(), tree.nv(), options.locked_dofs.size(), tree.gravity()[0], tree.gravity()[1],
+              tree.gravity()[2]);
+  // A mode whose omega is round-off of zero (below 1e-9 of the largest) is motion nothing resists.
+  double wmax = 0.0;
+  for (const TreeMode& m : modes) wmax = std::max(wmax, m.omega_n);
+  std::printf("linearised modes:\n  %-4s %12s %12s %10s\n", "mode", "f (Hz)", "omega (rad/s)", "zeta");
+  for (std::size_t k = 0; k < modes.size() && static_cast<int>(k) < count; ++k) {
+    const TreeMode& m = modes[k];
+    if (m.oscillatory)
+      std::printf("  %-4zu %12.4f %12.4f %10.4f\n", k + 1, m.frequency_hz(), m.omega_n, m.zeta);
+    else if (m.omega_n <= 1e-9 * wmax)
+      std::printf("  %-4zu %12s %12s %10s   free: nothing resists this motion\n", k + 1, "-", "0", "-");
+    else if (m.zeta < 0.0)
+      std::printf("  %-4zu %12s %12.4f %10s   unstable: grows e-fold in %.4g s\n", k + 1, "-", m.omega_n, "-",
+                  1.0 / m.omega_n);
+    else
+      std::printf("  %-4zu %12s %12.4f %10s   real pole, time constant %.4g s\n", k + 1, "-", m.omega_n, "-",
+                  1.0 / m.omega_n);
+  }
+  if (shapes.empty()) return;
+  // One row per mode: its frequency, damping and the joint coordinates of its shape.
+  std::vector<std::string> names(static_cast<std::size_t>(tree.nv()));
+  for (const auto& [n, j] : d.dof_index) names[static_cast<std::size_t>(j)] = n;
+  std::ostringstream out;
+  out.precision(10);
+  out << "mode,omega_rad_s,frequency_hz,zeta,oscillatory";
+  for (const std::string& n : names) out << ',' << n;
+  out << '\n';
+  for (std::size_t k = 0; k < modes.size(); ++k) {
+    const TreeMode& m = modes[k];
+    out << k + 1 << ',' << m.omega_n << ',' << m.frequency_hz() << ',' << m.zeta << ',' << (m.oscillatory ? 1 : 0);
+    for (int j = 0; j < tree.nv(); ++j) out << ',' << m.shape[j];
+    out << '\n';
+  }
+  write_file_atomic(shapes, out.str());
+  std::printf("mode shapes: %s\n", shapes.c_str());
+}
+
 }  // namespace
 
 void add_modes_verb(CLI::App& app) {
-  auto* cmd = app.add_subcommand("modes", "Print clamped-hub and closed-loop natural frequencies, damping ratios "
-                                          "and the equivalent cantilever stiffness 3EI/L");
+  auto* cmd = app.add_subcommand("modes", "Print natural frequencies and damping ratios: of a flexfarm model clamped "
+                                          "and in the closed loop (with the equivalent cantilever stiffness 3EI/L), "
+                                          "or of a kinematic tree (URDF or tree YAML) linearised at a pose");
   struct Args {
     std::string model;
     std::vector<std::string> sets;
     int count = 6;
+    std::string sidecar, shapes;
+    std::vector<std::string> at, lock;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("model", args->model, "model YAML file, e.g. configs/fbtb.yaml")->required()->check(CLI::ExistingFile);
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE (e.g. segments=24); repeatable");
   cmd->add_option("--count", args->count, "modes to list per table")->check(CLI::PositiveNumber);
+  cmd->add_option("--sidecar", args->sidecar, "tree: a flexfarm sidecar YAML for a URDF (joint springs)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--at", args->at, "tree: the pose, JOINT=VALUE (rad or m; others 0); repeatable");
+  cmd->add_option("--lock", args->lock, "tree: hold this joint still (a clamped joint); repeatable");
+  cmd->add_option("--shapes", args->shapes, "tree: write every mode's frequency, damping and shape to this CSV");
   cmd->callback([args] {
+    if (is_tree_description(args->model)) {
+      if (!args->sets.empty())
+        throw ConfigError("--set", 0, args->sets[0], "a tree description has no parameter paths; edit the file");
+      tree_modes(args->model, args->sidecar, args->at, args->lock, args->count, args->shapes);
+      return;
+    }
+    for (const auto* o : {&args->sidecar, &args->shapes})
+      if (!o->empty()) throw ConfigError(*o, 0, "", "--sidecar and --shapes are for tree descriptions");
+    if (!args->at.empty() || !args->lock.empty())
+      throw ConfigError(args->model, 0, "", "--at and --lock are for tree descriptions (URDF or tree YAML)");
     const Model m = load_model_with(args->model, args->sets);
     const auto& b = m.spec.beam;
     if (m.nseg > 1)

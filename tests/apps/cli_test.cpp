@@ -5,6 +5,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -177,6 +179,54 @@ TEST_F(Cli, ModesOfAMissingFileFails) {
   const auto r = run("modes configs/none.yaml");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("none.yaml"), std::string::npos) << r.output;
+}
+
+// A kinematic tree: a pendulum (mass 2 kg at 0.5 m below a revolute joint about y, gravity 9.81)
+// with a torsion spring of 3 N m/rad: omega^2 = (m g l + k) / (m l^2 + I_c), I_c of a 0.1 m cube.
+TEST_F(Cli, ModesOfATreeDescriptionAtItsPoseWithItsShapes) {
+  write("pendulum.yaml",
+        "gravity: [0, 0, -9.81]\n"
+        "bodies:\n"
+        "  - name: bob\n"
+        "    parent: base\n"
+        "    joint: {name: swing, type: revolute, axis: [0, 1, 0], stiffness: 3.0}\n"
+        "    mass: 2.0\n"
+        "    com: [0, 0, -0.5]\n"
+        "    inertia: {ixx: 0.0033333333333333335, iyy: 0.0033333333333333335, izz: 0.0033333333333333335}\n");
+  const double Ic = 2.0 * 0.01 / 6.0, w = std::sqrt((2.0 * 9.81 * 0.5 + 3.0) / (2.0 * 0.25 + Ic));
+  const auto r = run("modes pendulum.yaml --shapes shapes.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  char expect[64];
+  std::snprintf(expect, sizeof expect, " %.4f ", w / (2.0 * 3.141592653589793));
+  EXPECT_NE(r.output.find(expect), std::string::npos) << expect << " in " << r.output;
+  const auto rows = split_lines(read_text(work / "shapes.csv"));
+  ASSERT_EQ(rows.size(), 2u) << read_text(work / "shapes.csv");
+  EXPECT_EQ(rows[0], "mode,omega_rad_s,frequency_hz,zeta,oscillatory,swing");
+  EXPECT_NEAR(std::stod(rows[1].substr(2)), w, 1e-6 * w) << rows[1];
+  // Upside down (swing = pi) the spring no longer holds it: omega^2 = (k - m g l) / J < 0, a real pole.
+  const auto up = run("modes pendulum.yaml --at swing=3.141592653589793");
+  ASSERT_EQ(up.exit_code, 0) << up.output;
+  EXPECT_NE(up.output.find("unstable: grows e-fold in"), std::string::npos) << up.output;
+  // A locked joint leaves nothing to move.
+  EXPECT_EQ(run("modes pendulum.yaml --lock swing").exit_code, 0);
+  expect_one_error_line(run("modes pendulum.yaml --lock elbow"), "--lock: elbow: no moving joint of that name");
+  expect_one_error_line(run("modes pendulum.yaml --set swing=1"), "--set: swing=1: a tree description has no");
+}
+
+TEST_F(Cli, ModesOfAUrdfAndOfItsTreeYamlAreTheSame) {
+  const std::string urdf = quote(kSource + "/tests/data/urdf/arm6.urdf");
+  const std::string side = quote(kSource + "/tests/data/urdf/arm6_sidecar.yaml");
+  const std::string yaml = quote(kSource + "/tests/data/urdf/arm6.yaml");
+  const std::string pose = " --at shoulder_lift=-0.6 --at elbow=0.9 --lock shoulder_pan --count 6";
+  const auto a = run("modes " + urdf + " --sidecar " + side + pose);
+  const auto b = run("modes " + yaml + pose);
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  const auto table = [](const std::string& out) { return out.substr(out.find("linearised modes:")); };
+  EXPECT_EQ(table(a.output), table(b.output));
+  // wrist_3 has neither spring nor gravity stiffness; shoulder_lift's damper makes real poles.
+  EXPECT_NE(a.output.find("free: nothing resists this motion"), std::string::npos) << a.output;
+  EXPECT_NE(a.output.find(" 0.4844 "), std::string::npos) << a.output;
 }
 
 // ---- rejected input: one line, non-zero exit, nothing written ----------------------------
