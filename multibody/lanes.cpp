@@ -66,14 +66,13 @@ FF_INLINE ConstLaneBlock block(const std::vector<double>& v, int i, int K, int W
 // Pass 1 of the ABA for body i, root to tip, in every lane: the joint transform Xup = X_J(q) X_tree,
 // the velocity v = Xup v_parent + S qd, c = v × S qd, and the rigid body's inertia and bias force
 // p = v ×* I v as the start of the articulated quantities (RBDA Table 7.1, first loop).
-template <JointType J>
+template <JointType J, bool kRoot>
 void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, TreeLanesWorkspace& ws) {
   const int W = tl.W, p = tl.parent[i], j = tl.dof[i];
   const ConstLaneBlock ax = block(tl.axis, i, 3, W), Xt = block(tl.X_tree, i, 12, W), In = block(tl.inertia, i, 10, W);
   const LaneBlock Xup = block(ws.Xup, i, 12, W), v = block(ws.v, i, 6, W), c = block(ws.c, i, 6, W);
   const LaneBlock IA = block(ws.IA, i, 21, W), pA = block(ws.pA, i, 6, W);
   const ConstLaneBlock vp = block(ws.v, p < 0 ? 0 : p, 6, W);
-  const bool root = p < 0;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     double Et[9], rt[3], a[3], E[9], r[3];
@@ -106,7 +105,7 @@ void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, Tr
     for (int k = 0; k < 3; ++k) Xup(9 + k, l) = r[k];
     // v = Xup v_parent + S qd: [E w; E (v - r × w)] (the base is at rest).
     double w[3] = {0.0, 0.0, 0.0}, vl[3] = {0.0, 0.0, 0.0};
-    if (!root) {
+    if constexpr (!kRoot) {
       const double wp[3] = {vp(0, l), vp(1, l), vp(2, l)};
       double rw[3], vr[3];
       cross3(r, wp, rw);
@@ -157,7 +156,7 @@ void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, Tr
 // p^a = p^A + I^a c + U u / d, carried to its coordinates by X^T I^a X and X^T p^a (RBDA Table 7.1).
 // X^T [A B; B^T C] X with X = rot(E) xlt(r): first A' = E^T A E (likewise B', C'), then
 //   A'' = A' + r× B'^T - B' r× - r× C' r×,  B'' = B' + r× C',  C'' = C'.
-template <JointType J>
+template <JointType J, bool kRoot>
 void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extra, TreeLanesWorkspace& ws) {
   const int W = tl.W, p = tl.parent[i], j = tl.dof[i];
   const ConstLaneBlock ax = block(tl.axis, i, 3, W);
@@ -167,8 +166,7 @@ void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extr
   double* d = ws.d.data() + static_cast<std::size_t>(i) * W;
   double* u = ws.u.data() + static_cast<std::size_t>(i) * W;
   const double* arm = tl.armature.data() + static_cast<std::size_t>(j < 0 ? 0 : j) * W;
-  const double* xarm = extra ? extra + static_cast<std::size_t>(j < 0 ? 0 : j) * W : nullptr;
-  const bool root = p < 0;
+  const double* xarm = extra + static_cast<std::size_t>(j < 0 ? 0 : j) * W;  // zeros when none
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     double A[9], B[9], C[9], pa[6];
@@ -192,10 +190,10 @@ void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extr
         d[l] = dot3(a, Ub) + arm[l];
         uj = tau[j * W + l] - dot3(a, pa + 3);
       }
-      if (xarm) d[l] += xarm[l];
+      d[l] += xarm[l];
       u[l] = uj;
       for (int k = 0; k < 3; ++k) U(k, l) = Ut[k], U(3 + k, l) = Ub[k];
-      if (!root) {
+      if constexpr (!kRoot) {
         const double dinv = 1.0 / d[l];
         const double Us[6] = {Ut[0], Ut[1], Ut[2], Ub[0], Ub[1], Ub[2]};
         for (int r = 0; r < 3; ++r)
@@ -218,7 +216,7 @@ void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extr
         }
       }
     }
-    if (!root) {
+    if constexpr (!kRoot) {
       double E[9], r[3];
       for (int k = 0; k < 9; ++k) E[k] = Xup(k, l);
       for (int k = 0; k < 3; ++k) r[k] = Xup(9 + k, l);
@@ -255,7 +253,7 @@ void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extr
 
 // Pass 3 for body i, root to tip: a = Xup a_parent + c (the base's a_0 = [0; -gravity]),
 // qdd = (u - U . a) / d, a += S qdd.
-template <JointType J>
+template <JointType J, bool kRoot>
 void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) {
   const int W = tl.W, p = tl.parent[i], j = tl.dof[i];
   const ConstLaneBlock ax = block(tl.axis, i, 3, W), Xup = block(ws.Xup, i, 12, W), c = block(ws.c, i, 6, W);
@@ -264,13 +262,12 @@ void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) 
   const LaneBlock a = block(ws.a, i, 6, W);
   const double* d = ws.d.data() + static_cast<std::size_t>(i) * W;
   const double* u = ws.u.data() + static_cast<std::size_t>(i) * W;
-  const bool root = p < 0;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     double E[9], r[3], wp[3], vp[3];
     for (int k = 0; k < 9; ++k) E[k] = Xup(k, l);
     for (int k = 0; k < 3; ++k) r[k] = Xup(9 + k, l);
-    if (root) {
+    if constexpr (kRoot) {
       for (int k = 0; k < 3; ++k) wp[k] = 0.0, vp[k] = -g(k, l);
     } else {
       for (int k = 0; k < 3; ++k) wp[k] = ap(k, l), vp[k] = ap(3 + k, l);
@@ -298,17 +295,23 @@ void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) 
   }
 }
 
-template <template <JointType> class F, class... Args>
-void by_joint(JointType t, Args&&... args) {
+template <template <JointType, bool> class F, class... Args>
+void by_joint(JointType t, bool root, Args&&... args) {
   switch (t) {
-    case JointType::kRevolute: F<JointType::kRevolute>::run(args...); break;
-    case JointType::kPrismatic: F<JointType::kPrismatic>::run(args...); break;
-    case JointType::kFixed: F<JointType::kFixed>::run(args...); break;
+    case JointType::kRevolute:
+      root ? F<JointType::kRevolute, true>::run(args...) : F<JointType::kRevolute, false>::run(args...);
+      break;
+    case JointType::kPrismatic:
+      root ? F<JointType::kPrismatic, true>::run(args...) : F<JointType::kPrismatic, false>::run(args...);
+      break;
+    case JointType::kFixed:
+      root ? F<JointType::kFixed, true>::run(args...) : F<JointType::kFixed, false>::run(args...);
+      break;
   }
 }
-template <JointType J> struct Pass1 { static void run(auto&&... a) { aba_pass1<J>(a...); } };
-template <JointType J> struct Pass2 { static void run(auto&&... a) { aba_pass2<J>(a...); } };
-template <JointType J> struct Pass3 { static void run(auto&&... a) { aba_pass3<J>(a...); } };
+template <JointType J, bool R> struct Pass1 { static void run(auto&&... a) { aba_pass1<J, R>(a...); } };
+template <JointType J, bool R> struct Pass2 { static void run(auto&&... a) { aba_pass2<J, R>(a...); } };
+template <JointType J, bool R> struct Pass3 { static void run(auto&&... a) { aba_pass3<J, R>(a...); } };
 
 }  // namespace
 
@@ -380,15 +383,17 @@ TreeLanesWorkspace::TreeLanesWorkspace(const TreeLanes& tl) : W(tl.W), nb(tl.nb)
   U.assign(6 * n, 0.0);
   d.assign(n, 1.0);
   u.assign(n, 0.0);
+  zeros.assign(static_cast<std::size_t>(tl.nv) * tl.W, 0.0);
 }
 
 void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const double* qd, const double* tau,
                                    const double* extra_armature, double* qdd, TreeLanesWorkspace& ws) {
   if (ws.W != tl.W || ws.nb != tl.nb)
     throw std::invalid_argument("compute_tree_forward_dynamics: the workspace was made for another batch");
-  for (int i = 0; i < tl.nb; ++i) by_joint<Pass1>(tl.joint[i], tl, i, q, qd, ws);
-  for (int i = tl.nb - 1; i >= 0; --i) by_joint<Pass2>(tl.joint[i], tl, i, tau, extra_armature, ws);
-  for (int i = 0; i < tl.nb; ++i) by_joint<Pass3>(tl.joint[i], tl, i, qdd, ws);
+  const double* extra = extra_armature ? extra_armature : ws.zeros.data();
+  for (int i = 0; i < tl.nb; ++i) by_joint<Pass1>(tl.joint[i], tl.parent[i] < 0, tl, i, q, qd, ws);
+  for (int i = tl.nb - 1; i >= 0; --i) by_joint<Pass2>(tl.joint[i], tl.parent[i] < 0, tl, i, tau, extra, ws);
+  for (int i = 0; i < tl.nb; ++i) by_joint<Pass3>(tl.joint[i], tl.parent[i] < 0, tl, i, qdd, ws);
 }
 
 void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,

@@ -49,6 +49,7 @@ struct TreeLanesWorkspace {
   std::vector<double> pA;       // K = 6: articulated bias force
   std::vector<double> U;        // K = 6: I^A S
   std::vector<double> d, u;     // K = 1: S^T I^A S + armature, tau - S^T p^A
+  std::vector<double> zeros;    // (nv x W) the extra armature when none is given
 };
 
 // qdd = M(q)^-1 (tau - C(q, qd) - g(q)) in every lane (ABA, RBDA Table 7.1), the trees' armature
