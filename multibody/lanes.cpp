@@ -11,56 +11,68 @@ namespace {
 
 #define FF_INLINE [[gnu::always_inline]] inline
 
-// Small dense helpers on plain arrays, inlined into the lane loops: 3-vectors, 3x3 row-major.
-FF_INLINE void cross3(const double* a, const double* b, double* o) {
-  o[0] = a[1] * b[2] - a[2] * b[1];
-  o[1] = a[2] * b[0] - a[0] * b[2];
-  o[2] = a[0] * b[1] - a[1] * b[0];
-}
-FF_INLINE double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-FF_INLINE void mul3(const double* M, const double* x, double* o) {  // o = M x
-  for (int r = 0; r < 3; ++r) o[r] = M[3 * r] * x[0] + M[3 * r + 1] * x[1] + M[3 * r + 2] * x[2];
-}
-FF_INLINE void mul3t(const double* M, const double* x, double* o) {  // o = M^T x
-  for (int c = 0; c < 3; ++c) o[c] = M[c] * x[0] + M[3 + c] * x[1] + M[6 + c] * x[2];
-}
-FF_INLINE void matmul3(const double* A, const double* B, double* o) {  // o = A B
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) o[3 * r + c] = A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
-}
-// o = E^T M E (a 3x3 block carried from body to parent coordinates).
-FF_INLINE void congruence3(const double* E, const double* M, double* o) {
-  double ME[9];
-  matmul3(M, E, ME);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) o[3 * r + c] = E[r] * ME[c] + E[3 + r] * ME[3 + c] + E[6 + r] * ME[6 + c];
-}
-// Symmetric 3x3 packed (xx, xy, xz, yy, yz, zz) to and from full.
-FF_INLINE void unpack_sym(const double* p, double* M) {
-  M[0] = p[0], M[1] = p[1], M[2] = p[2];
-  M[3] = p[1], M[4] = p[3], M[5] = p[4];
-  M[6] = p[2], M[7] = p[4], M[8] = p[5];
-}
+// The lane loops are written in scalar locals only (x0, x1, x2 for a 3-vector, M0..M8 for a 3x3
+// row-major matrix, each a `double`): GCC vectorises a loop over lanes written so, and not one that
+// keeps its small vectors in local arrays or structs. The macros below spell the 3-vector and 3x3
+// operations on such names; each declares its result.
+#define FF_V3(o, e0, e1, e2) [[maybe_unused]] double o##0 = (e0), o##1 = (e1), o##2 = (e2)
+#define FF_LOAD3(o, base, k) FF_V3(o, base[(k) * sW + l], base[((k) + 1) * sW + l], base[((k) + 2) * sW + l])
+#define FF_STORE3(base, k, v) \
+  base[(k) * sW + l] = v##0, base[((k) + 1) * sW + l] = v##1, base[((k) + 2) * sW + l] = v##2
+#define FF_CROSS(o, a, b) FF_V3(o, a##1 * b##2 - a##2 * b##1, a##2 * b##0 - a##0 * b##2, a##0 * b##1 - a##1 * b##0)
+#define FF_DOT(a, b) (a##0 * b##0 + a##1 * b##1 + a##2 * b##2)
+// o = M x and o = M^T x
+#define FF_MV(o, M, x) \
+  FF_V3(o, M##0 * x##0 + M##1 * x##1 + M##2 * x##2, M##3 * x##0 + M##4 * x##1 + M##5 * x##2, \
+        M##6 * x##0 + M##7 * x##1 + M##8 * x##2)
+#define FF_MTV(o, M, x) \
+  FF_V3(o, M##0 * x##0 + M##3 * x##1 + M##6 * x##2, M##1 * x##0 + M##4 * x##1 + M##7 * x##2, \
+        M##2 * x##0 + M##5 * x##1 + M##8 * x##2)
+// 3x3 matrices: declare from nine values, load and store nine components, products A B, A^T B, A B^T.
+#define FF_M3(o, e0, e1, e2, e3, e4, e5, e6, e7, e8) \
+  [[maybe_unused]] double o##0 = (e0), o##1 = (e1), o##2 = (e2), o##3 = (e3), o##4 = (e4), o##5 = (e5), o##6 = (e6), \
+         o##7 = (e7), o##8 = (e8)
+// Entry (r, c) of a matrix named M is M##(3r + c); each product spells out its nine entries.
+#define FF_MM(o, A, B) \
+  FF_M3(o, A##0 * B##0 + A##1 * B##3 + A##2 * B##6, A##0 * B##1 + A##1 * B##4 + A##2 * B##7, \
+        A##0 * B##2 + A##1 * B##5 + A##2 * B##8, A##3 * B##0 + A##4 * B##3 + A##5 * B##6, \
+        A##3 * B##1 + A##4 * B##4 + A##5 * B##7, A##3 * B##2 + A##4 * B##5 + A##5 * B##8, \
+        A##6 * B##0 + A##7 * B##3 + A##8 * B##6, A##6 * B##1 + A##7 * B##4 + A##8 * B##7, \
+        A##6 * B##2 + A##7 * B##5 + A##8 * B##8)
+#define FF_MTM(o, A, B) \
+  FF_M3(o, A##0 * B##0 + A##3 * B##3 + A##6 * B##6, A##0 * B##1 + A##3 * B##4 + A##6 * B##7, \
+        A##0 * B##2 + A##3 * B##5 + A##6 * B##8, A##1 * B##0 + A##4 * B##3 + A##7 * B##6, \
+        A##1 * B##1 + A##4 * B##4 + A##7 * B##7, A##1 * B##2 + A##4 * B##5 + A##7 * B##8, \
+        A##2 * B##0 + A##5 * B##3 + A##8 * B##6, A##2 * B##1 + A##5 * B##4 + A##8 * B##7, \
+        A##2 * B##2 + A##5 * B##5 + A##8 * B##8)
+#define FF_MMT(o, A, B) \
+  FF_M3(o, A##0 * B##0 + A##1 * B##1 + A##2 * B##2, A##0 * B##3 + A##1 * B##4 + A##2 * B##5, \
+        A##0 * B##6 + A##1 * B##7 + A##2 * B##8, A##3 * B##0 + A##4 * B##1 + A##5 * B##2, \
+        A##3 * B##3 + A##4 * B##4 + A##5 * B##5, A##3 * B##6 + A##4 * B##7 + A##5 * B##8, \
+        A##6 * B##0 + A##7 * B##1 + A##8 * B##2, A##6 * B##3 + A##7 * B##4 + A##8 * B##5, \
+        A##6 * B##6 + A##7 * B##7 + A##8 * B##8)
+// M -= x y^T s
+#define FF_SUB_OUTER(M, x, y, s) \
+  M##0 -= x##0 * s * y##0, M##1 -= x##0 * s * y##1, M##2 -= x##0 * s * y##2, M##3 -= x##1 * s * y##0, \
+  M##4 -= x##1 * s * y##1, M##5 -= x##1 * s * y##2, M##6 -= x##2 * s * y##0, M##7 -= x##2 * s * y##1, \
+  M##8 -= x##2 * s * y##2
+// A symmetric 3x3 stored packed (xx, xy, xz, yy, yz, zz) at components k.. of a block, as a full M0..M8.
+#define FF_LOAD_SYM(o, base, k)                                                                              \
+  [[maybe_unused]] const double o##p0 = base[(k) * sW + l], o##p1 = base[((k) + 1) * sW + l], o##p2 = base[((k) + 2) * sW + l], \
+               o##p3 = base[((k) + 3) * sW + l], o##p4 = base[((k) + 4) * sW + l],                            \
+               o##p5 = base[((k) + 5) * sW + l];                                                              \
+  FF_M3(o, o##p0, o##p1, o##p2, o##p1, o##p3, o##p4, o##p2, o##p4, o##p5)
+#define FF_LOAD9(o, base, k)                                                                                  \
+  FF_M3(o, base[(k) * sW + l], base[((k) + 1) * sW + l], base[((k) + 2) * sW + l], base[((k) + 3) * sW + l], \
+        base[((k) + 4) * sW + l], base[((k) + 5) * sW + l], base[((k) + 6) * sW + l], base[((k) + 7) * sW + l], \
+        base[((k) + 8) * sW + l])
 
-// Lane-innermost views: component k of one body's K-vector at p[k * W + l].
-struct LaneBlock {
-  double* p;
-  int W;
-  FF_INLINE double& operator()(int k, int l) const { return p[k * W + l]; }
-};
-struct ConstLaneBlock {
-  const double* p;
-  int W;
-  ConstLaneBlock(const double* p_, int W_) : p(p_), W(W_) {}
-  ConstLaneBlock(const LaneBlock& b) : p(b.p), W(b.W) {}  // NOLINT: a read-only view of a block
-  FF_INLINE double operator()(int k, int l) const { return p[k * W + l]; }
-};
-
-FF_INLINE LaneBlock block(std::vector<double>& v, int i, int K, int W) {
-  return {v.data() + static_cast<std::size_t>(i) * K * W, W};
+// Component k of body i's K-vector block in lane l is at blk(v, i, K)[k * W + l].
+FF_INLINE double* blk(std::vector<double>& v, int i, int K, std::size_t W) {
+  return v.data() + static_cast<std::size_t>(i) * K * W;
 }
-FF_INLINE ConstLaneBlock block(const std::vector<double>& v, int i, int K, int W) {
-  return {v.data() + static_cast<std::size_t>(i) * K * W, W};
+FF_INLINE const double* blk(const std::vector<double>& v, int i, int K, std::size_t W) {
+  return v.data() + static_cast<std::size_t>(i) * K * W;
 }
 
 // Pass 1 of the ABA for body i, root to tip, in every lane: the joint transform Xup = X_J(q) X_tree,
@@ -68,86 +80,95 @@ FF_INLINE ConstLaneBlock block(const std::vector<double>& v, int i, int K, int W
 // p = v ×* I v as the start of the articulated quantities (RBDA Table 7.1, first loop).
 template <JointType J, bool kRoot>
 void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, TreeLanesWorkspace& ws) {
-  const int W = tl.W, p = tl.parent[i], j = tl.dof[i];
-  const ConstLaneBlock ax = block(tl.axis, i, 3, W), Xt = block(tl.X_tree, i, 12, W), In = block(tl.inertia, i, 10, W);
-  const LaneBlock Xup = block(ws.Xup, i, 12, W), v = block(ws.v, i, 6, W), c = block(ws.c, i, 6, W);
-  const LaneBlock IA = block(ws.IA, i, 21, W), pA = block(ws.pA, i, 6, W);
-  const ConstLaneBlock vp = block(ws.v, p < 0 ? 0 : p, 6, W);
+  const std::size_t sW = static_cast<std::size_t>(tl.W);
+  const int W = tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
+  const double *axb = blk(tl.axis, i, 3, sW), *Xtb = blk(tl.X_tree, i, 12, sW), *Inb = blk(tl.inertia, i, 10, sW);
+  const double* vpb = blk(ws.v, p, 6, sW);
+  double *Xb = blk(ws.Xup, i, 12, sW), *vb = blk(ws.v, i, 6, sW), *cb = blk(ws.c, i, 6, sW);
+  double *IAb = blk(ws.IA, i, 21, sW), *pAb = blk(ws.pA, i, 6, sW);
+  const double *qj = q + j * sW, *qdj = qd + j * sW;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    double Et[9], rt[3], a[3], E[9], r[3];
-    for (int k = 0; k < 9; ++k) Et[k] = Xt(k, l);
-    for (int k = 0; k < 3; ++k) rt[k] = Xt(9 + k, l), a[k] = ax(k, l);
-    double qj = 0.0, qdj = 0.0;
-    if constexpr (J != JointType::kFixed) qj = q[j * W + l], qdj = qd[j * W + l];
+    FF_LOAD3(a, axb, 0);
+    FF_LOAD9(Et, Xtb, 0);
+    FF_LOAD3(r, Xtb, 9);
     // Joint transform. Revolute: E_J = R(a, q)^T = c 1 - s [a]× + (1 - c) a a^T (Rodrigues), r_J = 0;
     // prismatic: E_J = 1, r_J = a q. Composition: E = E_J E_tree, r = r_tree + E_tree^T r_J.
+    FF_M3(E, Et0, Et1, Et2, Et3, Et4, Et5, Et6, Et7, Et8);
+    double qdl = 0.0;
     if constexpr (J == JointType::kRevolute) {
       double s, co;
-      calc_sincos(qj, s, co);
+      calc_sincos(qj[l], s, co);
       const double t = 1.0 - co;
-      const double EJ[9] = {co + t * a[0] * a[0],  s * a[2] + t * a[0] * a[1], -s * a[1] + t * a[0] * a[2],
-                            -s * a[2] + t * a[1] * a[0], co + t * a[1] * a[1], s * a[0] + t * a[1] * a[2],
-                            s * a[1] + t * a[2] * a[0], -s * a[0] + t * a[2] * a[1], co + t * a[2] * a[2]};
-      matmul3(EJ, Et, E);
-      for (int k = 0; k < 3; ++k) r[k] = rt[k];
+      FF_M3(EJ, co + t * a0 * a0, s * a2 + t * a0 * a1, -s * a1 + t * a0 * a2, -s * a2 + t * a1 * a0,
+            co + t * a1 * a1, s * a0 + t * a1 * a2, s * a1 + t * a2 * a0, -s * a0 + t * a2 * a1, co + t * a2 * a2);
+      FF_MM(En, EJ, Et);
+      E0 = En0, E1 = En1, E2 = En2, E3 = En3, E4 = En4, E5 = En5, E6 = En6, E7 = En7, E8 = En8;
+      qdl = qdj[l];
     } else if constexpr (J == JointType::kPrismatic) {
-      const double rJ[3] = {a[0] * qj, a[1] * qj, a[2] * qj};
-      double d[3];
-      mul3t(Et, rJ, d);
-      for (int k = 0; k < 9; ++k) E[k] = Et[k];
-      for (int k = 0; k < 3; ++k) r[k] = rt[k] + d[k];
-    } else {
-      for (int k = 0; k < 9; ++k) E[k] = Et[k];
-      for (int k = 0; k < 3; ++k) r[k] = rt[k];
+      const double ql = qj[l];
+      FF_V3(rJ, a0 * ql, a1 * ql, a2 * ql);
+      FF_MTV(dr, Et, rJ);
+      r0 += dr0, r1 += dr1, r2 += dr2;
+      qdl = qdj[l];
     }
-    for (int k = 0; k < 9; ++k) Xup(k, l) = E[k];
-    for (int k = 0; k < 3; ++k) Xup(9 + k, l) = r[k];
+    Xb[0 * sW + l] = E0, Xb[1 * sW + l] = E1, Xb[2 * sW + l] = E2, Xb[3 * sW + l] = E3, Xb[4 * sW + l] = E4;
+    Xb[5 * sW + l] = E5, Xb[6 * sW + l] = E6, Xb[7 * sW + l] = E7, Xb[8 * sW + l] = E8;
+    FF_STORE3(Xb, 9, r);
     // v = Xup v_parent + S qd: [E w; E (v - r × w)] (the base is at rest).
-    double w[3] = {0.0, 0.0, 0.0}, vl[3] = {0.0, 0.0, 0.0};
+    FF_V3(w, 0.0, 0.0, 0.0);
+    FF_V3(vl, 0.0, 0.0, 0.0);
     if constexpr (!kRoot) {
-      const double wp[3] = {vp(0, l), vp(1, l), vp(2, l)};
-      double rw[3], vr[3];
-      cross3(r, wp, rw);
-      for (int k = 0; k < 3; ++k) vr[k] = vp(3 + k, l) - rw[k];
-      mul3(E, wp, w);
-      mul3(E, vr, vl);
+      FF_LOAD3(wp, vpb, 0);
+      FF_CROSS(rw, r, wp);
+      FF_V3(vr, vpb[3 * sW + l] - rw0, vpb[4 * sW + l] - rw1, vpb[5 * sW + l] - rw2);
+      FF_MV(Ew, E, wp);
+      FF_MV(Ev, E, vr);
+      w0 = Ew0, w1 = Ew1, w2 = Ew2, vl0 = Ev0, vl1 = Ev1, vl2 = Ev2;
     }
-    const double aq[3] = {a[0] * qdj, a[1] * qdj, a[2] * qdj};  // the joint's rate along its axis
-    double cw[3] = {0.0, 0.0, 0.0}, cv[3] = {0.0, 0.0, 0.0};
+    FF_V3(aq, a0 * qdl, a1 * qdl, a2 * qdl);  // the joint's rate along its axis
+    FF_V3(cw, 0.0, 0.0, 0.0);
+    FF_V3(cv, 0.0, 0.0, 0.0);
     if constexpr (J == JointType::kRevolute) {
-      for (int k = 0; k < 3; ++k) w[k] += aq[k];
+      w0 += aq0, w1 += aq1, w2 += aq2;
       // c = v × [aq; 0] = [w × aq; vl × aq]
-      cross3(w, aq, cw);
-      cross3(vl, aq, cv);
+      FF_CROSS(x, w, aq);
+      FF_CROSS(y, vl, aq);
+      cw0 = x0, cw1 = x1, cw2 = x2, cv0 = y0, cv1 = y1, cv2 = y2;
     } else if constexpr (J == JointType::kPrismatic) {
-      for (int k = 0; k < 3; ++k) vl[k] += aq[k];
+      vl0 += aq0, vl1 += aq1, vl2 += aq2;
       // c = v × [0; aq] = [0; w × aq]
-      cross3(w, aq, cv);
+      FF_CROSS(y, w, aq);
+      cv0 = y0, cv1 = y1, cv2 = y2;
     }
-    for (int k = 0; k < 3; ++k) v(k, l) = w[k], v(3 + k, l) = vl[k], c(k, l) = cw[k], c(3 + k, l) = cv[k];
+    FF_STORE3(vb, 0, w);
+    FF_STORE3(vb, 3, vl);
+    FF_STORE3(cb, 0, cw);
+    FF_STORE3(cb, 3, cv);
     // The rigid inertia I = [Ibar, [h]×; [h]×^T, m 1] (RBDA eq. 2.63) and p = v ×* (I v):
     // I v = [Ibar w + h × vl; m vl - h × w],  v ×* [n; f] = [w × n + vl × f; w × f].
-    const double m = In(0, l), h[3] = {In(1, l), In(2, l), In(3, l)};
-    double Ib[9];
-    const double Ip[6] = {In(4, l), In(5, l), In(6, l), In(7, l), In(8, l), In(9, l)};
-    unpack_sym(Ip, Ib);
-    double n[3], f[3], hv[3], hw[3];
-    mul3(Ib, w, n);
-    cross3(h, vl, hv);
-    cross3(h, w, hw);
-    for (int k = 0; k < 3; ++k) n[k] += hv[k], f[k] = m * vl[k] - hw[k];
-    double wn[3], vf[3], wf[3];
-    cross3(w, n, wn);
-    cross3(vl, f, vf);
-    cross3(w, f, wf);
-    for (int k = 0; k < 3; ++k) pA(k, l) = wn[k] + vf[k], pA(3 + k, l) = wf[k];
+    const double m = Inb[0 * sW + l];
+    FF_LOAD3(h, Inb, 1);
+    FF_LOAD_SYM(Ib, Inb, 4);
+    FF_MV(Iw, Ib, w);
+    FF_CROSS(hv, h, vl);
+    FF_CROSS(hw, h, w);
+    FF_V3(n, Iw0 + hv0, Iw1 + hv1, Iw2 + hv2);
+    FF_V3(f, m * vl0 - hw0, m * vl1 - hw1, m * vl2 - hw2);
+    FF_CROSS(wn, w, n);
+    FF_CROSS(vf, vl, f);
+    FF_CROSS(wf, w, f);
+    FF_V3(pt, wn0 + vf0, wn1 + vf1, wn2 + vf2);
+    FF_STORE3(pAb, 0, pt);
+    FF_STORE3(pAb, 3, wf);
     // I^A = I: A = Ibar (packed), B = [h]×, C = m 1 (packed).
-    for (int k = 0; k < 6; ++k) IA(k, l) = Ip[k];
-    const double B[9] = {0.0, -h[2], h[1], h[2], 0.0, -h[0], -h[1], h[0], 0.0};
-    for (int k = 0; k < 9; ++k) IA(6 + k, l) = B[k];
-    const double C[6] = {m, 0.0, 0.0, m, 0.0, m};
-    for (int k = 0; k < 6; ++k) IA(15 + k, l) = C[k];
+    IAb[0 * sW + l] = Ibp0, IAb[1 * sW + l] = Ibp1, IAb[2 * sW + l] = Ibp2;
+    IAb[3 * sW + l] = Ibp3, IAb[4 * sW + l] = Ibp4, IAb[5 * sW + l] = Ibp5;
+    IAb[6 * sW + l] = 0.0, IAb[7 * sW + l] = -h2, IAb[8 * sW + l] = h1;
+    IAb[9 * sW + l] = h2, IAb[10 * sW + l] = 0.0, IAb[11 * sW + l] = -h0;
+    IAb[12 * sW + l] = -h1, IAb[13 * sW + l] = h0, IAb[14 * sW + l] = 0.0;
+    IAb[15 * sW + l] = m, IAb[16 * sW + l] = 0.0, IAb[17 * sW + l] = 0.0;
+    IAb[18 * sW + l] = m, IAb[19 * sW + l] = 0.0, IAb[20 * sW + l] = m;
   }
 }
 
@@ -158,95 +179,91 @@ void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, Tr
 //   A'' = A' + r× B'^T - B' r× - r× C' r×,  B'' = B' + r× C',  C'' = C'.
 template <JointType J, bool kRoot>
 void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extra, TreeLanesWorkspace& ws) {
-  const int W = tl.W, p = tl.parent[i], j = tl.dof[i];
-  const ConstLaneBlock ax = block(tl.axis, i, 3, W);
-  const LaneBlock IA = block(ws.IA, i, 21, W), pA = block(ws.pA, i, 6, W), U = block(ws.U, i, 6, W);
-  const LaneBlock c = block(ws.c, i, 6, W), Xup = block(ws.Xup, i, 12, W);
-  const LaneBlock IAp = block(ws.IA, p < 0 ? 0 : p, 21, W), pAp = block(ws.pA, p < 0 ? 0 : p, 6, W);
-  double* d = ws.d.data() + static_cast<std::size_t>(i) * W;
-  double* u = ws.u.data() + static_cast<std::size_t>(i) * W;
-  const double* arm = tl.armature.data() + static_cast<std::size_t>(j < 0 ? 0 : j) * W;
-  const double* xarm = extra + static_cast<std::size_t>(j < 0 ? 0 : j) * W;  // zeros when none
+  const std::size_t sW = static_cast<std::size_t>(tl.W);
+  const int W = tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
+  const double* axb = blk(tl.axis, i, 3, sW);
+  double *IAb = blk(ws.IA, i, 21, sW), *pAb = blk(ws.pA, i, 6, sW), *Ub = blk(ws.U, i, 6, sW);
+  const double *cb = blk(ws.c, i, 6, sW), *Xb = blk(ws.Xup, i, 12, sW);
+  double *IApb = blk(ws.IA, p, 21, sW), *pApb = blk(ws.pA, p, 6, sW);
+  double* d = ws.d.data() + static_cast<std::size_t>(i) * sW;
+  double* u = ws.u.data() + static_cast<std::size_t>(i) * sW;
+  const double *arm = tl.armature.data() + j * sW, *xarm = extra + j * sW, *tj = tau + j * sW;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    double A[9], B[9], C[9], pa[6];
-    double Ap[6], Cp[6];
-    for (int k = 0; k < 6; ++k) Ap[k] = IA(k, l), Cp[k] = IA(15 + k, l), pa[k] = pA(k, l);
-    unpack_sym(Ap, A);
-    unpack_sym(Cp, C);
-    for (int k = 0; k < 9; ++k) B[k] = IA(6 + k, l);
+    FF_LOAD_SYM(A, IAb, 0);
+    FF_LOAD9(B, IAb, 6);
+    FF_LOAD_SYM(C, IAb, 15);
+    FF_LOAD3(pt, pAb, 0);
+    FF_LOAD3(pb, pAb, 3);
     if constexpr (J != JointType::kFixed) {
-      const double a[3] = {ax(0, l), ax(1, l), ax(2, l)};
-      double Ut[3], Ub[3];  // U = [A a; B^T a] (revolute) or [B a; C a] (prismatic)
+      FF_LOAD3(a, axb, 0);
+      // U = [A a; B^T a] (revolute) or [B a; C a] (prismatic)
+      FF_V3(Ut, 0.0, 0.0, 0.0);
+      FF_V3(Uq, 0.0, 0.0, 0.0);
       double uj;
       if constexpr (J == JointType::kRevolute) {
-        mul3(A, a, Ut);
-        mul3t(B, a, Ub);
-        d[l] = dot3(a, Ut) + arm[l];
-        uj = tau[j * W + l] - dot3(a, pa);
+        FF_MV(x, A, a);
+        FF_MTV(y, B, a);
+        Ut0 = x0, Ut1 = x1, Ut2 = x2, Uq0 = y0, Uq1 = y1, Uq2 = y2;
+        d[l] = FF_DOT(a, Ut) + arm[l];
+        uj = tj[l] - FF_DOT(a, pt);
       } else {
-        mul3(B, a, Ut);
-        mul3(C, a, Ub);
-        d[l] = dot3(a, Ub) + arm[l];
-        uj = tau[j * W + l] - dot3(a, pa + 3);
+        FF_MV(x, B, a);
+        FF_MV(y, C, a);
+        Ut0 = x0, Ut1 = x1, Ut2 = x2, Uq0 = y0, Uq1 = y1, Uq2 = y2;
+        d[l] = FF_DOT(a, Uq) + arm[l];
+        uj = tj[l] - FF_DOT(a, pb);
       }
       d[l] += xarm[l];
       u[l] = uj;
-      for (int k = 0; k < 3; ++k) U(k, l) = Ut[k], U(3 + k, l) = Ub[k];
+      FF_STORE3(Ub, 0, Ut);
+      FF_STORE3(Ub, 3, Uq);
       if constexpr (!kRoot) {
         const double dinv = 1.0 / d[l];
-        const double Us[6] = {Ut[0], Ut[1], Ut[2], Ub[0], Ub[1], Ub[2]};
-        for (int r = 0; r < 3; ++r)
-          for (int k = 0; k < 3; ++k) {
-            A[3 * r + k] -= Us[r] * dinv * Us[k];
-            B[3 * r + k] -= Us[r] * dinv * Us[3 + k];
-            C[3 * r + k] -= Us[3 + r] * dinv * Us[3 + k];
-          }
+        FF_SUB_OUTER(A, Ut, Ut, dinv);
+        FF_SUB_OUTER(B, Ut, Uq, dinv);
+        FF_SUB_OUTER(C, Uq, Uq, dinv);
         // p^a = p^A + I^a c + U u / d
-        const double cc[6] = {c(0, l), c(1, l), c(2, l), c(3, l), c(4, l), c(5, l)};
-        double t0[3], t1[3], t2[3], t3[3];
-        mul3(A, cc, t0);
-        mul3(B, cc + 3, t1);
-        mul3t(B, cc, t2);
-        mul3(C, cc + 3, t3);
+        FF_LOAD3(cw, cb, 0);
+        FF_LOAD3(cv, cb, 3);
+        FF_MV(t0, A, cw);
+        FF_MV(t1, B, cv);
+        FF_MTV(t2, B, cw);
+        FF_MV(t3, C, cv);
         const double ud = uj * dinv;
-        for (int k = 0; k < 3; ++k) {
-          pa[k] += t0[k] + t1[k] + Us[k] * ud;
-          pa[3 + k] += t2[k] + t3[k] + Us[3 + k] * ud;
-        }
+        pt0 += t00 + t10 + Ut0 * ud, pt1 += t01 + t11 + Ut1 * ud, pt2 += t02 + t12 + Ut2 * ud;
+        pb0 += t20 + t30 + Uq0 * ud, pb1 += t21 + t31 + Uq1 * ud, pb2 += t22 + t32 + Uq2 * ud;
       }
     }
     if constexpr (!kRoot) {
-      double E[9], r[3];
-      for (int k = 0; k < 9; ++k) E[k] = Xup(k, l);
-      for (int k = 0; k < 3; ++k) r[k] = Xup(9 + k, l);
-      double A1[9], B1[9], C1[9];
-      congruence3(E, A, A1);
-      congruence3(E, B, B1);
-      congruence3(E, C, C1);
-      // r× M and M r× for 3x3 M: (r× M)_rk = (r × M_col k)_r, (M r×) = -(r× M^T)^T.
-      const double R[9] = {0.0, -r[2], r[1], r[2], 0.0, -r[0], -r[1], r[0], 0.0};
-      double RC[9], RBt[9], BR[9], RCR[9], B1t[9];
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) B1t[3 * a + b] = B1[3 * b + a];
-      matmul3(R, C1, RC);
-      matmul3(R, B1t, RBt);
-      matmul3(B1, R, BR);
-      matmul3(RC, R, RCR);
-      // Accumulate into the parent: packed A, full B, packed C.
-      const int pk[6] = {0, 1, 2, 4, 5, 8};
-      for (int k = 0; k < 6; ++k) {
-        const int e = pk[k];
-        IAp(k, l) += A1[e] + RBt[e] - BR[e] - RCR[e];
-        IAp(15 + k, l) += C1[e];
-      }
-      for (int k = 0; k < 9; ++k) IAp(6 + k, l) += B1[k] + RC[k];
+      FF_LOAD9(E, Xb, 0);
+      FF_LOAD3(r, Xb, 9);
+      FF_MM(AE, A, E);
+      FF_MTM(A1, E, AE);
+      FF_MM(BE, B, E);
+      FF_MTM(B1, E, BE);
+      FF_MM(CE, C, E);
+      FF_MTM(C1, E, CE);
+      FF_M3(R, 0.0, -r2, r1, r2, 0.0, -r0, -r1, r0, 0.0);
+      FF_MM(RC, R, C1);
+      FF_MMT(RBt, R, B1);
+      FF_MM(BR, B1, R);
+      FF_MM(RCR, RC, R);
+      // Accumulate into the parent: packed A (entries 0, 1, 2, 4, 5, 8 of the full), full B, packed C.
+      IApb[0 * sW + l] += A10 + RBt0 - BR0 - RCR0, IApb[1 * sW + l] += A11 + RBt1 - BR1 - RCR1;
+      IApb[2 * sW + l] += A12 + RBt2 - BR2 - RCR2, IApb[3 * sW + l] += A14 + RBt4 - BR4 - RCR4;
+      IApb[4 * sW + l] += A15 + RBt5 - BR5 - RCR5, IApb[5 * sW + l] += A18 + RBt8 - BR8 - RCR8;
+      IApb[6 * sW + l] += B10 + RC0, IApb[7 * sW + l] += B11 + RC1, IApb[8 * sW + l] += B12 + RC2;
+      IApb[9 * sW + l] += B13 + RC3, IApb[10 * sW + l] += B14 + RC4, IApb[11 * sW + l] += B15 + RC5;
+      IApb[12 * sW + l] += B16 + RC6, IApb[13 * sW + l] += B17 + RC7, IApb[14 * sW + l] += B18 + RC8;
+      IApb[15 * sW + l] += C10, IApb[16 * sW + l] += C11, IApb[17 * sW + l] += C12;
+      IApb[18 * sW + l] += C14, IApb[19 * sW + l] += C15, IApb[20 * sW + l] += C18;
       // X^T [n; f] = [E^T n + r × E^T f; E^T f]
-      double n1[3], f1[3], rf[3];
-      mul3t(E, pa, n1);
-      mul3t(E, pa + 3, f1);
-      cross3(r, f1, rf);
-      for (int k = 0; k < 3; ++k) pAp(k, l) += n1[k] + rf[k], pAp(3 + k, l) += f1[k];
+      FF_MTV(n1, E, pt);
+      FF_MTV(f1, E, pb);
+      FF_CROSS(rf, r, f1);
+      pApb[0 * sW + l] += n10 + rf0, pApb[1 * sW + l] += n11 + rf1, pApb[2 * sW + l] += n12 + rf2;
+      pApb[3 * sW + l] += f10, pApb[4 * sW + l] += f11, pApb[5 * sW + l] += f12;
     }
   }
 }
@@ -255,43 +272,46 @@ void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extr
 // qdd = (u - U . a) / d, a += S qdd.
 template <JointType J, bool kRoot>
 void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) {
-  const int W = tl.W, p = tl.parent[i], j = tl.dof[i];
-  const ConstLaneBlock ax = block(tl.axis, i, 3, W), Xup = block(ws.Xup, i, 12, W), c = block(ws.c, i, 6, W);
-  const ConstLaneBlock U = block(ws.U, i, 6, W), ap = block(ws.a, p < 0 ? 0 : p, 6, W);
-  const ConstLaneBlock g(tl.gravity.data(), W);
-  const LaneBlock a = block(ws.a, i, 6, W);
-  const double* d = ws.d.data() + static_cast<std::size_t>(i) * W;
-  const double* u = ws.u.data() + static_cast<std::size_t>(i) * W;
+  const std::size_t sW = static_cast<std::size_t>(tl.W);
+  const int W = tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
+  const double *axb = blk(tl.axis, i, 3, sW), *Xb = blk(ws.Xup, i, 12, sW), *cb = blk(ws.c, i, 6, sW);
+  const double *Ub = blk(ws.U, i, 6, sW), *apb = blk(ws.a, p, 6, sW), *gb = tl.gravity.data();
+  double* ab = blk(ws.a, i, 6, sW);
+  const double* d = ws.d.data() + static_cast<std::size_t>(i) * sW;
+  const double* u = ws.u.data() + static_cast<std::size_t>(i) * sW;
+  double* qj = qdd + j * sW;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    double E[9], r[3], wp[3], vp[3];
-    for (int k = 0; k < 9; ++k) E[k] = Xup(k, l);
-    for (int k = 0; k < 3; ++k) r[k] = Xup(9 + k, l);
+    FF_LOAD9(E, Xb, 0);
+    FF_LOAD3(r, Xb, 9);
+    FF_V3(wp, 0.0, 0.0, 0.0);
+    FF_V3(vp, 0.0, 0.0, 0.0);
     if constexpr (kRoot) {
-      for (int k = 0; k < 3; ++k) wp[k] = 0.0, vp[k] = -g(k, l);
+      vp0 = -gb[0 * sW + l], vp1 = -gb[1 * sW + l], vp2 = -gb[2 * sW + l];
     } else {
-      for (int k = 0; k < 3; ++k) wp[k] = ap(k, l), vp[k] = ap(3 + k, l);
+      wp0 = apb[0 * sW + l], wp1 = apb[1 * sW + l], wp2 = apb[2 * sW + l];
+      vp0 = apb[3 * sW + l], vp1 = apb[4 * sW + l], vp2 = apb[5 * sW + l];
     }
-    double rw[3], vr[3], aw[3], av[3];
-    cross3(r, wp, rw);
-    for (int k = 0; k < 3; ++k) vr[k] = vp[k] - rw[k];
-    mul3(E, wp, aw);
-    mul3(E, vr, av);
-    for (int k = 0; k < 3; ++k) aw[k] += c(k, l), av[k] += c(3 + k, l);
+    FF_CROSS(rw, r, wp);
+    FF_V3(vr, vp0 - rw0, vp1 - rw1, vp2 - rw2);
+    FF_MV(aw, E, wp);
+    FF_MV(av, E, vr);
+    aw0 += cb[0 * sW + l], aw1 += cb[1 * sW + l], aw2 += cb[2 * sW + l];
+    av0 += cb[3 * sW + l], av1 += cb[4 * sW + l], av2 += cb[5 * sW + l];
     if constexpr (J != JointType::kFixed) {
-      double Ua = 0.0;
-      for (int k = 0; k < 3; ++k) Ua += U(k, l) * aw[k];
-      for (int k = 0; k < 3; ++k) Ua += U(3 + k, l) * av[k];
-      const double x = (u[l] - Ua) / d[l];
-      qdd[j * W + l] = x;
-      for (int k = 0; k < 3; ++k) {
-        if constexpr (J == JointType::kRevolute)
-          aw[k] += ax(k, l) * x;
-        else
-          av[k] += ax(k, l) * x;
+      FF_LOAD3(Ut, Ub, 0);
+      FF_LOAD3(Uq, Ub, 3);
+      const double x = (u[l] - (FF_DOT(Ut, aw) + FF_DOT(Uq, av))) / d[l];
+      qj[l] = x;
+      FF_LOAD3(a, axb, 0);
+      if constexpr (J == JointType::kRevolute) {
+        aw0 += a0 * x, aw1 += a1 * x, aw2 += a2 * x;
+      } else {
+        av0 += a0 * x, av1 += a1 * x, av2 += a2 * x;
       }
     }
-    for (int k = 0; k < 3; ++k) a(k, l) = aw[k], a(3 + k, l) = av[k];
+    FF_STORE3(ab, 0, aw);
+    FF_STORE3(ab, 3, av);
   }
 }
 
@@ -349,17 +369,18 @@ TreeLanes make_tree_lanes(std::span<const Tree> trees) {
       if (b.parent != tl.parent[i] || b.joint != tl.joint[i] || b.dof != tl.dof[i])
         throw std::invalid_argument("make_tree_lanes: lane " + std::to_string(l) + ", body " + std::to_string(i) +
                                     " (" + b.name + "): another parent or joint type than in lane 0");
-      const LaneBlock ax = block(tl.axis, i, 3, W), Xt = block(tl.X_tree, i, 12, W), In = block(tl.inertia, i, 10, W);
-      for (int k = 0; k < 3; ++k) ax(k, l) = b.axis[k];
+      double *ax = blk(tl.axis, i, 3, W), *Xt = blk(tl.X_tree, i, 12, W), *In = blk(tl.inertia, i, 10, W);
+      const auto at = [W, l](int k) { return static_cast<std::size_t>(k) * W + l; };
+      for (int k = 0; k < 3; ++k) ax[at(k)] = b.axis[k];
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) Xt(3 * r + c, l) = b.X_tree.E(r, c);
-      for (int k = 0; k < 3; ++k) Xt(9 + k, l) = b.X_tree.r[k];
+        for (int c = 0; c < 3; ++c) Xt[at(3 * r + c)] = b.X_tree.E(r, c);
+      for (int k = 0; k < 3; ++k) Xt[at(9 + k)] = b.X_tree.r[k];
       const Mat3 Ibar = b.inertia.topLeftCorner<3, 3>();
       const Vec3 h = b.mass * b.com;
-      In(0, l) = b.mass;
-      for (int k = 0; k < 3; ++k) In(1 + k, l) = h[k];
+      In[at(0)] = b.mass;
+      for (int k = 0; k < 3; ++k) In[at(1 + k)] = h[k];
       const double packed[6] = {Ibar(0, 0), Ibar(0, 1), Ibar(0, 2), Ibar(1, 1), Ibar(1, 2), Ibar(2, 2)};
-      for (int k = 0; k < 6; ++k) In(4 + k, l) = packed[k];
+      for (int k = 0; k < 6; ++k) In[at(4 + k)] = packed[k];
       if (b.dof >= 0) {
         const std::size_t o = static_cast<std::size_t>(b.dof) * W + l;
         tl.armature[o] = b.armature;
