@@ -41,8 +41,8 @@
 //   (8) -EI2 W2'''(L2) - omega^2 m_p W2(L2) = 0         tip: shear balance with the payload's m_p
 // With phi = 0 these are the transfer conditions of one beam through a section; with a single link
 // (7) and (8) are the classical tip-body conditions whose determinant is
-// cantilever_tip_body_equation below (Laura, Pombo & Susemihl, J. Sound Vib. 37, 1974; Blevins,
-// Formulas for Natural Frequency and Mode Shape, 1979, Table 8-8).
+// cantilever_tip_body_equation below (with the tip mass alone: Laura, Pombo & Susemihl, J. Sound
+// Vib. 37, 1974; Blevins, Formulas for Natural Frequency and Mode Shape, 1979, ch. 8).
 // Each row is divided by its natural scale (EI1 beta1^k for a k-th derivative, W2's derivatives as
 // multiples of W2^(k)/beta2^k), so every entry is O(1) times a mass or stiffness ratio, and the 8 x 8
 // determinant D(omega) is a smooth real function whose simple zeros are the natural frequencies. They
@@ -169,13 +169,15 @@ inline std::vector<double> two_link_natural_frequencies(const EbTwoLinkArm& arm,
 }
 
 // The frequency equation of a uniform cantilever carrying a tip body, lambda = beta L, mass ratio
-// mu = m_p / (rho A L), inertia ratio j = J_p / (rho A L^3) (Laura, Pombo & Susemihl 1974; Blevins
-// 1979, Table 8-8; with j = 0 the tip mass alone):
+// mu = m_p / (rho A L), inertia ratio j = J_p / (rho A L^3): the 4 x 4 determinant of the clamped-free
+// beam in sin, cos, sinh, cosh with the tip conditions (7), (8), expanded (with j = 0 it is the
+// classical tip-mass equation of Laura, Pombo & Susemihl 1974 and Blevins 1979, ch. 8):
 //   1 + cos cosh + lambda mu (cos sinh - sin cosh) - lambda^3 j (sin cosh + cos sinh)
 //     + lambda^4 mu j (1 - cos cosh) = 0,
 // divided by cosh lambda to keep it bounded.
 inline double cantilever_tip_body_equation(double lambda, double mu, double j) {
-  const double s = std::sin(lambda), c = std::cos(lambda), t = std::tanh(lambda), sech = 1.0 / std::cosh(lambda);
+  const double s = std::sin(lambda), c = std::cos(lambda);
+  const double t = std::tanh(lambda), sech = 1.0 / std::cosh(lambda);
   return sech + c + lambda * mu * (c * t - s) - lambda * lambda * lambda * j * (s + c * t) +
          std::pow(lambda, 4) * mu * j * (sech - c);
 }

@@ -40,8 +40,10 @@ TEST(TwoLinkBeamOracle, StraightArmOfEqualLinksIsOneCantilever) {
     const std::vector<double> omega = test::two_link_natural_frequencies(arm, 3);
     const EbLink whole{0.7 + L2, 6.3, 0.324};
     for (int k = 0; k < 3; ++k) {
-      const double err = std::abs(beta_l(whole, omega[static_cast<std::size_t>(k)]) / kCantileverBetaL[k] - 1.0);
-      RecordProperty("L2_" + std::to_string(L2).substr(0, 3) + "_mode" + std::to_string(k + 1), test::sci(err));
+      const double lambda = beta_l(whole, omega[static_cast<std::size_t>(k)]);
+      const double err = std::abs(lambda / kCantileverBetaL[k] - 1.0);
+      RecordProperty("L2_" + std::to_string(L2).substr(0, 3) + "_mode" + std::to_string(k + 1),
+                     test::sci(err));
       EXPECT_LT(err, 1e-10) << "L2 " << L2 << " mode " << k + 1;
     }
   }
@@ -50,7 +52,7 @@ TEST(TwoLinkBeamOracle, StraightArmOfEqualLinksIsOneCantilever) {
 TEST(TwoLinkBeamOracle, TipMassGivesTheCantileverTipMassFrequencyEquationAndBlevinsValue) {
   // The frequency equation of a cantilever with a tip mass, solved on its own (mu = m_p / (rho A L)):
   // 1 + cos cosh + mu beta L (cos sinh - sin cosh) = 0. Without the mass it is 1 + cos cosh = 0;
-  // Blevins (Formulas for Natural Frequency and Mode Shape, Table 8-8) tabulates beta_1 L = 1.2479
+  // Blevins (Formulas for Natural Frequency and Mode Shape, 1979, ch. 8) tabulates beta_1 L = 1.2479
   // at mu = 1. The straight arm of equal links carrying m_p is that cantilever.
   const std::vector<double> bare = test::cantilever_tip_body_roots(0.0, 0.0, 3);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(bare[static_cast<std::size_t>(k)], kCantileverBetaL[k], 1e-12);
@@ -77,10 +79,11 @@ TEST(TwoLinkBeamOracle, RigidSecondLinkAtARightAngleIsATipBodyOnLinkOne) {
   // centre of mass lies on link 1's transverse line through the elbow, so its translation along y
   // (link 2 sliding along its axis: the whole mass M = rho A2 L2 + m_p) and its rotation about the
   // elbow (J = rho A2 L2^3 / 3 + m_p L2^2 + J_p) do not couple: link 1 is a cantilever with tip mass
-  // M and rotary inertia J, whose frequency equation (Laura, Pombo & Susemihl 1974) is
+  // M and rotary inertia J, whose frequency equation (the clamped-free determinant with the tip
+  // body's conditions, expanded) is
   // 1 + cos cosh + l mu (cos sinh - sin cosh) - l^3 j (sin cosh + cos sinh) + l^4 mu j (1 - cos cosh)
   // = 0, mu = M / (rho A1 L1), j = J / (rho A1 L1^3). The remaining flexibility of link 2 moves the
-  // frequencies by ~1e-8 relative.
+  // frequencies by ~3e-9 relative.
   EbTwoLinkArm arm;
   arm.link1 = {0.7, 6.3, 0.324};
   arm.link2 = {0.6, 6.3e8, 0.162};
@@ -88,7 +91,8 @@ TEST(TwoLinkBeamOracle, RigidSecondLinkAtARightAngleIsATipBodyOnLinkOne) {
   arm.tip_mass = 0.2;
   arm.tip_inertia = 1e-3;
   const double M = 0.162 * 0.6 + 0.2, J = 0.162 * std::pow(0.6, 3) / 3.0 + 0.2 * 0.36 + 1e-3;
-  const std::vector<double> closed = test::cantilever_tip_body_roots(M / (0.324 * 0.7), J / (0.324 * std::pow(0.7, 3)), 3);
+  const std::vector<double> closed =
+      test::cantilever_tip_body_roots(M / (0.324 * 0.7), J / (0.324 * std::pow(0.7, 3)), 3);
   const std::vector<double> omega = test::two_link_natural_frequencies(arm, 3);
   for (int k = 0; k < 3; ++k) {
     const double err = std::abs(beta_l(arm.link1, omega[static_cast<std::size_t>(k)]) /
@@ -133,9 +137,8 @@ EbLink continuous(const Strip& s) {
 // every lumped frequency by sqrt(kappa) at every N, a bias no refinement removes; the rig's 0.905
 // leaves -4.9 %). Measured (phi = 0, 45, 90 deg, bare or with the payload): the lumped frequencies lie
 // above the continuous ones and the error falls as 1/N^2 (x 4.2-4.9 per doubling), from 0.25-1.7 %
-// at N = 6 to
-// 2.8e-5 .. 1.8e-4 at N = 48 (0.018 % at most). Checked: it falls by more than 3 at each doubling, and at N = 48
-// it is below 5e-4 for each of the three.
+// at N = 6 to 2.8e-5 .. 1.8e-4 at N = 48 (0.018 % at most). Checked: it falls by more than 3 at
+// each doubling, and at N = 48 it is below 5e-4 for each of the three.
 void expect_lumped_arm_converges(double phi, bool payload, const char* what) {
   EbTwoLinkArm arm;
   arm.link1 = continuous(kLink1);
@@ -171,8 +174,8 @@ void expect_lumped_arm_converges(double phi, bool payload, const char* what) {
       const std::size_t kk = static_cast<std::size_t>(k);
       EXPECT_TRUE(modes[kk].oscillatory);
       const double err = std::abs(modes[kk].omega_n / exact[kk] - 1.0);
-      testing::Test::RecordProperty(std::string(what) + "_N" + std::to_string(N) + "_mode" + std::to_string(k + 1),
-                                    test::sci(err));
+      testing::Test::RecordProperty(
+          std::string(what) + "_N" + std::to_string(N) + "_mode" + std::to_string(k + 1), test::sci(err));
       EXPECT_LT(err, previous[k] / 3.0) << what << " N " << N << " mode " << k + 1;
       previous[k] = err;
     }
