@@ -28,6 +28,12 @@ struct KeyDoc {
 };
 std::vector<KeyDoc> tree_yaml_keys();
 
+// A `flexible:` block (docs/formats.md; tree YAML bodies and the URDF sidecar's links): its keys read
+// from `r` (the block's own reader, then finished), bounds, required keys and the payload inertia
+// checked. The returned spec's name, root name and root joint are left for make_flexible.
+FlexibleLinkSpec read_flexible_block(YamlReader& r);
+std::vector<KeyDoc> flexible_keys(const std::string& prefix);
+
 // The joint block's passive keys (armature, stiffness, damping, spring_reference): those present in
 // `r` read into `body` and checked (>= 0 where make_tree wants it); for the URDF sidecar.
 void read_joint_springs(YamlReader& r, BodySpec& body);
