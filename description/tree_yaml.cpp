@@ -21,7 +21,8 @@ namespace {
 enum class Bound { kAny, kNonNegative, kPositive, kNonZero };
 
 // One key of a block: where its value goes, whether it must be given, its bound. The default is the
-// member's initial value in a default-constructed block; a text key's, as the docs write it, `fallback`.
+// member's initial value in a default-constructed block; `fallback` overrides it as the docs write it
+// (a text key's default, or a condition such as "required with torsion").
 template <class T>
 struct Field {
   const char* key;
@@ -30,7 +31,7 @@ struct Field {
   bool required = false;
   Bound bound = Bound::kAny;
   bool moving_only = false;        // revolute and prismatic joints only: an error on a fixed joint
-  const char* fallback = nullptr;  // the default of a text key, as the docs write it
+  const char* fallback = nullptr;  // the default as the docs write it, when not the member's value
 };
 
 constexpr const char* kDefaultJointType = "revolute";

@@ -1,5 +1,6 @@
 // Tree YAML files (docs/formats.md, "Kinematic trees (YAML) and URDF"): a kinematic tree as a list of
-// bodies, parents first, each with the joint to its parent. Read strictly (kernel/yaml_reader.hpp):
+// bodies, parents first, each with the joint to its parent, rigid or flexible (a `flexible:` block,
+// made a flexible link by make_flexible, tree_description.hpp). Read strictly (kernel/yaml_reader.hpp):
 // every error, make_tree's included, is one ConfigError naming the file, the line and the key path.
 #pragma once
 

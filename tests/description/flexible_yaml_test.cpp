@@ -198,6 +198,28 @@ TEST(FlexibleYaml, OmittedKeysTakeTheirDefaultsAndPlanarKeepsOneJointPerCell) {
   EXPECT_EQ(d.body_index.at("strip.seg5"), 5);
 }
 
+TEST(FlexibleYaml, WithoutTorsionACellHasTheTwoBendingJointsNamedZAndY) {
+  const ff::TreeDescription d = parse(R"(bodies:
+  - name: strip
+    parent: base
+    joint: {name: hub, axis: [0, 1, 0], armature: 0.01}
+    flexible:
+      length: 1
+      segments: 3
+      torsion: false
+      section: {E: 2.0e11, density: 7800, area: 1.0e-4, I_y: 1.0e-10, I_z: 2.0e-10}
+)");
+  EXPECT_EQ(d.body_index, (std::map<std::string, int>{{"strip", 0}, {"strip.cell1.z", 1}, {"strip.seg1", 2},
+                                                       {"strip.cell2.z", 3}, {"strip.seg2", 4}}));
+  EXPECT_EQ(d.dof_index, (std::map<std::string, int>{{"hub", 0}, {"strip.cell1.z", 1}, {"strip.cell1.y", 2},
+                                                      {"strip.cell2.z", 3}, {"strip.cell2.y", 4}}));
+  EXPECT_EQ(d.flexible_links.at(0).dofs, (std::vector<int>{1, 2, 3, 4}));
+  EXPECT_EQ(d.spec.bodies[0].joint, ff::JointType::kRevolute);  // the hub joint moves the root segment
+  EXPECT_EQ(d.spec.bodies[0].axis, ff::Vec3::UnitY());
+  EXPECT_EQ(d.spec.bodies[0].armature, 0.01);
+  EXPECT_NEAR(d.spec.bodies[0].mass, 7800 * 1.0e-4 * 0.25, 1e-15);  // kg: the root segment, l/2 = 0.25 m
+}
+
 // --- geometry ------------------------------------------------------------------------------------
 
 TEST(FlexibleYaml, AChildSitsAtTheFlexibleBodysTipPointAndTheStraightArmIsTheRigidOnesGeometry) {
