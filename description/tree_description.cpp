@@ -1,5 +1,6 @@
 #include "description/tree_description.hpp"
 
+#include <set>
 #include <stdexcept>
 #include <utility>
 
@@ -45,13 +46,91 @@ std::string joint_fault(const BodySpec& body) {
   return fault_alone(std::move(b));
 }
 
+std::string make_flexible(TreeDescription& d, int body, FlexibleLinkSpec link) {
+  const int n = static_cast<int>(d.spec.bodies.size());
+  if (body < 0 || body >= n) return "no body " + std::to_string(body);
+  for (const FlexibleLinkInfo& f : d.flexible_links)
+    if (body >= f.root_body && body <= f.tip_body) return "body \"" + f.name + "\" is already flexible";
+  const BodySpec& rigid = d.spec.bodies[static_cast<std::size_t>(body)];
+  link.name = rigid.name;
+  link.root_name = rigid.name;
+  link.root_joint = {.type = rigid.joint, .axis = rigid.axis, .armature = rigid.armature,
+                     .stiffness = rigid.stiffness, .damping = rigid.damping,
+                     .spring_reference = rigid.spring_reference};
+  if (rigid.joint == JointType::kFixed) link.root_joint.axis = Vec3::UnitZ();
+
+  // The bodies before `body` unchanged, then the link, then the rest with their indices shifted.
+  TreeSpec spec;
+  spec.gravity = d.spec.gravity;
+  spec.bodies.assign(d.spec.bodies.begin(), d.spec.bodies.begin() + body);
+  int tip = -1;
+  try {
+    tip = append_flexible_link(spec, rigid.parent, rigid.position, rigid.rotation, link);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  const int added = tip - body;  // bodies beyond the one replaced
+  // The cell joints' names: per cell the joints z, y, x of flexible_link.hpp, as many as it has.
+  const int per_cell = link.planar ? 1 : (link.torsion ? 3 : 2);
+  std::vector<JointInfo> joints(d.joints.begin(), d.joints.begin() + body + 1);
+  std::set<std::string> body_names, joint_names;
+  for (int i = 0; i < n; ++i) {
+    body_names.insert(d.spec.bodies[static_cast<std::size_t>(i)].name);
+    joint_names.insert(d.joints.at(static_cast<std::size_t>(i)).name);
+  }
+  for (int k = 0; k < added; ++k) {
+    const BodySpec& b = spec.bodies[static_cast<std::size_t>(body + 1 + k)];
+    const char* tag = b.axis == Vec3::UnitZ() ? "z" : b.axis == Vec3::UnitY() ? "y" : "x";
+    JointInfo info;
+    info.name = link.name + ".cell" + std::to_string(k / per_cell + 1) + "." + tag;
+    if (body_names.count(b.name)) return "its segment body \"" + b.name + "\" would take the name of another body";
+    if (joint_names.count(info.name))
+      return "its cell joint \"" + info.name + "\" would take the name of another joint";
+    joints.push_back(std::move(info));
+  }
+  const double shift = link.length - flexible_link_tip_point(link).x();  // the tip segment's origin, m
+  for (int i = body + 1; i < n; ++i) {
+    BodySpec b = d.spec.bodies[static_cast<std::size_t>(i)];
+    if (b.parent == body) {
+      b.parent = tip;
+      b.position.x() -= shift;
+    } else if (b.parent > body) {
+      b.parent += added;
+    }
+    spec.bodies.push_back(std::move(b));
+    joints.push_back(d.joints.at(static_cast<std::size_t>(i)));
+  }
+  for (FlexibleLinkInfo& f : d.flexible_links)
+    if (f.root_body > body) {
+      f.root_body += added;
+      f.tip_body += added;
+    }
+  FlexibleLinkInfo info{.name = link.name, .root_body = body, .tip_body = tip,
+                        .tip_point = flexible_link_tip_point(link), .link = link, .dofs = {}};
+  auto at = d.flexible_links.begin();
+  while (at != d.flexible_links.end() && at->root_body < body) ++at;
+  d.flexible_links.insert(at, std::move(info));
+  d.spec = std::move(spec);
+  d.joints = std::move(joints);
+  return "";
+}
+
 std::string finish_description(TreeDescription& d) {
   d.body_index.clear();
   d.dof_index.clear();
+  std::vector<int> dofs(d.spec.bodies.size(), -1);
   int dof = 0;
   for (std::size_t i = 0; i < d.spec.bodies.size(); ++i) {
     d.body_index[d.spec.bodies[i].name] = static_cast<int>(i);
-    if (d.spec.bodies[i].joint != JointType::kFixed) d.dof_index[d.joints.at(i).name] = dof++;
+    if (d.spec.bodies[i].joint != JointType::kFixed) {
+      dofs[i] = dof;
+      d.dof_index[d.joints.at(i).name] = dof++;
+    }
+  }
+  for (FlexibleLinkInfo& f : d.flexible_links) {
+    f.dofs.clear();
+    for (int i = f.root_body + 1; i <= f.tip_body; ++i)
+      if (dofs[static_cast<std::size_t>(i)] >= 0) f.dofs.push_back(dofs[static_cast<std::size_t>(i)]);
   }
   try {
     make_tree(d.spec);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "multibody/flexible_link.hpp"
 #include "multibody/spatial.hpp"
 #include "multibody/tree.hpp"
 
@@ -23,6 +24,19 @@ struct JointInfo {
   double friction = 0.0;                 // Coulomb friction, N·m (prismatic: N) (URDF <dynamics friction>)
 };
 
+// A body of the file made a flexible link (multibody/flexible_link.hpp): its bodies are
+// spec.bodies[root_body..tip_body], contiguous, the root segment named after the file's body (or URDF
+// link) and carrying its joint, then per cell j the bodies "<name>.cell<j>.z", ".y" (massless) and
+// "<name>.seg<j>"; the cell joints are named "<name>.cell<j>.z", ".y", ".x" (the last on the segment).
+struct FlexibleLinkInfo {
+  std::string name;                 // the file's body (URDF: link) name, = the root body's name
+  int root_body = -1;               // index into spec.bodies: the root segment
+  int tip_body = -1;                // the last segment, to which the body's children are attached
+  Vec3 tip_point = Vec3::Zero();    // the beam's end in the tip body's frame, m
+  FlexibleLinkSpec link;            // as given to append_flexible_link (name, root_name, root_joint set)
+  std::vector<int> dofs;            // the cell joints' dofs (elastic), in body order; not the root joint's
+};
+
 struct TreeDescription {
   TreeSpec spec;
   std::vector<JointInfo> joints;           // one per body, in the order of spec.bodies: the joint to its parent
@@ -30,6 +44,7 @@ struct TreeDescription {
   std::map<std::string, int> body_index;   // body (URDF: link) name -> index into spec.bodies and Tree::bodies()
   std::map<std::string, int> dof_index;    // revolute or prismatic joint name -> dof (index into q, qd, tau)
   std::vector<std::string> notes;          // what was read and ignored, one line each ("FILE:LINE: ...")
+  std::vector<FlexibleLinkInfo> flexible_links;  // the bodies made flexible, in body order
 };
 
 // The active rotation of fixed-axis roll, pitch, yaw (rad), URDF's convention:
@@ -42,8 +57,19 @@ Mat3 rpy_rotation(double roll, double pitch, double yaw);
 std::string inertia_fault(const BodySpec& body);
 std::string joint_fault(const BodySpec& body);
 
+// Replaces body `body` (a rigid body of d, not yet flexible) by the flexible link `link` (its length,
+// section, segments, ... ; name, root_name and root_joint are set here): the root segment takes the
+// body's name, parent, placement, joint (type, axis, armature, springs) and JointInfo; the body's mass,
+// centre of mass and inertia are dropped; its children are attached to the tip segment, their
+// placements (written in the body's frame) re-expressed in the tip segment's frame (the tip segment's
+// origin is at x = L - l_last in the straight link's root frame, with the same axes), so the straight
+// link has the rigid body's geometry. Later bodies' indices (parents, flexible_links) are shifted.
+// Returns "" or why it cannot (a generated body or joint name already taken, append_flexible_link's
+// objection); on a fault d is unchanged. Call finish_description afterwards.
+std::string make_flexible(TreeDescription& d, int body, FlexibleLinkSpec link);
+
 // The readers' last step: fills body_index and dof_index from spec and joints (dofs numbered as
-// make_tree numbers them) and returns make_tree's verdict on the tree as a whole ("" when it builds;
+// make_tree numbers them) and each flexible link's dofs, and returns make_tree's verdict on the tree as a whole ("" when it builds;
 // every body has passed inertia_fault and joint_fault alone before).
 std::string finish_description(TreeDescription& d);
 

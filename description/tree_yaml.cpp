@@ -2,6 +2,8 @@
 // requires from it, and tree_yaml_keys() lists it for the docs test (tests/description/tree_yaml_test.cpp).
 #include "description/tree_yaml.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
 #include <map>
 #include <sstream>
@@ -10,24 +12,26 @@
 #include <variant>
 
 #include "kernel/errors.hpp"
+#include "multibody/flexible_link.hpp"
 
 namespace ff {
 
 namespace {
 
-enum class Bound { kAny, kNonNegative, kNonZero };
+enum class Bound { kAny, kNonNegative, kPositive, kNonZero };
 
 // One key of a block: where its value goes, whether it must be given, its bound. The default is the
-// member's initial value in a default-constructed block; a text key's, as the docs write it, `fallback`.
+// member's initial value in a default-constructed block; `fallback` overrides it as the docs write it
+// (a text key's default, or a condition such as "required with torsion").
 template <class T>
 struct Field {
   const char* key;
-  std::variant<double T::*, Vec3 T::*, std::string T::*> member;
+  std::variant<double T::*, int T::*, bool T::*, Vec3 T::*, std::string T::*> member;
   const char* unit = "";
   bool required = false;
   Bound bound = Bound::kAny;
   bool moving_only = false;        // revolute and prismatic joints only: an error on a fixed joint
-  const char* fallback = nullptr;  // the default of a text key, as the docs write it
+  const char* fallback = nullptr;  // the default as the docs write it, when not the member's value
 };
 
 constexpr const char* kDefaultJointType = "revolute";
@@ -35,6 +39,8 @@ constexpr const char* kDefaultJointType = "revolute";
 // The blocks as written, before they become a BodySpec.
 struct BodyBlock {
   std::string name, parent;
+};
+struct RigidBlock {           // a rigid body's mass (a flexible body's comes from its beam)
   double mass = 0.0;          // kg
   Vec3 com = Vec3::Zero();    // m, body frame
 };
@@ -55,11 +61,14 @@ const std::array<Field<TreeSpec>, 1> kTopFields{{
     {.key = "gravity", .member = &TreeSpec::gravity, .unit = "m/s²"},
 }};
 
-const std::array<Field<BodyBlock>, 4> kBodyFields{{
+const std::array<Field<BodyBlock>, 2> kBodyFields{{
     {.key = "name", .member = &BodyBlock::name, .required = true},
     {.key = "parent", .member = &BodyBlock::parent, .required = true},
-    {.key = "mass", .member = &BodyBlock::mass, .unit = "kg", .required = true, .bound = Bound::kNonNegative},
-    {.key = "com", .member = &BodyBlock::com, .unit = "m"},
+}};
+
+const std::array<Field<RigidBlock>, 2> kRigidFields{{
+    {.key = "mass", .member = &RigidBlock::mass, .unit = "kg", .required = true, .bound = Bound::kNonNegative},
+    {.key = "com", .member = &RigidBlock::com, .unit = "m"},
 }};
 
 const std::array<Field<JointBlock>, 10> kJointFields{{
@@ -95,6 +104,48 @@ const std::array<Field<InertiaBlock>, 6> kInertiaFields{{
     {.key = "ixy", .member = &InertiaBlock::ixy, .unit = "kg·m²"},
     {.key = "ixz", .member = &InertiaBlock::ixz, .unit = "kg·m²"},
     {.key = "iyz", .member = &InertiaBlock::iyz, .unit = "kg·m²"},
+}};
+
+// The flexible block (multibody/flexible_link.hpp) as written: its section, payload and inertia go
+// into the BeamSection, TipPayload and an InertiaBlock.
+struct FlexibleBlock {
+  double length = 0.0;          // L, m, along the body frame's +x from its origin
+  int segments = 6;             // N
+  double stiffness_factor = 1.0;  // kappa
+  double damping_time = 0.0;    // beta, s
+  bool torsion = true;
+  bool planar = false;
+};
+struct PayloadBlock {
+  double mass = 0.0;            // kg
+  Vec3 com = Vec3::Zero();      // m, from the tip point, tip segment axes
+};
+
+const std::array<Field<FlexibleBlock>, 6> kFlexibleFields{{
+    {.key = "length", .member = &FlexibleBlock::length, .unit = "m", .required = true, .bound = Bound::kPositive},
+    {.key = "segments", .member = &FlexibleBlock::segments, .bound = Bound::kPositive},
+    {.key = "stiffness_factor", .member = &FlexibleBlock::stiffness_factor, .bound = Bound::kPositive},
+    {.key = "damping_time", .member = &FlexibleBlock::damping_time, .unit = "s", .bound = Bound::kNonNegative},
+    {.key = "torsion", .member = &FlexibleBlock::torsion},
+    {.key = "planar", .member = &FlexibleBlock::planar},
+}};
+
+constexpr const char* kTorsionOnly = "required with torsion";
+const std::array<Field<BeamSection>, 7> kSectionFields{{
+    {.key = "E", .member = &BeamSection::youngs_modulus, .unit = "Pa", .required = true, .bound = Bound::kPositive},
+    {.key = "G", .member = &BeamSection::shear_modulus, .unit = "Pa", .bound = Bound::kPositive,
+     .fallback = kTorsionOnly},
+    {.key = "density", .member = &BeamSection::density, .unit = "kg/m³", .required = true, .bound = Bound::kPositive},
+    {.key = "area", .member = &BeamSection::area, .unit = "m²", .required = true, .bound = Bound::kPositive},
+    {.key = "I_y", .member = &BeamSection::second_moment_y, .unit = "m⁴", .required = true, .bound = Bound::kPositive},
+    {.key = "I_z", .member = &BeamSection::second_moment_z, .unit = "m⁴", .required = true, .bound = Bound::kPositive},
+    {.key = "J", .member = &BeamSection::torsion_constant, .unit = "m⁴", .bound = Bound::kPositive,
+     .fallback = kTorsionOnly},
+}};
+
+const std::array<Field<PayloadBlock>, 2> kPayloadFields{{
+    {.key = "mass", .member = &PayloadBlock::mass, .unit = "kg", .bound = Bound::kNonNegative},
+    {.key = "com", .member = &PayloadBlock::com, .unit = "m"},
 }};
 
 template <class... F>
@@ -133,7 +184,15 @@ void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) 
                             r.optional(f.key, out.*m);
                             if (f.bound == Bound::kNonNegative && out.*m < 0.0)
                               r.fail(f.key, "must be >= 0, got " + format_number(out.*m));
+                            if (f.bound == Bound::kPositive && !(out.*m > 0.0))
+                              r.fail(f.key, "must be > 0, got " + format_number(out.*m));
                           },
+                          [&](int T::*m) {
+                            r.optional(f.key, out.*m);
+                            if (f.bound == Bound::kPositive && out.*m < 1)
+                              r.fail(f.key, "must be >= 1, got " + std::to_string(out.*m));
+                          },
+                          [&](bool T::*m) { r.optional(f.key, out.*m); },
                           [&](Vec3 T::*m) {
                             read_vec3(r, f.key, out.*m);
                             if (f.bound == Bound::kNonZero && (out.*m).norm() == 0.0)
@@ -170,6 +229,8 @@ void add_keys(std::vector<KeyDoc>& out, const std::string& prefix, const std::ar
       fallback = f.fallback;
     else if (!f.required)
       fallback = std::visit(Overloaded{[&](double T::*m) { return format_number(defaults.*m); },
+                                       [&](int T::*m) { return std::to_string(defaults.*m); },
+                                       [&](bool T::*m) { return std::string(defaults.*m ? "true" : "false"); },
                                        [&](Vec3 T::*m) { return format_vector(defaults.*m); },
                                        [&](std::string T::*) { return std::string(); }},
                             f.member);
@@ -191,6 +252,59 @@ struct Named {
 
 }  // namespace
 
+FlexibleLinkSpec read_flexible_block(YamlReader& r) {
+  FlexibleBlock fb;
+  read_present(r, kFlexibleFields, fb);
+  FlexibleLinkSpec link;
+  YamlReader sr = r.child("section");
+  read_present(sr, kSectionFields, link.section);
+  YamlReader pr = r.child("payload");
+  PayloadBlock pb;
+  read_present(pr, kPayloadFields, pb);
+  YamlReader ir = pr.child("inertia");
+  InertiaBlock ib;
+  read_present(ir, kInertiaFields, ib);
+  ir.finish();
+  pr.finish();
+  sr.finish();
+  r.finish();
+  require(r, kFlexibleFields);
+  if (!r.has("section")) r.fail("section", "missing required value");
+  require(sr, kSectionFields);
+  if (fb.torsion && !fb.planar)
+    for (const char* key : {"G", "J"})
+      if (!sr.has(key)) sr.fail(key, "missing: required with torsion (or set torsion: false or planar: true)");
+  if (pr.has("inertia")) require(ir, kInertiaFields);
+  link.length = fb.length;
+  link.segments = fb.segments;
+  link.stiffness_factor = fb.stiffness_factor;
+  link.damping_time = fb.damping_time;
+  link.torsion = fb.torsion;
+  link.planar = fb.planar;
+  link.payload.mass = pb.mass;
+  link.payload.com_offset = pb.com;
+  link.payload.inertia << ib.ixx, ib.ixy, ib.ixz,
+                          ib.ixy, ib.iyy, ib.iyz,
+                          ib.ixz, ib.iyz, ib.izz;
+  // append_flexible_link's payload checks (the rest are the bounds above), at the inertia's line.
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(link.payload.inertia, Eigen::EigenvaluesOnly);
+  if (eig.eigenvalues()[0] < -1e-12 * std::max(link.payload.inertia.cwiseAbs().maxCoeff(), 1e-300))
+    pr.fail("inertia", "is not positive semi-definite");
+  return link;
+}
+
+std::vector<KeyDoc> flexible_keys(const std::string& prefix) {
+  std::vector<KeyDoc> out;
+  add_keys(out, prefix, kFlexibleFields);
+  out.push_back({prefix + "section", "", "yes", ""});
+  add_keys(out, prefix + "section.", kSectionFields);
+  out.push_back({prefix + "payload", "", "no", "none"});
+  add_keys(out, prefix + "payload.", kPayloadFields);
+  out.push_back({prefix + "payload.inertia", "kg·m²", "no", "zero"});
+  add_keys(out, prefix + "payload.inertia.", kInertiaFields);
+  return out;
+}
+
 void read_joint_springs(YamlReader& r, BodySpec& body) { read_present(r, kSpringFields, body); }
 
 std::vector<KeyDoc> joint_spring_keys(const std::string& prefix) {
@@ -204,11 +318,14 @@ std::vector<KeyDoc> tree_yaml_keys() {
   add_keys(out, "", kTopFields);
   out.push_back({"bodies", "", "yes", ""});
   add_keys(out, "bodies[i].", kBodyFields);
+  add_keys(out, "bodies[i].", kRigidFields);
   out.push_back({"bodies[i].joint", "", "yes", ""});
   add_keys(out, "bodies[i].joint.", kJointFields);
   add_keys(out, "bodies[i].joint.", kSpringFields);
   out.push_back({"bodies[i].inertia", "kg·m²", "no", "zero"});
   add_keys(out, "bodies[i].inertia.", kInertiaFields);
+  out.push_back({"bodies[i].flexible", "", "no", "none"});
+  for (KeyDoc& k : flexible_keys("bodies[i].flexible.")) out.push_back(std::move(k));
   return out;
 }
 
@@ -232,11 +349,14 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
       listed.try_emplace(list[i]["name"].Scalar(), Named{static_cast<int>(i), list[i]["name"].Mark().line + 1});
 
   std::map<std::string, Named> body_names, joint_names;  // the bodies read so far
+  std::vector<std::pair<int, FlexibleLinkSpec>> flexible;  // made flexible once every body is read
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     const int i = static_cast<int>(k);
     YamlReader& r = bodies[k];
     BodyBlock bb;
     read_present(r, kBodyFields, bb);
+    RigidBlock rb;
+    read_present(r, kRigidFields, rb);
     YamlReader jr = r.child("joint");
     JointBlock jb;
     read_present(jr, kJointFields, jb);
@@ -245,13 +365,21 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
     YamlReader ir = r.child("inertia");
     InertiaBlock ib;
     read_present(ir, kInertiaFields, ib);
+    YamlReader fr = r.child("flexible");
     jr.finish();
     ir.finish();
     r.finish();
     require(r, kBodyFields);
+    if (r.has("flexible")) {
+      for (const char* key : {"mass", "com", "inertia"})
+        if (r.has(key)) r.fail(key, "a flexible body's mass is its beam's: give `flexible` or `mass`, not both");
+    } else {
+      require(r, kRigidFields);
+    }
     if (!r.has("joint")) r.fail("joint", "missing required value");
     require(jr, kJointFields);
     if (r.has("inertia")) require(ir, kInertiaFields);
+    if (r.has("flexible")) flexible.emplace_back(i, read_flexible_block(fr));
 
     b.name = bb.name;
     if (b.name == "base") r.fail("name", "'base' names the fixed base; a body needs another name");
@@ -292,8 +420,8 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
     b.axis = jb.axis;
     b.position = jb.position;
     b.rotation = rpy_rotation(jb.rpy.x(), jb.rpy.y(), jb.rpy.z());
-    b.mass = bb.mass;
-    b.com = bb.com;
+    b.mass = rb.mass;
+    b.com = rb.com;
     b.inertia << ib.ixx, ib.ixy, ib.ixz,
                  ib.ixy, ib.iyy, ib.iyz,
                  ib.ixz, ib.iyz, ib.izz;
@@ -305,6 +433,10 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
     d.spec.bodies.push_back(std::move(b));
     d.joints.push_back(std::move(info));
   }
+  // Last first, so that the earlier bodies' indices hold.
+  for (auto it = flexible.rbegin(); it != flexible.rend(); ++it)
+    if (const std::string fault = make_flexible(d, it->first, it->second); !fault.empty())
+      bodies[static_cast<std::size_t>(it->first)].fail("flexible", fault);
   if (const std::string fault = finish_description(d); !fault.empty()) top.fail("bodies", fault);
   return d;
 }

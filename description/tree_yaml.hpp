@@ -1,5 +1,6 @@
 // Tree YAML files (docs/formats.md, "Kinematic trees (YAML) and URDF"): a kinematic tree as a list of
-// bodies, parents first, each with the joint to its parent. Read strictly (kernel/yaml_reader.hpp):
+// bodies, parents first, each with the joint to its parent, rigid or flexible (a `flexible:` block,
+// made a flexible link by make_flexible, tree_description.hpp). Read strictly (kernel/yaml_reader.hpp):
 // every error, make_tree's included, is one ConfigError naming the file, the line and the key path.
 #pragma once
 
@@ -27,6 +28,12 @@ struct KeyDoc {
   std::string fallback;  // the default ("" when required)
 };
 std::vector<KeyDoc> tree_yaml_keys();
+
+// A `flexible:` block (docs/formats.md; tree YAML bodies and the URDF sidecar's links): its keys read
+// from `r` (the block's own reader, then finished), bounds, required keys and the payload inertia
+// checked. The returned spec's name, root name and root joint are left for make_flexible.
+FlexibleLinkSpec read_flexible_block(YamlReader& r);
+std::vector<KeyDoc> flexible_keys(const std::string& prefix);
 
 // The joint block's passive keys (armature, stiffness, damping, spring_reference): those present in
 // `r` read into `body` and checked (>= 0 where make_tree wants it); for the URDF sidecar.

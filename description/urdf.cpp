@@ -455,33 +455,67 @@ void apply_urdf_sidecar(TreeDescription& d, const YAML::Node& doc, const std::st
   LineMap lines;
   YamlReader top(doc, source, "", &lines);
   if (!doc || doc.IsNull()) top.fail("joints", "the file is empty");
-  const YAML::Node map = top.raw("joints");
+  const YAML::Node map = top.raw("joints"), link_map = top.raw("links");
   YamlReader joints = top.child("joints");
+  YamlReader links = top.child("links");
   top.finish();
-  if (!top.has("joints")) top.fail("joints", "missing required value");
-  for (const auto& kv : map) {
-    const std::string name = kv.first.Scalar();
-    const auto it = std::find_if(d.joints.begin(), d.joints.end(), [&](const JointInfo& j) { return j.name == name; });
-    if (it == d.joints.end()) joints.fail(name, "no joint named '" + name + "' in the URDF");
-    BodySpec& body = d.spec.bodies.at(static_cast<std::size_t>(it - d.joints.begin()));
-    if (body.joint == JointType::kFixed)
-      joints.fail(name, "joint '" + name + "' is fixed: it has no degree of freedom for these values");
-    YamlReader joint = joints.child(name);
-    read_joint_springs(joint, body);
-    joint.finish();
-    if (const std::string fault = joint_fault(body); !fault.empty()) joints.fail(name, fault);
-  }
+  if (!top.has("joints") && !top.has("links")) top.fail("joints", "missing: a sidecar gives `joints`, `links` or both");
+  if (top.has("joints"))
+    for (const auto& kv : map) {
+      const std::string name = kv.first.Scalar();
+      const auto it = std::find_if(d.joints.begin(), d.joints.end(), [&](const JointInfo& j) { return j.name == name; });
+      if (it == d.joints.end()) joints.fail(name, "no joint named '" + name + "' in the URDF");
+      BodySpec& body = d.spec.bodies.at(static_cast<std::size_t>(it - d.joints.begin()));
+      if (body.joint == JointType::kFixed)
+        joints.fail(name, "joint '" + name + "' is fixed: it has no degree of freedom for these values");
+      YamlReader joint = joints.child(name);
+      read_joint_springs(joint, body);
+      joint.finish();
+      if (const std::string fault = joint_fault(body); !fault.empty()) joints.fail(name, fault);
+    }
   joints.finish();
-  try {
-    make_tree(d.spec);
-  } catch (const std::invalid_argument& e) {
-    top.fail("joints", e.what());
-  }
+
+  // Flexible links: read first, then made flexible last body first (so the others' indices hold).
+  struct Flexible {
+    int body;
+    std::string name;
+    FlexibleLinkSpec link;
+  };
+  std::vector<Flexible> flexible;
+  if (top.has("links"))
+    for (const auto& kv : link_map) {
+      const std::string name = kv.first.Scalar();
+      if (name == d.base) links.fail(name, "link '" + name + "' is the root link, the fixed base: it cannot be flexible");
+      const auto it = d.body_index.find(name);
+      if (it == d.body_index.end()) links.fail(name, "no link named '" + name + "' in the URDF");
+      YamlReader link = links.child(name);
+      link.only({"flexible"});
+      YamlReader block = link.child("flexible", true);
+      link.finish();
+      flexible.push_back({it->second, name, read_flexible_block(block)});
+      const BodySpec& b = d.spec.bodies.at(static_cast<std::size_t>(it->second));
+      if (b.mass > 0.0 || b.inertia.cwiseAbs().maxCoeff() > 0.0) {
+        const std::string key = links.full_key(name) + ".flexible";
+        d.notes.push_back(ConfigError(source, lines.count(key) ? lines.at(key) : 0, key,
+                                      "link \"" + name + "\": its <inertial> (" + fmt(b.mass) +
+                                          " kg) is replaced by the flexible beam")
+                              .what());
+      }
+    }
+  links.finish();
+  std::sort(flexible.begin(), flexible.end(), [](const Flexible& a, const Flexible& b) { return a.body > b.body; });
+  for (const Flexible& f : flexible)
+    if (const std::string fault = make_flexible(d, f.body, f.link); !fault.empty()) links.fail(f.name, fault);
+  if (const std::string fault = finish_description(d); !fault.empty())
+    top.fail(flexible.empty() ? "joints" : "links", fault);
 }
 
 std::vector<KeyDoc> urdf_sidecar_keys() {
-  std::vector<KeyDoc> out{{"joints", "", "yes", ""}};
+  std::vector<KeyDoc> out{{"joints", "", "no", "none"}};
   for (KeyDoc& k : joint_spring_keys("joints.NAME.")) out.push_back(std::move(k));
+  out.push_back({"links", "", "no", "none"});
+  out.push_back({"links.NAME.flexible", "", "yes", ""});
+  for (KeyDoc& k : flexible_keys("links.NAME.flexible.")) out.push_back(std::move(k));
   return out;
 }
 

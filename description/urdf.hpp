@@ -21,7 +21,10 @@ TreeDescription parse_urdf(const std::string& xml, const std::string& source);
 TreeDescription load_urdf(const std::string& path, const std::string& sidecar = "");
 
 // The sidecar: `joints: {NAME: {armature:, stiffness:, damping:, spring_reference:}}`, each given value
-// replacing the URDF's for that (revolute or prismatic) joint. Read strictly; errors name `source`.
+// replacing the URDF's for that (revolute or prismatic) joint, and `links: {NAME: {flexible: {...}}}`,
+// each link (not the root) made a flexible link (the tree YAML block, read_flexible_block; make_flexible):
+// its <inertial> replaced by the beam (with a note), the beam along the link frame's +x, its child
+// joints moved onto the tip segment. Read strictly; errors name `source`, the line and the key.
 void apply_urdf_sidecar(TreeDescription& d, const YAML::Node& doc, const std::string& source);
 std::vector<KeyDoc> urdf_sidecar_keys();
 

@@ -129,8 +129,17 @@ int append_flexible_link(TreeSpec& tree, int parent, const Vec3& position, const
   };
 
   BodySpec root = segment(0);
+  if (!link.root_name.empty()) root.name = link.root_name;
   root.parent = parent;
-  root.joint = JointType::kFixed;
+  const FlexibleRootJoint& rj = link.root_joint;
+  root.joint = rj.type;
+  if (rj.type != JointType::kFixed) {
+    root.axis = rj.axis;
+    root.armature = rj.armature;
+    root.stiffness = rj.stiffness;
+    root.damping = rj.damping;
+    root.spring_reference = rj.spring_reference;
+  }
   root.position = position;
   root.rotation = rotation;
   tree.bodies.push_back(root);

@@ -24,7 +24,9 @@
 //   Damping    stiffness-proportional, joint by joint: c = beta k (N·m·s/rad, beta in s). Since
 //              k scales as 1/l, so does c: this is the rig's rule c_N = 90.4 (L/5)/l, with
 //              beta = 90.4 / 39.5e3 = 2.289e-3 s.
-//   Root       the first segment is rigidly attached (a fixed joint) to the parent at the placement.
+//   Root       the first segment is attached to the parent at the placement by the root joint: fixed
+//              by default (rigidly attached), or a revolute or prismatic joint that moves the root
+//              segment directly (a motor at the link's hub, with no extra body).
 //   Payload    an optional rigid body fixed to the last segment, its centre of mass at the tip
 //              point (L along the link) plus an offset; merged into the last segment's body.
 // Body frames: each segment's frame has its origin on the neutral axis at the segment's inboard end
@@ -58,8 +60,20 @@ struct TipPayload {
   Mat3 inertia = Mat3::Zero();     // about its centre of mass, link axes, kg·m² (symmetric, >= 0)
 };
 
+// The joint between the parent and the root segment: a BodySpec's joint fields (multibody/tree.hpp).
+struct FlexibleRootJoint {
+  JointType type = JointType::kFixed;
+  Vec3 axis = Vec3::UnitZ();       // in the joint frame (the placement's axes); unused when fixed
+  double armature = 0.0;           // kg·m² (prismatic: kg)
+  double stiffness = 0.0;          // N·m/rad (N/m)
+  double damping = 0.0;            // N·m·s/rad (N·s/m)
+  double spring_reference = 0.0;   // rad (m)
+};
+
 struct FlexibleLinkSpec {
   std::string name = "link";     // prefix of the bodies' names
+  std::string root_name;         // the root segment's body name; "" = "<name>.seg0"
+  FlexibleRootJoint root_joint;  // default: fixed to the parent
   double length = 0.0;           // L, m
   BeamSection section;
   int segments = 1;              // N >= 1
@@ -76,15 +90,16 @@ std::vector<double> flexible_link_segment_lengths(const FlexibleLinkSpec& link);
 Vec3 flexible_link_tip_point(const FlexibleLinkSpec& link);
 
 // Appends the link's bodies to `tree` (in topological order, after the existing ones): its root
-// segment fixed to body `parent` (-1 = the base) at `position` with orientation `rotation` (active
-// rotation of the link's axes, in the parent's frame), then for each cell its joint bodies (massless,
+// segment (named root_name, else "<name>.seg0") joined by link.root_joint (default fixed) to body
+// `parent` (-1 = the base) at `position` with orientation `rotation` (active rotation of the link's
+// axes, in the parent's frame; the joint frame), then for each cell its joint bodies (massless,
 // named "<name>.cell<j>.z" and ".y") and segment j ("<name>.seg<j>", carrying the cell's last joint).
-// The joints' spring references are 0 (the straight link). Returns the index of the last segment's
+// The cell joints' spring references are 0 (the straight link). Returns the index of the last segment's
 // body, the tip body to which further joints attach. Throws std::invalid_argument naming the link on
 // a parent out of range, a non-positive or non-finite length, N < 1, a non-positive density, area,
 // E, I_y or I_z, a non-positive G or J with torsion, kappa <= 0, beta < 0, or a payload with a
 // negative mass or a non-finite, non-symmetric or indefinite inertia. (make_tree checks the rest,
-// e.g. the rotation.)
+// e.g. the rotation and the root joint's axis and values.)
 int append_flexible_link(TreeSpec& tree, int parent, const Vec3& position, const Mat3& rotation,
                          const FlexibleLinkSpec& link);
 

@@ -509,5 +509,62 @@ TEST(FlexibleLinkDynamics, FreeLinkOnARevoluteHubConservesEnergyUnderRk4) {
   RecordProperty("twist_max_rad", test::sci(twist_max));
 }
 
+TEST(FlexibleLinkRootJoint, DefaultsToFixedAndNamesTheRootSegmentSeg0UnlessRootNameIsGiven) {
+  TreeSpec spec;
+  append_flexible_link(spec, -1, Vec3::Zero(), Mat3::Identity(), aluminium_bar(1.0, 3));
+  EXPECT_EQ(spec.bodies.at(0).name, "bar.seg0");
+  EXPECT_EQ(spec.bodies.at(0).joint, JointType::kFixed);
+  FlexibleLinkSpec named = aluminium_bar(1.0, 3);
+  named.root_name = "forearm";
+  TreeSpec other;
+  append_flexible_link(other, -1, Vec3::Zero(), Mat3::Identity(), named);
+  EXPECT_EQ(other.bodies.at(0).name, "forearm");
+  EXPECT_EQ(other.bodies.at(1).name, "bar.cell1.z");
+}
+
+TEST(FlexibleLinkRootJoint, MovesTheRootSegmentAsAMasslessHubWithThatJointWould) {
+  // A revolute root joint (axis y, armature 0.3 kg·m², k = 50 N·m/rad, c = 2 N·m·s/rad, q0 = 0.1 rad)
+  // against the same joint on a massless hub body with the link fixed to it: the same M(q), bias and
+  // passive forces at a random state, one body fewer.
+  const Vec3 at(0.1, -0.2, 0.3);
+  const Mat3 R = rotz(0.4) * rotx(-0.3);
+  FlexibleLinkSpec link = aluminium_bar(0.8, 5);
+  TreeSpec with_hub;
+  BodySpec hub;
+  hub.name = "hub";
+  hub.axis = Vec3::UnitY();
+  hub.position = at;
+  hub.rotation = R;
+  hub.armature = 0.3;
+  hub.stiffness = 50.0;
+  hub.damping = 2.0;
+  hub.spring_reference = 0.1;
+  with_hub.bodies.push_back(hub);
+  append_flexible_link(with_hub, 0, Vec3::Zero(), Mat3::Identity(), link);
+  link.root_joint = {.type = JointType::kRevolute, .axis = Vec3::UnitY(), .armature = 0.3, .stiffness = 50.0,
+                     .damping = 2.0, .spring_reference = 0.1};
+  TreeSpec direct;
+  const int tip = append_flexible_link(direct, -1, at, R, link);
+  const Tree a = make_tree(with_hub), b = make_tree(direct);
+  ASSERT_EQ(b.num_bodies() + 1, a.num_bodies());
+  ASSERT_EQ(a.nv(), b.nv());
+  EXPECT_EQ(tip, b.num_bodies() - 1);
+  EXPECT_EQ(b.body(0).dof, 0);
+  const VectorXd q = VectorXd::Random(a.nv()), qd = VectorXd::Random(a.nv());
+  TreeWorkspace wa(a), wb(b);
+  MatrixXd Ma(a.nv(), a.nv()), Mb(b.nv(), b.nv());
+  calc_mass_matrix(a, q, Ma, wa);
+  calc_mass_matrix(b, q, Mb, wb);
+  EXPECT_LE((Ma - Mb).cwiseAbs().maxCoeff(), 1e-12 * Ma.cwiseAbs().maxCoeff());
+  VectorXd ha(a.nv()), hb(b.nv()), pa(a.nv()), pb(b.nv());
+  calc_bias_forces(a, q, qd, ha, wa);
+  calc_bias_forces(b, q, qd, hb, wb);
+  EXPECT_LE((ha - hb).cwiseAbs().maxCoeff(), 1e-10 * ha.cwiseAbs().maxCoeff());
+  calc_passive_forces(a, q, qd, pa);
+  calc_passive_forces(b, q, qd, pb);
+  EXPECT_LE((pa - pb).cwiseAbs().maxCoeff(), 1e-12 * pa.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(pb[0], -50.0 * (q[0] - 0.1) - 2.0 * qd[0], 1e-12);
+}
+
 }  // namespace
 }  // namespace ff
