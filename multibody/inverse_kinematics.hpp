@@ -1,0 +1,63 @@
+// Inverse kinematics of a point on a body of a kinematic tree (multibody/tree.hpp), and optionally
+// of the body's orientation, by damped least squares (Wampler 1986; Buss, "Introduction to inverse
+// kinematics with Jacobian transpose, pseudoinverse and damped least squares methods", 2004, sec. 5)
+// with a Levenberg–Marquardt damping schedule (Nocedal and Wright, Numerical Optimization, 2006,
+// sec. 10.3):
+//   e   = [p_des - p(q); log(R_des R(q)^T)]       position error (m), then the rotation vector (rad)
+//   dq  = J^T (J J^T + lambda² I)^-1 e             J: calc_point_jacobian's rows for e, free dofs only
+//         (evaluated as sum_i sigma_i / (sigma_i² + lambda²) v_i u_i^T e over J's SVD),
+// each step scaled down to at most 0.5 rad (or m) on any dof and clamped to the joint limits; a
+// step that lowers |e| is taken and lambda shrinks (/3, down to 1e-9), else lambda grows (x4) and
+// the step is tried again, so the solver is Gauss–Newton (quadratic) near a solution and gradient
+// descent far from one. A dof at a limit whose step points outwards is left out of that step.
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "multibody/spatial.hpp"
+#include "multibody/tree.hpp"
+
+namespace ff {
+
+struct IkTarget {
+  int body = 0;                       // the body carrying the point
+  Vec3 point = Vec3::Zero();          // in the body frame, m
+  Vec3 position = Vec3::Zero();       // desired position of the point in the base frame, m
+  bool orient = false;                // also reach `rotation`
+  Mat3 rotation = Mat3::Identity();   // desired body orientation in the base frame when orient (active)
+};
+
+struct IkOptions {
+  // The dofs the solver may move (empty = all); the others keep q0's values bit for bit (e.g. a
+  // flexible link's cell joints held at 0, the rigid model).
+  std::vector<int> free_dofs;
+  double damping = 1e-2;     // initial lambda (m, rad), > 0
+  int max_iterations = 200;  // trial steps (each one forward-kinematics evaluation), >= 0
+  double tolerance = 1e-9;   // converged when |position error| <= it (m) and |orientation error| <= it (rad)
+  bool respect_limits = true;
+  std::vector<double> lower, upper;  // per dof (nv entries) or empty = unbounded; rad or m
+};
+
+struct IkResult {
+  Eigen::VectorXd q;               // the solution, or the best point reached
+  bool converged = false;
+  double position_error = 0.0;     // |p_des - p(q)|, m
+  double orientation_error = 0.0;  // rotation angle of R_des R(q)^T, rad (0 without orient)
+  int iterations = 0;              // trial steps taken
+  std::string why;                 // why not converged (empty when converged)
+};
+
+// Solves from q0. Free dofs start from q0 clamped to their limits (when respect_limits). Failure is
+// a result (converged = false, `why`): a stationary point with the error left (a target beyond
+// reach, blocked by the limits, or a local minimum: "target beyond reach: stationary 0.35 m from it
+// ...") or the iteration limit ("did not converge in 200 iterations; residual 3.1 mm"). Throws
+// std::invalid_argument on a body out of range, q0 not of nv entries or not finite, a non-finite
+// target, a rotation that is not proper orthonormal (when orient), a free dof out of range or
+// repeated, limits not of nv entries, NaN (infinities are allowed) or lower > upper, and on
+// damping <= 0, max_iterations < 0 or tolerance <= 0.
+IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target,
+                                  const IkOptions& opt = {});
+
+}  // namespace ff
