@@ -91,6 +91,36 @@ void check_arguments(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget
   if (!(opt.tolerance > 0.0)) fail("tolerance must be positive");
 }
 
+// An upper bound on the point's reach: the centre (base frame) and radius (m, infinite when a prismatic
+// joint's travel is unbounded) of a ball holding the point for every q. Centre: the joint frame origin
+// of the chain's root-most moving joint (fixed, its ancestors being fixed joints); radius: the chain's
+// joint frame offsets below it, the point's offset and each prismatic joint's largest travel (a free
+// dof's max(|lower|, |upper|), another's |q0|), since revolute joints turn lengths without changing them.
+struct Reach {
+  Vec3 centre;
+  double radius;
+  int root;  // the root-most moving body, -1 if none
+};
+Reach reach_bound(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target, const std::vector<bool>& is_free,
+                  const Eigen::VectorXd& lo, const Eigen::VectorXd& hi) {
+  int root = -1;
+  for (int j = target.body; j >= 0; j = tree.body(j).parent)
+    if (tree.body(j).dof >= 0) root = j;
+  if (root < 0) return {calc_point_position(tree, q0, target.body, target.point), 0.0, -1};
+  double radius = target.point.norm();
+  for (int j = target.body;; j = tree.body(j).parent) {
+    const Body& b = tree.body(j);
+    if (b.joint == JointType::kPrismatic)
+      radius += is_free[static_cast<std::size_t>(b.dof)] ? std::max(std::abs(lo[b.dof]), std::abs(hi[b.dof]))
+                                                        : std::abs(q0[b.dof]);
+    if (j == root) break;
+    radius += b.X_tree.position().norm();
+  }
+  const Body& r = tree.body(root);
+  const Vec3 centre = r.parent < 0 ? r.X_tree.position() : calc_body_pose(tree, q0, r.parent).point(r.X_tree.position());
+  return {centre, radius, root};
+}
+
 }  // namespace
 
 IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target,
@@ -213,8 +243,20 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
         return finish(false, "target not reached within the joint limits: stationary " + residual_text() +
                                  " from it with dof" + (at_limit.size() > 1 ? "s " : " ") + dofs + " at a limit");
       }
-      return finish(false, "target beyond reach: stationary " + residual_text() +
-                               " from it (no move of the free dofs reduces the error; or a local minimum)");
+      std::vector<bool> is_free(static_cast<std::size_t>(nv), false);
+      for (int d : free) is_free[static_cast<std::size_t>(d)] = true;
+      const Reach reach = reach_bound(tree, q0, target, is_free, lo, hi);
+      const double beyond = (target.position - reach.centre).norm() - reach.radius;
+      if (beyond > 0.0 && e.head<3>().norm() > opt.tolerance) {
+        const std::string joint = reach.root < 0 ? std::string("its place (no moving joint)")
+                                                 : "body " + std::to_string(reach.root) + "'s joint";
+        return finish(false, "target " + length(beyond) + " beyond reach (the point stays within " +
+                                 length(reach.radius) + " of " + joint + "); stationary " + residual_text() +
+                                 " from it");
+      }
+      return finish(false, "stationary " + residual_text() +
+                               " from the target: a local minimum, or a target the free dofs cannot reach "
+                               "(try another q0)");
     }
   }
 }
