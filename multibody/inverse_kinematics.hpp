@@ -57,7 +57,8 @@ struct IkResult {
 // a result (converged = false, q the best point found, `why`), never an exception:
 //   a target outside a ball that holds the point for every q (centred on the chain's root-most
 //     moving joint; radius the chain's offsets plus prismatic travels): "target 0.35 m beyond reach
-//     (the point stays within 0.9 m of body 0's joint); stationary 0.35 m from it";
+//     (the point stays within 0.9 m of body 0's joint); stationary 0.35 m from it" (with no moving
+//     joint on the chain: "target beyond reach: 0.5 m from the point, which no joint moves");
 //   a stationary point with dofs at their limits: "target not reached within the joint limits: ...";
 //   another stationary point: "stationary 0.19 m, 0.03 rad from the target: a local minimum, or a
 //     target the free dofs cannot reach (try another q0)";

@@ -415,5 +415,20 @@ TEST(InverseKinematics, BadArgumentsThrowButFailuresToReachDoNot) {
   EXPECT_NO_THROW(solve_inverse_kinematics(tree, q0, {.body = 1, .point = kTip2R, .position = {5.0, 0.0, 0.0}}));
 }
 
+TEST(InverseKinematics, APointNoJointMovesIsReachedOnlyWhereItIs) {
+  // A tree of one fixed body (nv = 0): the point 0.2 m from the origin, targets there and 0.5 m away.
+  TreeSpec s;
+  s.bodies.push_back(link_body(-1, {0.1, 0.0, 0.0}, 0.2, 1.0));
+  s.bodies[0].joint = JointType::kFixed;
+  const Tree tree = make_tree(s);
+  ASSERT_EQ(tree.nv(), 0);
+  const IkResult here = solve_inverse_kinematics(tree, VectorXd(0), {.body = 0, .point = {0.1, 0, 0}, .position = {0.2, 0, 0}});
+  EXPECT_TRUE(here.converged);
+  const IkResult away = solve_inverse_kinematics(tree, VectorXd(0), {.body = 0, .point = {0.1, 0, 0}, .position = {0.2, 0.5, 0}});
+  EXPECT_FALSE(away.converged);
+  EXPECT_EQ(away.why, "target beyond reach: 0.5 m from the point, which no joint moves");
+  EXPECT_DOUBLE_EQ(away.position_error, 0.5);
+}
+
 }  // namespace
 }  // namespace ff
