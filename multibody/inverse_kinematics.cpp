@@ -91,6 +91,36 @@ void check_arguments(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget
   if (!(opt.tolerance > 0.0)) fail("tolerance must be positive");
 }
 
+// An upper bound on the point's reach: the centre (base frame) and radius (m, infinite when a prismatic
+// joint's travel is unbounded) of a ball holding the point for every q. Centre: the joint frame origin
+// of the chain's root-most moving joint (fixed, its ancestors being fixed joints); radius: the chain's
+// joint frame offsets below it, the point's offset and each prismatic joint's largest travel (a free
+// dof's max(|lower|, |upper|), another's |q0|), since revolute joints turn lengths without changing them.
+struct Reach {
+  Vec3 centre;
+  double radius;
+  int root;  // the root-most moving body, -1 if none
+};
+Reach reach_bound(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target, const std::vector<bool>& is_free,
+                  const Eigen::VectorXd& lo, const Eigen::VectorXd& hi) {
+  int root = -1;
+  for (int j = target.body; j >= 0; j = tree.body(j).parent)
+    if (tree.body(j).dof >= 0) root = j;
+  if (root < 0) return {calc_point_position(tree, q0, target.body, target.point), 0.0, -1};
+  double radius = target.point.norm();
+  for (int j = target.body;; j = tree.body(j).parent) {
+    const Body& b = tree.body(j);
+    if (b.joint == JointType::kPrismatic)
+      radius += is_free[static_cast<std::size_t>(b.dof)] ? std::max(std::abs(lo[b.dof]), std::abs(hi[b.dof]))
+                                                        : std::abs(q0[b.dof]);
+    if (j == root) break;
+    radius += b.X_tree.position().norm();
+  }
+  const Body& r = tree.body(root);
+  const Vec3 centre = r.parent < 0 ? r.X_tree.position() : calc_body_pose(tree, q0, r.parent).point(r.X_tree.position());
+  return {centre, radius, root};
+}
+
 }  // namespace
 
 IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target,
@@ -99,10 +129,10 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
   const int nv = tree.nv();
   const int rows = target.orient ? 6 : 3;
 
-  std::vector<int> free = opt.free_dofs;
-  if (free.empty())
-    for (int j = 0; j < nv; ++j) free.push_back(j);
-  const int m = static_cast<int>(free.size());
+  std::vector<int> moving = opt.free_dofs;
+  if (moving.empty())
+    for (int j = 0; j < nv; ++j) moving.push_back(j);
+  const int m = static_cast<int>(moving.size());
   constexpr double inf = std::numeric_limits<double>::infinity();
   Eigen::VectorXd lo = Eigen::VectorXd::Constant(nv, -inf), hi = Eigen::VectorXd::Constant(nv, inf);
   if (opt.respect_limits) {
@@ -112,7 +142,7 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
 
   IkResult r;
   r.q = q0;
-  for (int d : free) r.q[d] = std::clamp(r.q[d], lo[d], hi[d]);
+  for (int d : moving) r.q[d] = std::clamp(r.q[d], lo[d], hi[d]);
   Vec6 e = residual(tree, r.q, target);
   double cost = e.squaredNorm();
   auto finish = [&](bool converged, std::string why) {
@@ -142,8 +172,8 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
     // J's rows for e: calc_point_jacobian gives [omega; v], e is [position; orientation].
     calc_point_jacobian(tree, r.q, target.body, target.point, J6, ws);
     for (int c = 0; c < m; ++c) {
-      J.block<3, 1>(0, c) = J6.block<3, 1>(3, free[c]);
-      if (target.orient) J.block<3, 1>(3, c) = J6.block<3, 1>(0, free[c]);
+      J.block<3, 1>(0, c) = J6.block<3, 1>(3, moving[c]);
+      if (target.orient) J.block<3, 1>(3, c) = J6.block<3, 1>(0, moving[c]);
     }
     const Eigen::VectorXd er = e.head(rows);
     // Trial steps at growing lambda until one lowers |e|.
@@ -155,7 +185,7 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
       std::fill(locked.begin(), locked.end(), false);
       Jm = J;
       double sigma_max = 0.0;
-      for (int pass = 0; pass <= m; ++pass) {
+      for (int pass = 0; pass <= m && m > 0; ++pass) {  // (no SVD of an empty J)
         const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jm, Eigen::ComputeThinU | Eigen::ComputeThinV);
         const Eigen::VectorXd& sv = svd.singularValues();
         sigma_max = sv.size() > 0 ? sv[0] : 0.0;
@@ -166,8 +196,8 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
         }
         bool more = false;
         for (int c = 0; c < m; ++c) {
-          const double qc = r.q[free[c]];
-          if (!locked[c] && ((qc <= lo[free[c]] && dq[c] < 0.0) || (qc >= hi[free[c]] && dq[c] > 0.0))) {
+          const double qc = r.q[moving[c]];
+          if (!locked[c] && ((qc <= lo[moving[c]] && dq[c] < 0.0) || (qc >= hi[moving[c]] && dq[c] > 0.0))) {
             locked[c] = true;
             Jm.col(c).setZero();
             more = true;
@@ -177,7 +207,7 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
       }
       at_limit.clear();
       for (int c = 0; c < m; ++c)
-        if (locked[c]) at_limit.push_back(free[c]);
+        if (locked[c]) at_limit.push_back(moving[c]);
       const double biggest = dq.size() > 0 ? dq.cwiseAbs().maxCoeff() : 0.0;
       const double gradient = (Jm.transpose() * er).norm();
       if (biggest == 0.0 || gradient <= kStationary * sigma_max * er.norm() || lambda > kLambdaStall * sigma_max) {
@@ -186,7 +216,7 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
       }
       if (biggest > kMaxStep) dq *= kMaxStep / biggest;
       q_trial = r.q;
-      for (int c = 0; c < m; ++c) q_trial[free[c]] = std::clamp(r.q[free[c]] + dq[c], lo[free[c]], hi[free[c]]);
+      for (int c = 0; c < m; ++c) q_trial[moving[c]] = std::clamp(r.q[moving[c]] + dq[c], lo[moving[c]], hi[moving[c]]);
       const Vec6 e_trial = residual(tree, q_trial, target);
       ++r.iterations;
       const double cost_trial = e_trial.squaredNorm();
@@ -194,7 +224,7 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
         // The gain ratio rho = actual / predicted (by e - J dq) decrease sets lambda (Nielsen 1999:
         // x max(1/3, 1 - (2 rho - 1)³)): a step the linear model overrates (large residuals, where
         // Gauss–Newton overshoots and oscillates) raises it, a faithful one lowers it.
-        for (int c = 0; c < m; ++c) dq[c] = q_trial[free[c]] - r.q[free[c]];
+        for (int c = 0; c < m; ++c) dq[c] = q_trial[moving[c]] - r.q[moving[c]];
         const double predicted = cost - (er - J * dq).squaredNorm();
         const double rho = predicted > 0.0 ? (cost - cost_trial) / predicted : 0.0;
         lambda = std::max(lambda * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), kLambdaMin);
@@ -207,14 +237,26 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
       if (r.iterations >= opt.max_iterations) break;
     }
     if (stalled) {
+      std::vector<bool> is_free(static_cast<std::size_t>(nv), false);
+      for (int d : moving) is_free[static_cast<std::size_t>(d)] = true;
+      const Reach reach = reach_bound(tree, q0, target, is_free, lo, hi);
+      const double beyond = (target.position - reach.centre).norm() - reach.radius;
+      if (beyond > 0.0 && e.head<3>().norm() > opt.tolerance) {
+        if (reach.root < 0)
+          return finish(false, "target beyond reach: " + length(beyond) + " from the point, which no joint moves");
+        return finish(false, "target " + length(beyond) + " beyond reach (the point stays within " +
+                                 length(reach.radius) + " of body " + std::to_string(reach.root) +
+                                 "'s joint); stationary " + residual_text() + " from it");
+      }
       if (!at_limit.empty()) {
         std::string dofs;
         for (int d : at_limit) dofs += (dofs.empty() ? "" : ", ") + std::to_string(d);
         return finish(false, "target not reached within the joint limits: stationary " + residual_text() +
                                  " from it with dof" + (at_limit.size() > 1 ? "s " : " ") + dofs + " at a limit");
       }
-      return finish(false, "target beyond reach: stationary " + residual_text() +
-                               " from it (no move of the free dofs reduces the error; or a local minimum)");
+      return finish(false, "stationary " + residual_text() +
+                               " from the target: a local minimum, or a target the free dofs cannot reach "
+                               "(try another q0)");
     }
   }
 }

@@ -6,10 +6,14 @@
 //   e   = [p_des - p(q); log(R_des R(q)^T)]       position error (m), then the rotation vector (rad)
 //   dq  = J^T (J J^T + lambda² I)^-1 e             J: calc_point_jacobian's rows for e, free dofs only
 //         (evaluated as sum_i sigma_i / (sigma_i² + lambda²) v_i u_i^T e over J's SVD),
-// each step scaled down to at most 0.5 rad (or m) on any dof and clamped to the joint limits; a
-// step that lowers |e| is taken and lambda shrinks (/3, down to 1e-9), else lambda grows (x4) and
-// the step is tried again, so the solver is Gauss–Newton (quadratic) near a solution and gradient
-// descent far from one. A dof at a limit whose step points outwards is left out of that step.
+// each step scaled down to at most 0.5 rad (or m) on any dof and clamped to the joint limits. A step
+// that lowers |e| is taken and lambda scaled by max(1/3, 1 - (2 rho - 1)³), rho = the actual over the
+// linear model's predicted decrease (Nielsen's 1999 rule, applied to lambda rather than lambda²; Madsen,
+// Nielsen and Tingleff, Methods for non-linear least squares problems, 2004, sec. 3.2), floor 1e-9;
+// a step that does not is retried with lambda x4. So the solver is Gauss–Newton (quadratic) near a
+// solution, gradient descent far from one, and does not oscillate at a large residual (a target
+// beyond reach). A dof at a limit whose step points outwards is left out of that step. A stationary
+// point (|J^T e| <= 1e-12 sigma_max |e|, or lambda > 1e7 sigma_max) ends the search.
 #pragma once
 
 #include <Eigen/Dense>
@@ -50,12 +54,18 @@ struct IkResult {
 };
 
 // Solves from q0. Free dofs start from q0 clamped to their limits (when respect_limits). Failure is
-// a result (converged = false, `why`): a stationary point with the error left (a target beyond
-// reach, blocked by the limits, or a local minimum: "target beyond reach: stationary 0.35 m from it
-// ...") or the iteration limit ("did not converge in 200 iterations; residual 3.1 mm"). Throws
-// std::invalid_argument on a body out of range, q0 not of nv entries or not finite, a non-finite
-// target, a rotation that is not proper orthonormal (when orient), a free dof out of range or
-// repeated, limits not of nv entries, NaN (infinities are allowed) or lower > upper, and on
+// a result (converged = false, q the best point found, `why`), never an exception:
+//   a target outside a ball that holds the point for every q (centred on the chain's root-most
+//     moving joint; radius the chain's offsets plus prismatic travels): "target 0.35 m beyond reach
+//     (the point stays within 0.9 m of body 0's joint); stationary 0.35 m from it" (with no moving
+//     joint on the chain: "target beyond reach: 0.5 m from the point, which no joint moves");
+//   a stationary point with dofs at their limits: "target not reached within the joint limits: ...";
+//   another stationary point: "stationary 0.19 m, 0.03 rad from the target: a local minimum, or a
+//     target the free dofs cannot reach (try another q0)";
+//   the iteration limit: "did not converge in 200 iterations; residual 3.1 mm".
+// Throws std::invalid_argument on a body out of range, q0 not of nv entries or not finite, a
+// non-finite target, a rotation that is not proper orthonormal (when orient), a free dof out of
+// range or repeated, limits not of nv entries, NaN (infinities are allowed) or lower > upper, and on
 // damping <= 0, max_iterations < 0 or tolerance <= 0.
 IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target,
                                   const IkOptions& opt = {});

@@ -132,11 +132,11 @@ TEST(InverseKinematics, TargetBeyondReachStopsAtTheStretchedArmPointingAtIt) {
   q0 << -0.4, 1.2;
   const IkResult r = solve_inverse_kinematics(tree, q0, {.body = 1, .point = kTip2R, .position = p});
   EXPECT_FALSE(r.converged);
-  EXPECT_NE(r.why.find("beyond reach"), std::string::npos) << r.why;
-  EXPECT_NE(r.why.find("0.35 m"), std::string::npos) << r.why;
-  EXPECT_NEAR(r.position_error, 1.25 - (kL1 + kL2), 1e-9);
-  EXPECT_NEAR(angle_diff(r.q[0], phi), 0.0, 1e-4);
-  EXPECT_NEAR(angle_diff(r.q[1], 0.0), 0.0, 1e-4);
+  EXPECT_EQ(r.why.rfind("target 0.35 m beyond reach (the point stays within 0.9 m of body 0's joint)", 0), 0u)
+      << r.why;
+  EXPECT_NEAR(r.position_error, 1.25 - (kL1 + kL2), 1e-12);
+  EXPECT_NEAR(angle_diff(r.q[0], phi), 0.0, 1e-8);
+  EXPECT_NEAR(angle_diff(r.q[1], 0.0), 0.0, 1e-8);
   RecordProperty("why", r.why);
   RecordProperty("iterations", r.iterations);
 }
@@ -167,6 +167,39 @@ TEST(InverseKinematics, SixDofArmReachesRandomPosesMadeByForwardKinematics) {
   }
   RecordProperty("worst_iterations", worst_iterations);
   RecordProperty("mean_iterations", test::sci(total / 50.0));
+}
+
+TEST(InverseKinematics, SixDofArmFromHomeReachesThePoseOrReportsWhereItStopped) {
+  // Full poses from the home pose q = 0, far from most solutions: damped least squares is a local
+  // method, so some runs end in a local minimum; each is then a result with its reason and residual.
+  const Tree tree = arm6();
+  test::Rng rng(20260611);
+  int converged = 0;
+  for (int k = 0; k < 50; ++k) {
+    const VectorXd q = test::random_q(rng, tree);
+    const Pose pose = calc_body_pose(tree, q, kTool);
+    const IkTarget target{.body = kTool, .point = kToolPoint, .position = pose.point(kToolPoint), .orient = true,
+                          .rotation = pose.rotation};
+    const IkResult r = solve_inverse_kinematics(tree, VectorXd::Zero(6), target);
+    if (r.converged) {
+      ++converged;
+      EXPECT_LE(r.position_error, 1e-9);
+      EXPECT_LE(r.orientation_error, 1e-9);
+    } else {
+      EXPECT_EQ(r.why.rfind("stationary ", 0), 0u) << r.why;
+      EXPECT_GT(std::max(r.position_error, r.orientation_error), 1e-6) << r.why;
+      const Pose got = calc_body_pose(tree, r.q, kTool);
+      EXPECT_NEAR(r.position_error, (got.point(kToolPoint) - target.position).norm(), 1e-15);
+    }
+  }
+  EXPECT_GE(converged, 20);
+  RecordProperty("converged_of_50", converged);
+  // Far outside the arm: beyond reach, whatever the start.
+  const IkResult far = solve_inverse_kinematics(tree, VectorXd::Zero(6),
+                                                {.body = kTool, .point = kToolPoint, .position = {3.0, 0.0, 0.5}});
+  EXPECT_FALSE(far.converged);
+  EXPECT_NE(far.why.find(" beyond reach (the point stays within "), std::string::npos) << far.why;
+  RecordProperty("far_why", far.why);
 }
 
 TEST(InverseKinematics, SixDofArmReachesRandomPositionsFromHome) {
@@ -246,6 +279,8 @@ TEST(InverseKinematics, FreeDofsAloneMoveAndTheFlexibleLinksCellJointsStayBitFor
   for (int d : a.cells) EXPECT_EQ(r.q[d], q0[d]);
   const Vec3 elbow = calc_body_pose(a.tree, q0, a.forearm).position;
   EXPECT_NEAR(r.position_error, std::abs((p - elbow).norm() - 0.5), 1e-9) << r.why;
+  EXPECT_EQ(r.why.rfind("stationary ", 0), 0u) << r.why;
+  EXPECT_NE(r.why.find("the free dofs cannot reach"), std::string::npos) << r.why;
 }
 
 TEST(InverseKinematics, JointLimitsAreHonouredAndPickTheAllowedBranch) {
@@ -378,6 +413,21 @@ TEST(InverseKinematics, BadArgumentsThrowButFailuresToReachDoNot) {
   b.lower = {-std::numeric_limits<double>::infinity(), 0.0};
   EXPECT_NO_THROW(solve_inverse_kinematics(tree, q0, t, b));
   EXPECT_NO_THROW(solve_inverse_kinematics(tree, q0, {.body = 1, .point = kTip2R, .position = {5.0, 0.0, 0.0}}));
+}
+
+TEST(InverseKinematics, APointNoJointMovesIsReachedOnlyWhereItIs) {
+  // A tree of one fixed body (nv = 0): the point 0.2 m from the origin, targets there and 0.5 m away.
+  TreeSpec s;
+  s.bodies.push_back(link_body(-1, {0.1, 0.0, 0.0}, 0.2, 1.0));
+  s.bodies[0].joint = JointType::kFixed;
+  const Tree tree = make_tree(s);
+  ASSERT_EQ(tree.nv(), 0);
+  const IkResult here = solve_inverse_kinematics(tree, VectorXd(0), {.body = 0, .point = {0.1, 0, 0}, .position = {0.2, 0, 0}});
+  EXPECT_TRUE(here.converged);
+  const IkResult away = solve_inverse_kinematics(tree, VectorXd(0), {.body = 0, .point = {0.1, 0, 0}, .position = {0.2, 0.5, 0}});
+  EXPECT_FALSE(away.converged);
+  EXPECT_EQ(away.why, "target beyond reach: 0.5 m from the point, which no joint moves");
+  EXPECT_DOUBLE_EQ(away.position_error, 0.5);
 }
 
 }  // namespace
