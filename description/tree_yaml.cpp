@@ -11,28 +11,13 @@
 #include <utility>
 #include <variant>
 
+#include "description/field_table.hpp"
 #include "kernel/errors.hpp"
 #include "multibody/flexible_link.hpp"
 
 namespace ff {
 
 namespace {
-
-enum class Bound { kAny, kNonNegative, kPositive, kNonZero };
-
-// One key of a block: where its value goes, whether it must be given, its bound. The default is the
-// member's initial value in a default-constructed block; `fallback` overrides it as the docs write it
-// (a text key's default, or a condition such as "required with torsion").
-template <class T>
-struct Field {
-  const char* key;
-  std::variant<double T::*, int T::*, bool T::*, Vec3 T::*, std::string T::*> member;
-  const char* unit = "";
-  bool required = false;
-  Bound bound = Bound::kAny;
-  bool moving_only = false;        // revolute and prismatic joints only: an error on a fixed joint
-  const char* fallback = nullptr;  // the default as the docs write it, when not the member's value
-};
 
 constexpr const char* kDefaultJointType = "revolute";
 
@@ -148,94 +133,11 @@ const std::array<Field<PayloadBlock>, 2> kPayloadFields{{
     {.key = "com", .member = &PayloadBlock::com, .unit = "m"},
 }};
 
-template <class... F>
-struct Overloaded : F... {
-  using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;  // clang 14 has no CTAD for aggregates
-
-std::string format_number(double x) {
-  if (x == JointInfo::kNone || x == -JointInfo::kNone) return "none";
-  std::ostringstream o;
-  o << x;
-  return o.str();
-}
-
-std::string format_vector(const Vec3& v) {
-  return "[" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + "]";
-}
-
-// A list of exactly three numbers (not YamlReader's one-number-for-all).
-void read_vec3(YamlReader& r, const std::string& key, Vec3& out) {
-  const YAML::Node v = r.raw(key);
-  if (!v.IsSequence() || v.size() != 3) r.fail(key, "expected a list of 3 numbers");
-  double x[3];
-  r.optional_array(key, x, 3);
-  out = Vec3(x[0], x[1], x[2]);
-}
-
-// Reads the fields present in `r` into `out`, checking their bounds; absent ones keep their defaults.
-template <class T, std::size_t N>
-void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) {
-  for (const Field<T>& f : fields) {
-    if (!r.has(f.key)) continue;
-    std::visit(Overloaded{[&](double T::*m) {
-                            r.optional(f.key, out.*m);
-                            if (f.bound == Bound::kNonNegative && out.*m < 0.0)
-                              r.fail(f.key, "must be >= 0, got " + format_number(out.*m));
-                            if (f.bound == Bound::kPositive && !(out.*m > 0.0))
-                              r.fail(f.key, "must be > 0, got " + format_number(out.*m));
-                          },
-                          [&](int T::*m) {
-                            r.optional(f.key, out.*m);
-                            if (f.bound == Bound::kPositive && out.*m < 1)
-                              r.fail(f.key, "must be >= 1, got " + std::to_string(out.*m));
-                          },
-                          [&](bool T::*m) { r.optional(f.key, out.*m); },
-                          [&](Vec3 T::*m) {
-                            read_vec3(r, f.key, out.*m);
-                            if (f.bound == Bound::kNonZero && (out.*m).norm() == 0.0)
-                              r.fail(f.key, "is zero: a joint axis needs a direction");
-                          },
-                          [&](std::string T::*m) {
-                            r.optional(f.key, out.*m);
-                            if ((out.*m).empty()) r.fail(f.key, "must not be empty");
-                          }},
-               f.member);
-  }
-}
-
-// After finish() (so a misspelt key is reported as unknown, not as the required one it misses).
-template <class T, std::size_t N>
-void require(const YamlReader& r, const std::array<Field<T>, N>& fields) {
-  for (const Field<T>& f : fields)
-    if (f.required && !r.has(f.key)) r.fail(f.key, "missing required value");
-}
-
 // A fixed joint has no coordinate: its dof-only keys are mistakes.
 template <class T, std::size_t N>
 void reject_moving_only(const YamlReader& r, const std::array<Field<T>, N>& fields) {
   for (const Field<T>& f : fields)
     if (f.moving_only && r.has(f.key)) r.fail(f.key, "a fixed joint has no degree of freedom: remove this key");
-}
-
-template <class T, std::size_t N>
-void add_keys(std::vector<KeyDoc>& out, const std::string& prefix, const std::array<Field<T>, N>& fields) {
-  const T defaults{};
-  for (const Field<T>& f : fields) {
-    std::string fallback;
-    if (f.fallback)
-      fallback = f.fallback;
-    else if (!f.required)
-      fallback = std::visit(Overloaded{[&](double T::*m) { return format_number(defaults.*m); },
-                                       [&](int T::*m) { return std::to_string(defaults.*m); },
-                                       [&](bool T::*m) { return std::string(defaults.*m ? "true" : "false"); },
-                                       [&](Vec3 T::*m) { return format_vector(defaults.*m); },
-                                       [&](std::string T::*) { return std::string(); }},
-                            f.member);
-    out.push_back({prefix + f.key, f.unit, f.required ? "yes" : "no", fallback});
-  }
 }
 
 JointType parse_joint_type(const YamlReader& joint, const std::string& type) {
@@ -405,7 +307,7 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
       reject_moving_only(jr, kSpringFields);
     }
     if (jb.lower > jb.upper)
-      jr.fail("upper", "is below lower (" + format_number(jb.upper) + " < " + format_number(jb.lower) + ")");
+      jr.fail("upper", "is below lower (" + format_key_number(jb.upper) + " < " + format_key_number(jb.lower) + ")");
     JointInfo info{.name = jb.name.empty() ? b.name : jb.name,
                    .lower = jb.lower, .upper = jb.upper, .effort = jb.effort, .velocity = jb.velocity,
                    .friction = jb.friction};

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "description/field_table.hpp"
 #include "description/tree_description.hpp"
 #include "kernel/yaml_reader.hpp"
 
@@ -19,14 +20,6 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
 // Loads a tree YAML file.
 TreeDescription load_tree_yaml(const std::string& path);
 
-// One key of a format as docs/formats.md lists it (from the readers' field tables, so a test can hold
-// the docs to them).
-struct KeyDoc {
-  std::string key;       // full path, list elements as [i] ("bodies[i].joint.axis")
-  std::string unit;      // "" for none
-  std::string required;  // "yes" or "no"
-  std::string fallback;  // the default ("" when required)
-};
 std::vector<KeyDoc> tree_yaml_keys();
 
 // A `flexible:` block (docs/formats.md; tree YAML bodies and the URDF sidecar's links): its keys read

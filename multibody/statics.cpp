@@ -25,11 +25,13 @@ std::string sci(double v) {
 // r = g(q) - passive(q, 0) - tau = g(q) + K (q - q_ref) - tau; also the scale of the balancing forces.
 struct Residual {
   VectorXd r, g, spring, zero;
-  explicit Residual(int n) : r(n), g(n), spring(n), zero(VectorXd::Zero(n)) {}
+  std::vector<int> locked;  // dofs whose residual is a reaction (set to 0)
+  explicit Residual(int n, std::vector<int> held = {}) : r(n), g(n), spring(n), zero(VectorXd::Zero(n)), locked(std::move(held)) {}
   double eval(const Tree& tree, const ConstVec& q, const ConstVec& tau, TreeWorkspace& ws, double* scale) {
     calc_bias_forces(tree, q, zero, g, ws);
     calc_passive_forces(tree, q, zero, spring);
     r = g - spring - tau;
+    for (int j : locked) r[j] = 0.0;
     if (scale) {
       *scale = 0.0;
       if (r.size() > 0)
@@ -80,11 +82,13 @@ StaticEquilibriumResult solve_static_equilibrium(const Tree& tree, const ConstVe
   if (options.max_iterations < 0 || !(options.tolerance > 0.0) || !(options.fd_step > 0.0))
     throw std::invalid_argument(
         "solve_static_equilibrium: options need max_iterations >= 0, tolerance > 0 and fd_step > 0");
+  for (int j : options.locked_dofs)
+    if (j < 0 || j >= n) throw std::invalid_argument("solve_static_equilibrium: locked dof " + std::to_string(j) + " out of range");
 
   StaticEquilibriumResult res;
   res.q = q0;
   TreeWorkspace ws(tree);
-  Residual R(n), trial(n);
+  Residual R(n, options.locked_dofs), trial(n, options.locked_dofs);
   MatrixXd J(n, n);
   auto finish = [&](StaticStatus status, const std::string& what) {
     res.status = status;
@@ -104,6 +108,11 @@ StaticEquilibriumResult solve_static_equilibrium(const Tree& tree, const ConstVe
       return finish(StaticStatus::kMaxIterations, "not converged: iteration limit reached");
     if (!reuse) {
       calc_static_stiffness(tree, res.q, J, ws, options.fd_step);
+      for (int j : options.locked_dofs) {  // a held dof does not move: its row and column are the identity's
+        J.row(j).setZero();
+        J.col(j).setZero();
+        J(j, j) = 1.0;
+      }
       lu.compute(J);
       ++res.jacobians;
       fresh = true;

@@ -10,6 +10,7 @@
 
 #include <Eigen/Dense>
 #include <string>
+#include <vector>
 
 #include "multibody/algorithms.hpp"
 #include "multibody/tree.hpp"
@@ -28,6 +29,9 @@ struct StaticEquilibriumOptions {
   // max|g(q)| and max|K (q - q_ref)| (the forces that balance), N·m or N.
   double tolerance = 1e-10;
   double fd_step = 1e-6;    // the Jacobian's central-difference step (calc_static_stiffness)
+  // Dofs held at their q0 value (a joint clamped by its brake or its servo): their residual is the
+  // reaction the holding supplies, not balanced.
+  std::vector<int> locked_dofs;
 };
 
 enum class StaticStatus {

@@ -116,6 +116,36 @@ TEST(Statics, SpringLoadedPendulumSettlesWhereTheSpringBalancesGravity) {
   RecordProperty("equilibrium_rad", test::sci(q));
 }
 
+TEST(Statics, ALockedJointHoldsItsAngleAndTheSpringJointOutboardBalancesGravityAboutIt) {
+  // A hub joint about y (no spring) locked at 0.3 rad carrying the spring pendulum: alone it is
+  // falls (nothing holds the hub); locked, the outer joint balances k q2 = m g l cos(q1 + q2).
+  const double m = 2.0, g = 9.81, l = 0.4, k = 12.0;
+  TreeSpec s;
+  BodySpec hub;
+  hub.axis = Vec3::UnitY();
+  hub.mass = 1.0;
+  hub.inertia = test::box_inertia(1.0, 0.1, 0.1, 0.1);
+  BodySpec arm;
+  arm.parent = 0;
+  arm.axis = Vec3::UnitY();
+  arm.mass = m;
+  arm.com = {l, 0.0, 0.0};
+  arm.inertia = test::box_inertia(m, 0.05, 0.05, 0.05);
+  arm.stiffness = k;
+  s.bodies = {hub, arm};
+  s.gravity = {0.0, 0.0, -g};
+  const Tree tree = make_tree(s);
+  VectorXd q0 = VectorXd::Zero(2);
+  q0[0] = -0.3;  // about +y: turns x towards +z, against the sag
+  EXPECT_FALSE(solve_static_equilibrium(tree, q0, VectorXd::Zero(2)).converged());  // it falls
+  StaticEquilibriumOptions held;
+  held.locked_dofs = {0};
+  const StaticEquilibriumResult res = solve_static_equilibrium(tree, q0, VectorXd::Zero(2), held);
+  ASSERT_TRUE(res.converged()) << res.message;
+  EXPECT_EQ(res.q[0], -0.3);
+  EXPECT_NEAR(k * res.q[1], m * g * l * std::cos(res.q[0] + res.q[1]), 1e-10 * m * g * l);
+}
+
 TEST(Statics, FailuresAreResultsWithAStatusAndAMessageNotExceptions) {
   // A hub about the vertical axis with no spring under a torque: nothing holds it (singular).
   TreeSpec s;

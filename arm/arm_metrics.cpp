@@ -1,0 +1,121 @@
+// Arm metrics (arm_metrics.hpp).
+#include "arm/arm_metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/metrics.hpp"
+
+namespace ff {
+
+std::vector<std::string> arm_metric_columns(const ArmModel& m) {
+  std::vector<std::string> c;
+  for (const ActuatedJoint& a : m.actuated)
+    for (const char* s : {"_settling_s", "_overshoot_pct", "_peak_torque_Nm", "_peak_speed"}) c.push_back(a.name + s);
+  for (const char* s : {"tool_settling_s", "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m"}) c.push_back(s);
+  for (const LinkTip& l : m.links)
+    for (const char* s : {"_peak_deflection_m", "_residual_m", "_sag_m"}) c.push_back(l.name + s);
+  c.push_back("settling_horizon_s");
+  return c;
+}
+
+namespace {
+
+double peak_abs(const std::vector<double>& y) {
+  double p = 0.0;
+  for (double v : y) p = std::max(p, std::abs(v));
+  return p;
+}
+
+// Last exit of e(t) >= 0 from [0, band] after t0, interpolated; NaN when still out at the end.
+double last_exit(const std::vector<double>& t, const std::vector<double>& e, double t0, double band) {
+  std::size_t last = t.size();
+  for (std::size_t k = 0; k < t.size(); ++k)
+    if (t[k] >= t0 && e[k] > band) last = k;
+  if (last == t.size()) return 0.0;
+  if (last + 1 == t.size()) return std::nan("");
+  const double f = (e[last] - band) / (e[last] - e[last + 1]);
+  return std::max(0.0, t[last] + f * (t[last + 1] - t[last]) - t0);
+}
+
+}  // namespace
+
+std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, LaneStatus status) {
+  const std::vector<std::string> cols = arm_metric_columns(m);
+  std::vector<double> v(cols.size(), std::nan(""));
+  if (status != LaneStatus::kOk) return v;
+  const std::vector<double>& t = tr.t();
+  const double t0 = m.move_end, band = m.spec.band;
+  std::size_t c = 0;
+  const std::size_t na = m.actuated.size();
+  for (std::size_t j = 0; j < na; ++j) {
+    const ActuatedJoint& a = m.actuated[j];
+    const std::vector<double>& q = tr.column(a.name + ".q");
+    // The joint's largest move and its last move (start, target).
+    double largest = 0.0, start = m.trajectory.start[j], from = start, target = start;
+    for (const JointWaypoint& w : m.trajectory.waypoints) {
+      const double step = w.q[j] - from;
+      largest = std::max(largest, std::abs(step));
+      if (step != 0.0) start = from, target = w.q[j];
+      from = w.q[j];
+    }
+    const double final_target = from;
+    std::vector<double> e(q.size());
+    for (std::size_t k = 0; k < q.size(); ++k) e[k] = std::abs(q[k] - final_target);
+    v[c++] = largest > 0.0 ? last_exit(t, e, t0, band * largest) : 0.0;
+    double over = 0.0;
+    if (target != start) {
+      const double dir = target > start ? 1.0 : -1.0;
+      for (std::size_t k = 0; k < q.size(); ++k) over = std::max(over, dir * (q[k] - target));
+      over = 100.0 * over / std::abs(target - start);
+    }
+    v[c++] = over;
+    v[c++] = peak_abs(tr.column(a.name + ".torque"));
+    v[c++] = peak_abs(tr.column(a.name + ".qd"));
+  }
+  // The tool: its final target, its largest and last moves in the rigid reference.
+  const std::vector<double>*x[3] = {&tr.column("tool.x"), &tr.column("tool.y"), &tr.column("tool.z")};
+  const std::vector<double>*xr[3] = {&tr.column("tool.ref_x"), &tr.column("tool.ref_y"), &tr.column("tool.ref_z")};
+  const std::size_t n = t.size();
+  Vec3 goal((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
+  Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
+  double largest = 0.0;
+  for (std::size_t k = 0; k < n; ++k)
+    largest = std::max(largest, (Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k]) - begin).norm());
+  std::vector<double> err(n), track(n);
+  double over = 0.0;
+  const Vec3 dir = (goal - begin).norm() > 0.0 ? Vec3((goal - begin).normalized()) : Vec3::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3 p((*x[0])[k], (*x[1])[k], (*x[2])[k]);
+    err[k] = (p - goal).norm();
+    track[k] = (p - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
+    if (t[k] >= t0) over = std::max(over, dir.dot(p - goal));
+  }
+  v[c++] = largest > 0.0 ? last_exit(t, err, t0, band * largest) : 0.0;
+  v[c++] = (goal - begin).norm() > 0.0 ? 100.0 * over / (goal - begin).norm() : 0.0;
+  v[c++] = peak_abs(track);
+  v[c++] = track[n - 1];
+  // The flexible links' tips.
+  for (const LinkTip& l : m.links) {
+    const std::vector<double>& dy = tr.column(l.name + ".deflection_y");
+    const std::vector<double>& dz = tr.column(l.name + ".deflection_z");
+    double peak = 0.0;
+    for (std::size_t k = 0; k < n; ++k) peak = std::max(peak, std::hypot(dy[k], dz[k]));
+    v[c++] = peak;
+    const double t_end = t[n - 1];
+    v[c++] = t0 < t_end ? std::max(calc_residual_amplitude(t, dy, t0, t_end), calc_residual_amplitude(t, dz, t0, t_end))
+                        : std::nan("");
+    v[c++] = std::hypot(dy[0], dz[0]);
+  }
+  v[c++] = std::max(0.0, t[n - 1] - t0);
+  return v;
+}
+
+std::string calc_arm_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values) {
+  if (lane != LaneStatus::kOk) return lane_status_name(lane);
+  for (std::size_t i = 0; i < columns.size(); ++i)
+    if (columns[i] == "tool_settling_s" && std::isnan(values[i])) return "not_settled";
+  return "ok";
+}
+
+}  // namespace ff

@@ -1,0 +1,36 @@
+// The responses of one arm run (arm_simulate.hpp's trace), the reference rig's definitions
+// (kernel/metrics.hpp, docs/reference-rig.md) applied per joint, to the tool point and to each flexible
+// link's tip. The settling window runs from the end of the last waypoint to the end of the run.
+//   <joint>_settling_s        last exit of the joint from its final target's band (band x the joint's
+//                             largest move), NaN = not settled
+//   <joint>_overshoot_pct     beyond the target of the joint's last move, % of that move
+//   <joint>_peak_torque_Nm    largest |torque| (prismatic: N)
+//   <joint>_peak_speed        largest |rate|, rad/s (m/s)
+//   tool_settling_s           last exit of the tool point from a ball about its final target of radius
+//                             band x the tool's largest move, NaN = not settled
+//   tool_overshoot_pct        largest excursion past the final target along the last move, % of it
+//   tool_peak_error_m         largest |tool - where the rigid arm at the reference puts it|: tracking
+//   tool_final_error_m        that error at the end of the run
+//   <link>_peak_deflection_m  largest |tip deflection| of a flexible link
+//   <link>_residual_m         half the peak-to-peak of its tip deflection after the move (the larger plane)
+//   <link>_sag_m              |tip deflection| at the start (the static sag under gravity, held)
+//   settling_horizon_s        the longest settling time the run can confirm: its window (censoring)
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "arm/arm_model.hpp"
+#include "arm/arm_simulate.hpp"
+
+namespace ff {
+
+std::vector<std::string> arm_metric_columns(const ArmModel& m);
+
+// Values in arm_metric_columns order; all NaN when the lane failed.
+std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& trace, LaneStatus status);
+
+// "ok", "not_settled" (the tool's settling time is NaN), or the lane's failure.
+std::string calc_arm_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values);
+
+}  // namespace ff

@@ -1,0 +1,286 @@
+// make_arm (arm_model.hpp): the tree, the actuated joints, the tool, the trajectory (IK at plan time),
+// the initial sag, the closed-loop modes and from them the substeps, notches and shapers.
+#include "arm/arm_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "kernel/errors.hpp"
+#include "kernel/modes.hpp"
+#include "multibody/algorithms.hpp"
+#include "multibody/inverse_kinematics.hpp"
+#include "multibody/modes.hpp"
+#include "multibody/statics.hpp"
+
+namespace ff {
+
+namespace {
+
+ShaperKind parse_shaper_kind(const std::string& type) {
+  if (type == "zv") return ShaperKind::kZv;
+  if (type == "zvd") return ShaperKind::kZvd;
+  if (type == "ei") return ShaperKind::kEi;
+  return ShaperKind::kNone;
+}
+
+std::string joint_key(const ActuatedJoint& a, const std::string& tail) { return "joints." + a.name + "." + tail; }
+
+// The closed-loop modes at q: each actuated joint's kp and kd added to K and C.
+std::vector<TreeMode> closed_loop_modes(const ArmModel& m) {
+  const int n = m.tree.nv();
+  TreeModeOptions o;
+  o.extra_stiffness = Eigen::MatrixXd::Zero(n, n);
+  o.extra_damping = Eigen::MatrixXd::Zero(n, n);
+  for (const ActuatedJoint& a : m.actuated) {
+    o.extra_stiffness(a.dof, a.dof) = a.control.kp;
+    o.extra_damping(a.dof, a.dof) = a.control.kd;
+  }
+  return calc_tree_modes(m.tree, m.q0, o);
+}
+
+// The joint info of the body whose joint is `dof`.
+const JointInfo& joint_info(const ArmSpec& spec, const Tree& tree, int dof) {
+  for (int i = 0; i < tree.num_bodies(); ++i)
+    if (tree.body(i).dof == dof) return spec.tree.joints[static_cast<std::size_t>(i)];
+  throw std::logic_error("joint_info: no body moves dof " + std::to_string(dof));
+}
+
+}  // namespace
+
+ArmModel make_arm(const ArmSpec& spec) {
+  const std::string& src = spec.source;
+  ArmModel m;
+  m.spec = spec;
+  m.tree = make_tree(spec.tree.spec);
+  const int nv = m.tree.nv();
+
+  // The actuated joints, in dof order.
+  std::map<int, const JointControlSpec*> by_dof;
+  for (const JointControlSpec& c : spec.joints) {
+    const auto it = spec.tree.dof_index.find(c.joint);
+    if (it == spec.tree.dof_index.end()) throw ConfigError(src, 0, "joints." + c.joint, "no moving joint of that name");
+    if (!by_dof.emplace(it->second, &c).second)
+      throw ConfigError(src, 0, "joints." + c.joint, "this joint has a controller already");
+  }
+  std::vector<char> actuated(static_cast<std::size_t>(nv), 0);
+  for (const auto& [dof, c] : by_dof) {
+    ActuatedJoint a;
+    a.name = c->joint;
+    a.dof = dof;
+    a.control = *c;
+    const JointInfo& info = joint_info(spec, m.tree, dof);
+    a.torque_limit = c->torque_limit > 0.0 ? c->torque_limit : (std::isfinite(info.effort) ? info.effort : 0.0);
+    a.notch_on_feedback = c->notch.placement == "feedback";
+    m.actuated.push_back(std::move(a));
+    actuated[static_cast<std::size_t>(dof)] = 1;
+  }
+  for (int j = 0; j < nv; ++j)
+    if (!actuated[static_cast<std::size_t>(j)]) m.passive_dofs.push_back(j);
+  const int na = static_cast<int>(m.actuated.size());
+
+  // The flexible links, and the tool: a body by name (a flexible link's name means its tip).
+  for (const FlexibleLinkInfo& f : spec.tree.flexible_links) {
+    LinkTip t;
+    t.name = f.name;
+    t.root_body = f.root_body;
+    t.tip_body = f.tip_body;
+    t.tip_point = f.tip_point;
+    t.rigid_tip = Vec3(f.link.length, 0.0, 0.0);
+    t.elastic_dofs = f.dofs;
+    m.links.push_back(std::move(t));
+  }
+  m.tool_body = m.tree.num_bodies() - 1;
+  m.tool_point = spec.tool_point;
+  bool at_link_tip = false;
+  if (!spec.tool_body.empty()) {
+    const auto link = std::find_if(m.links.begin(), m.links.end(), [&](const LinkTip& t) { return t.name == spec.tool_body; });
+    if (link != m.links.end()) {
+      m.tool_body = link->tip_body;
+      m.tool_point = link->tip_point + spec.tool_point;
+      at_link_tip = true;
+    } else {
+      const auto it = spec.tree.body_index.find(spec.tool_body);
+      if (it == spec.tree.body_index.end())
+        throw ConfigError(src, 0, "tool.body", "no body named '" + spec.tool_body + "'");
+      m.tool_body = it->second;
+    }
+  }
+  if (!at_link_tip && spec.tool_body.empty())
+    for (const LinkTip& t : m.links)
+      if (t.tip_body == m.tool_body) m.tool_point = t.tip_point + spec.tool_point;
+
+  // The trajectory: joint waypoints as written, tool waypoints by IK on the rigid arm (flexible links
+  // straight), each from the pose before it.
+  m.trajectory.shape = spec.shape;
+  m.trajectory.start.assign(static_cast<std::size_t>(na), 0.0);
+  Eigen::VectorXd pose = Eigen::VectorXd::Zero(nv);
+  std::map<std::string, int> act_index;
+  for (int k = 0; k < na; ++k) act_index[m.actuated[static_cast<std::size_t>(k)].name] = k;
+  IkOptions ik;
+  for (const ActuatedJoint& a : m.actuated) {
+    ik.free_dofs.push_back(a.dof);
+  }
+  ik.lower.assign(static_cast<std::size_t>(nv), -JointInfo::kNone);
+  ik.upper.assign(static_cast<std::size_t>(nv), JointInfo::kNone);
+  for (int j = 0; j < nv; ++j) {
+    const JointInfo& info = joint_info(spec, m.tree, j);
+    ik.lower[static_cast<std::size_t>(j)] = info.lower;
+    ik.upper[static_cast<std::size_t>(j)] = info.upper;
+  }
+  for (std::size_t w = 0; w < spec.waypoints.size(); ++w) {
+    const ArmWaypoint& wp = spec.waypoints[w];
+    const std::string key = "trajectory.waypoints[" + std::to_string(w) + "]";
+    if (na == 0) throw ConfigError(src, wp.line, key, "the arm has no actuated joint to move (give `joints`)");
+    if (wp.cartesian) {
+      IkTarget target;
+      target.body = m.tool_body;
+      target.point = m.tool_point;
+      target.position = wp.tool;
+      const IkResult r = solve_inverse_kinematics(m.tree, pose, target, ik);
+      if (!r.converged) throw ConfigError(src, wp.line, key + ".tool", "the tool cannot reach it: " + r.why);
+      pose = r.q;
+    } else {
+      for (const auto& [name, value] : wp.joints) {
+        const auto it = act_index.find(name);
+        if (it == act_index.end())
+          throw ConfigError(src, wp.line, key + ".joints." + name,
+                            spec.tree.dof_index.count(name) ? "a passive joint cannot be commanded (give it a controller under `joints`)"
+                                                            : "no moving joint of that name");
+        if (!std::isfinite(value)) throw ConfigError(src, wp.line, key + ".joints." + name, "must be finite");
+        pose[m.actuated[static_cast<std::size_t>(it->second)].dof] = value;
+      }
+    }
+    JointWaypoint jw;
+    jw.time = wp.time;
+    for (const ActuatedJoint& a : m.actuated) jw.q.push_back(pose[a.dof]);
+    for (int k = 0; k < na; ++k) {
+      const JointInfo& info = joint_info(spec, m.tree, m.actuated[static_cast<std::size_t>(k)].dof);
+      if (jw.q[static_cast<std::size_t>(k)] < info.lower || jw.q[static_cast<std::size_t>(k)] > info.upper)
+        throw ConfigError(src, wp.line, key, "joint " + m.actuated[static_cast<std::size_t>(k)].name + " at " +
+                                                 std::to_string(jw.q[static_cast<std::size_t>(k)]) + " is beyond its limits");
+    }
+    m.trajectory.waypoints.push_back(std::move(jw));
+  }
+  m.move_end = spec.waypoints.empty() ? 0.0 : spec.waypoints.back().time;
+  m.control_period = 1.0 / spec.rate;
+  m.duration = spec.duration > 0.0 ? spec.duration : m.move_end + spec.settle;
+  if (!(m.duration >= m.control_period))
+    throw ConfigError(src, 0, "simulation.duration", "shorter than one control period: give a duration or waypoints");
+
+  // The initial state: at rest, the actuated joints at the start, the rest sagging under gravity.
+  m.q0 = Eigen::VectorXd::Zero(nv);
+  if (m.tree.gravity().norm() > 0.0 && !m.passive_dofs.empty()) {
+    StaticEquilibriumOptions held;
+    for (const ActuatedJoint& a : m.actuated) held.locked_dofs.push_back(a.dof);
+    const StaticEquilibriumResult r = solve_static_equilibrium(m.tree, m.q0, Eigen::VectorXd::Zero(nv), held);
+    if (r.converged()) m.q0 = r.q;  // else (a free passive joint): it starts straight, at 0
+  }
+
+  // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
+  m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
+  const std::vector<TreeMode> modes = closed_loop_modes(m);
+  std::vector<Mode> kernel_modes;
+  std::vector<double> zetas;
+  for (const TreeMode& md : modes) {
+    kernel_modes.push_back({md.omega_n, md.zeta, md.oscillatory});
+    if (md.oscillatory && md.zeta < 0.3 && md.omega_n > 0.0) {
+      m.resonances.push_back(md.omega_n);
+      zetas.push_back(md.zeta);
+    }
+  }
+  m.substeps = spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
+  for (ActuatedJoint& a : m.actuated) {
+    const ShaperSpec& sh = a.control.shaper;
+    const ShaperKind kind = parse_shaper_kind(sh.type);
+    a.shaper = {Impulse{0.0, 1.0}};
+    if (kind != ShaperKind::kNone) {
+      double w = sh.frequency, z = sh.damping;
+      if (w == 0.0) {
+        if (m.resonances.empty())
+          throw ConfigError(src, 0, joint_key(a, "shaper.frequency"), "the closed loop has no resonance to design on; give frequency");
+        w = m.resonances[0];
+        if (z < 0.0) z = zetas[0];
+      }
+      if (z < 0.0) z = 0.0;
+      try {
+        a.shaper = make_shaper(kind, w, z, sh.vtol);
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(src, 0, joint_key(a, "shaper"), e.what());
+      }
+    }
+    const NotchSpec& n = a.control.notch;
+    if (n.enabled) {
+      NotchDesign d;
+      d.order = n.order;
+      for (int i = 0; i < 2; ++i) {
+        d.alpha[i] = n.alpha[i];
+        d.zeta[i] = n.zeta[i];
+        d.omega_z[i] = n.omega_z[i];
+      }
+      if (d.omega_z[0] == 0.0) {
+        if (m.resonances.size() < 2)
+          throw ConfigError(src, 0, joint_key(a, "notch.omega_z"),
+                            "the closed loop has fewer than two resonances to place the notch at; give omega_z");
+        d.omega_z[0] = m.resonances[0];
+        d.omega_z[1] = m.resonances[1];
+      }
+      try {
+        a.notch = make_notch_sections(d, m.control_period);
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(src, 0, joint_key(a, "notch"), e.what());
+      }
+    }
+  }
+  return m;
+}
+
+void eval_arm_reference(const ArmModel& m, double t, double* r, double* rd, double* rdd, double* scratch) {
+  const std::size_t na = m.actuated.size();
+  double* q = scratch;
+  double* qd = scratch + na;
+  double* qdd = scratch + 2 * na;
+  for (std::size_t j = 0; j < na; ++j) r[j] = rd[j] = rdd[j] = 0.0;
+  if (m.trajectory.waypoints.empty()) {
+    for (std::size_t j = 0; j < na; ++j) r[j] = m.trajectory.start[j];
+    return;
+  }
+  // Each joint's shaper: the sum of the trajectory delayed by each impulse, weighted.
+  for (std::size_t j = 0; j < na; ++j) {
+    for (const Impulse& imp : m.actuated[j].shaper) {
+      eval_joint_trajectory(m.trajectory, t - imp.time, q, qd, qdd);
+      r[j] += imp.amplitude * q[j];
+      rd[j] += imp.amplitude * qd[j];
+      rdd[j] += imp.amplitude * qdd[j];
+    }
+  }
+}
+
+ArmFeedforward::ArmFeedforward(const Tree& tree)
+    : ws(tree),
+      q(Eigen::VectorXd::Zero(tree.nv())),
+      qd(Eigen::VectorXd::Zero(tree.nv())),
+      qdd(Eigen::VectorXd::Zero(tree.nv())),
+      tau(Eigen::VectorXd::Zero(tree.nv())),
+      zero(Eigen::VectorXd::Zero(tree.nv())) {}
+
+void calc_arm_feedforward(const ArmModel& m, const double* r, const double* rd, const double* rdd, double* tau_id,
+                          double* tau_g, ArmFeedforward& ff) {
+  ff.q.setZero();
+  ff.qd.setZero();
+  ff.qdd.setZero();
+  const std::size_t na = m.actuated.size();
+  for (std::size_t j = 0; j < na; ++j) {
+    const int d = m.actuated[j].dof;
+    ff.q[d] = r[j];
+    ff.qd[d] = rd[j];
+    ff.qdd[d] = rdd[j];
+  }
+  calc_inverse_dynamics(m.tree, ff.q, ff.qd, ff.qdd, ff.tau, ff.ws);
+  for (std::size_t j = 0; j < na; ++j) tau_id[j] = ff.tau[m.actuated[j].dof];
+  calc_bias_forces(m.tree, ff.q, ff.zero, ff.tau, ff.ws);
+  for (std::size_t j = 0; j < na; ++j) tau_g[j] = ff.tau[m.actuated[j].dof];
+}
+
+}  // namespace ff

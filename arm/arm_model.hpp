@@ -1,0 +1,129 @@
+// The immutable model of a manipulator of any shape: a kinematic tree (multibody/tree.hpp, read from
+// tree YAML or URDF by description/), its actuated joints each with its own controller, a commanded
+// motion and how to simulate it. Built and validated once by make_arm(); never written afterwards.
+//
+// The control law of actuated joint j, sampled at `rate` with zero-order hold (docs/formats.md, "Arm
+// models"), the reference rig's law (kernel/controller.hpp) per joint:
+//   e_j   = F_j(r_j) - q_j                        (notch on the reference; on the feedback: r_j - F_j(q_j))
+//   tau_j = sat(kp e_j + ki int e_j - kd qd_j + f_i (ID(r, r', r'') - G(r) + kd r'_j) + f_g G(r)_j)
+// with r the shaped joint reference, ID the rigid arm's inverse dynamics (RNEA, flexible links held
+// straight) and G(r) its gravity torques, f_i and f_g the feed-forward gains, the integral frozen
+// while the torque saturates in the direction of the error (clamping anti-windup).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "description/tree_description.hpp"
+#include "kernel/model.hpp"  // NotchSpec, ShaperSpec, Integrator
+#include "kernel/notch.hpp"
+#include "kernel/shaper.hpp"
+#include "multibody/algorithms.hpp"
+#include "multibody/joint_trajectory.hpp"
+#include "multibody/tree.hpp"
+
+namespace ff {
+
+// The control of one actuated joint, as the user writes it.
+struct JointControlSpec {
+  std::string joint;           // the moving joint's name in the tree
+  double kp = 0.0;             // N·m/rad (prismatic: N/m)
+  double ki = 0.0;             // N·m/(rad·s)
+  double kd = 0.0;             // N·m·s/rad, on the measured joint rate
+  double torque_limit = 0.0;   // |tau| bound, N·m (N); 0 = the joint's effort limit, or unlimited
+  double feedforward = 0.0;    // f_i: gain on the rigid arm's inverse dynamics less gravity (1 = full)
+  double gravity_compensation = 0.0;  // f_g: gain on the rigid arm's gravity torques at the reference
+  NotchSpec notch;             // on this joint's reference or feedback; omega_z 0 = this joint's resonances
+  ShaperSpec shaper;           // on this joint's reference; frequency 0 = the arm's first resonance
+};
+
+// Where a waypoint goes: joint values by name (the others keep the previous waypoint's), or a tool
+// position reached by inverse kinematics at plan time.
+struct ArmWaypoint {
+  double time = 0.0;                 // arrival, s from the start
+  std::vector<std::pair<std::string, double>> joints;  // joint name -> rad (m)
+  bool cartesian = false;            // `tool` set: solve for the actuated joints
+  Vec3 tool = Vec3::Zero();          // the tool point's target in the base frame, m
+  int line = 0;                      // where it is written, for errors
+};
+
+struct ArmSpec {
+  std::string source;                // the file, for errors
+  std::string description;
+  TreeDescription tree;
+  std::string tool_body;             // the end effector's body ("" = the last body; a flexible link's tip)
+  Vec3 tool_point = Vec3::Zero();    // in that body's frame (a flexible link: from its tip point), m
+  bool tool_point_given = false;
+  double rate = 1000.0;              // controller sample rate, Hz
+  std::vector<JointControlSpec> joints;  // the actuated joints, in file order
+  TrajectoryShape shape = TrajectoryShape::kQuintic;
+  std::vector<ArmWaypoint> waypoints;
+  double duration = 0.0;             // s; 0 = the last waypoint's time plus `settle`
+  double settle = 5.0;               // s after the last waypoint when duration is 0
+  Integrator integrator = Integrator::kRk4;
+  bool integrator_given = false;     // default: sdirk2 with a flexible link, rk4 without
+  int substeps = 0;                  // per control period; 0 = from the modes
+  double band = 0.02;                // settling band, fraction of each move's amplitude
+};
+
+// A flexible link's tip, for its deflection.
+struct LinkTip {
+  std::string name;
+  int root_body = -1;                // the root segment (its frame is the undeformed link's)
+  int tip_body = -1;
+  Vec3 tip_point = Vec3::Zero();     // in the tip body's frame, m
+  Vec3 rigid_tip = Vec3::Zero();     // where the straight link's tip sits in the root body's frame, m
+  std::vector<int> elastic_dofs;
+};
+
+// One actuated joint, derived.
+struct ActuatedJoint {
+  std::string name;
+  int dof = -1;
+  JointControlSpec control;
+  double torque_limit = 0.0;         // in use (0 = unlimited)
+  std::vector<Biquad> notch;         // sections; empty when off
+  bool notch_on_feedback = false;
+  std::vector<Impulse> shaper;       // one of amplitude 1 at 0 when off
+};
+
+struct ArmModel {
+  ArmSpec spec;
+  Tree tree;
+  std::vector<ActuatedJoint> actuated;  // in dof order
+  std::vector<int> passive_dofs;     // every other moving joint (cells, unactuated joints)
+  int tool_body = -1;
+  Vec3 tool_point = Vec3::Zero();    // in tool_body's frame, m
+  std::vector<LinkTip> links;        // the flexible links
+  JointTrajectory trajectory;        // of the actuated joints (their order), start = the initial pose
+  Eigen::VectorXd q0;                // the initial state: actuated joints at the start, elastic dofs at
+                                     // the static sag under gravity with the actuated joints held
+  double control_period = 0.0;       // s
+  double duration = 0.0;             // s
+  int substeps = 1;
+  Integrator integrator = Integrator::kRk4;
+  std::vector<double> resonances;    // closed-loop resonances at q0 (zeta < 0.3), ascending, rad/s
+  double move_end = 0.0;             // the last waypoint's time, s
+};
+
+// Derives and validates the model. Throws ConfigError naming spec.source and the key: an unknown or
+// passive joint given a controller, a joint controlled twice, a waypoint naming an unknown joint or
+// out of time order, an unreachable tool target (the IK's failure), a notch or shaper it cannot design.
+ArmModel make_arm(const ArmSpec& spec);
+
+// The joint reference of the actuated joints at t (their order), shaped by each joint's shaper:
+// r_j(t) = sum_i A_i s_j(t - t_i), and its first two derivatives. `scratch` holds 3 x (actuated
+// joints) doubles. Allocation-free.
+void eval_arm_reference(const ArmModel& m, double t, double* r, double* rd, double* rdd, double* scratch);
+
+// The rigid arm's gravity torques G(q) and inverse dynamics ID(q, qd, qdd) at the actuated joints
+// (the flexible links held straight: their dofs 0), scratch in `ws`.
+struct ArmFeedforward {
+  explicit ArmFeedforward(const Tree& tree);
+  TreeWorkspace ws;
+  Eigen::VectorXd q, qd, qdd, tau, zero;
+};
+void calc_arm_feedforward(const ArmModel& m, const double* r, const double* rd, const double* rdd, double* tau_id,
+                          double* tau_g, ArmFeedforward& ff);
+
+}  // namespace ff

@@ -1,0 +1,49 @@
+// Closed-loop runs of arm models (arm_model.hpp) over lanes: W variants of one shape advanced together
+// by the tree kernel (multibody/lanes.hpp, lane_integrators.hpp), every actuated joint's controller at
+// its sample rate with the torque held between samples (arm_model.hpp gives the law).
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "arm/arm_model.hpp"
+#include "kernel/batch.hpp"  // LaneStatus
+
+namespace ff {
+
+// One lane's signals at every controller sample (column 0 is the time `t`, s), sampled at the instant
+// before that sample's torque is applied; the torque columns hold the torque applied from it on.
+//   <joint>.ref, <joint>.q, <joint>.qd, <joint>.torque    per actuated joint (rad, rad/s, N·m; prismatic m, N)
+//   tool.x, tool.y, tool.z, tool.ref_x, tool.ref_y, tool.ref_z   the tool point and where the rigid arm
+//                                                        at the reference puts it, base frame, m
+//   <link>.deflection_y, <link>.deflection_z             a flexible link's tip from the straight link's
+//                                                        tip, in the link's root frame, m
+struct ArmTrace {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> columns;  // (names) x (samples)
+  const std::vector<double>& column(const std::string& name) const;  // throws std::out_of_range
+  const std::vector<double>& t() const { return columns.front(); }
+};
+
+struct ArmRun {
+  std::vector<ArmTrace> traces;      // (W)
+  std::vector<LaneStatus> status;    // (W)
+};
+
+// Why arms a and b cannot share a batch ("" when they can): their trees differ in topology, or their
+// actuated joints, rate, duration, substeps, integrator or notch sections differ.
+std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b);
+
+// The trace's column names for an arm.
+std::vector<std::string> arm_trace_names(const ArmModel& m);
+
+// Runs every lane to its duration. Throws std::invalid_argument when the lanes' shapes differ.
+// A lane whose state stops being finite is frozen with the status kNonfinite (its trace NaN from then).
+ArmRun simulate_arms(std::span<const ArmModel> lanes);
+
+// Writes a trace as CSV (a header of its names, one row per sample), atomically; reads it back.
+void write_arm_trace_csv(const ArmTrace& trace, const std::string& path);
+ArmTrace read_arm_trace_csv(const std::string& path);
+
+}  // namespace ff

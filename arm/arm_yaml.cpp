@@ -1,0 +1,271 @@
+// Arm model files (arm_yaml.hpp). Each block's keys are one field table below.
+#include "arm/arm_yaml.hpp"
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "description/tree_yaml.hpp"
+#include "description/urdf.hpp"
+#include "kernel/errors.hpp"
+
+namespace ff {
+
+namespace {
+
+// The top level beyond the tree.
+struct TopBlock {
+  std::string description, urdf, sidecar;
+  Vec3 gravity{0.0, 0.0, -9.81};
+};
+const std::array<Field<TopBlock>, 4> kTopFields{{
+    {.key = "description", .member = &TopBlock::description, .fallback = "\"\""},
+    {.key = "urdf", .member = &TopBlock::urdf, .fallback = "none: the tree is `bodies`"},
+    {.key = "sidecar", .member = &TopBlock::sidecar, .fallback = "none"},
+    {.key = "gravity", .member = &TopBlock::gravity, .unit = "m/s²"},
+}};
+
+const std::array<Field<ArmSpec>, 2> kToolFields{{
+    {.key = "body", .member = &ArmSpec::tool_body, .fallback = "the last body (a flexible link: its tip)"},
+    {.key = "point", .member = &ArmSpec::tool_point, .unit = "m"},
+}};
+
+const std::array<Field<ArmSpec>, 1> kControllerFields{{
+    {.key = "rate", .member = &ArmSpec::rate, .unit = "Hz", .bound = Bound::kPositive},
+}};
+
+const std::array<Field<JointControlSpec>, 6> kGainFields{{
+    {.key = "kp", .member = &JointControlSpec::kp, .unit = "N·m/rad (N/m)", .bound = Bound::kNonNegative},
+    {.key = "ki", .member = &JointControlSpec::ki, .unit = "N·m/(rad·s)", .bound = Bound::kNonNegative},
+    {.key = "kd", .member = &JointControlSpec::kd, .unit = "N·m·s/rad", .bound = Bound::kNonNegative},
+    {.key = "torque_limit", .member = &JointControlSpec::torque_limit, .unit = "N·m (N)", .bound = Bound::kNonNegative,
+     .fallback = "0: the joint's effort limit, or none"},
+    {.key = "feedforward", .member = &JointControlSpec::feedforward, .bound = Bound::kNonNegative},
+    {.key = "gravity_compensation", .member = &JointControlSpec::gravity_compensation, .bound = Bound::kNonNegative},
+}};
+
+const std::array<Field<NotchSpec>, 3> kNotchFields{{
+    {.key = "enabled", .member = &NotchSpec::enabled},
+    {.key = "placement", .member = &NotchSpec::placement},
+    {.key = "order", .member = &NotchSpec::order, .bound = Bound::kPositive},
+}};
+
+const std::array<Field<ShaperSpec>, 4> kShaperFields{{
+    {.key = "type", .member = &ShaperSpec::type},
+    {.key = "frequency", .member = &ShaperSpec::frequency, .unit = "rad/s", .bound = Bound::kNonNegative,
+     .fallback = "0: the arm's first closed-loop resonance"},
+    {.key = "damping", .member = &ShaperSpec::damping, .fallback = "-1: that resonance's"},
+    {.key = "vtol", .member = &ShaperSpec::vtol, .bound = Bound::kPositive},
+}};
+
+struct TrajectoryBlock {
+  std::string shape = "quintic";
+};
+const std::array<Field<TrajectoryBlock>, 1> kTrajectoryFields{{
+    {.key = "shape", .member = &TrajectoryBlock::shape},
+}};
+const std::array<Field<ArmWaypoint>, 2> kWaypointFields{{
+    {.key = "time", .member = &ArmWaypoint::time, .unit = "s", .required = true, .bound = Bound::kPositive},
+    {.key = "tool", .member = &ArmWaypoint::tool, .unit = "m", .fallback = "none: `joints`"},
+}};
+
+struct SimulationBlock {
+  std::string integrator = "auto";
+};
+const std::array<Field<ArmSpec>, 3> kSimulationFields{{
+    {.key = "duration", .member = &ArmSpec::duration, .unit = "s", .bound = Bound::kNonNegative,
+     .fallback = "0: the last waypoint + settle"},
+    {.key = "settle", .member = &ArmSpec::settle, .unit = "s", .bound = Bound::kNonNegative},
+    {.key = "substeps", .member = &ArmSpec::substeps, .bound = Bound::kNonNegative, .fallback = "0: from the modes"},
+}};
+const std::array<Field<SimulationBlock>, 1> kIntegratorFields{{
+    {.key = "integrator", .member = &SimulationBlock::integrator,
+     .fallback = "auto: sdirk2 with a flexible link, rk4 without"},
+}};
+
+const std::array<Field<ArmSpec>, 1> kMetricsFields{{
+    {.key = "band", .member = &ArmSpec::band, .bound = Bound::kPositive},
+}};
+
+std::string resolve(const std::string& source, const std::string& path) {
+  if (path.empty() || std::filesystem::path(path).is_absolute()) return path;
+  return (std::filesystem::path(source).parent_path() / path).lexically_normal().string();
+}
+
+void read_notch(YamlReader& r, NotchSpec& n) {
+  read_present(r, kNotchFields, n);
+  // The pairs (one number means both) of sections 1 and 2.
+  r.optional_array("alpha", n.alpha, 2);
+  r.optional_array("zeta", n.zeta, 2);
+  r.optional_array("omega_z", n.omega_z, 2);
+  if (n.placement != "reference" && n.placement != "feedback")
+    r.fail("placement", "unknown placement '" + n.placement + "' (reference, feedback)");
+  if (n.order > 8) r.fail("order", "must be between 1 and 8, got " + std::to_string(n.order));
+  for (int i = 0; i < 2; ++i) {
+    if (!(n.alpha[i] > 0.0)) r.fail("alpha", "must be > 0");
+    if (!(n.zeta[i] > 0.0)) r.fail("zeta", "must be > 0");
+    if (n.omega_z[i] < 0.0) r.fail("omega_z", "must be >= 0");
+  }
+  if ((n.omega_z[0] > 0) != (n.omega_z[1] > 0)) r.fail("omega_z", "give both zero frequencies or neither");
+}
+
+void read_shaper(YamlReader& r, ShaperSpec& s) {
+  read_present(r, kShaperFields, s);
+  if (s.type != "none" && s.type != "zv" && s.type != "zvd" && s.type != "ei")
+    r.fail("type", "unknown shaper '" + s.type + "' (none, zv, zvd, ei)");
+  if (!(s.damping < 1.0)) r.fail("damping", "must be < 1 (negative = the resonance's)");
+  if (!(s.vtol < 0.5)) r.fail("vtol", "must be in (0, 0.5)");
+}
+
+TreeDescription read_tree(YamlReader& top, const YAML::Node& doc, const TopBlock& tb, const std::string& source) {
+  if (!tb.urdf.empty()) {
+    if (top.has("bodies")) top.fail("bodies", "give the tree either as `bodies` or as `urdf`, not both");
+    TreeDescription d = load_urdf(resolve(source, tb.urdf), resolve(source, tb.sidecar));
+    d.spec.gravity = tb.gravity;
+    return d;
+  }
+  if (!tb.sidecar.empty()) top.fail("sidecar", "a sidecar belongs to a `urdf`");
+  if (!top.has("bodies")) top.fail("bodies", "missing: the tree's bodies (or a `urdf`)");
+  top.raw("bodies");
+  YAML::Node tree;
+  if (doc["gravity"]) tree["gravity"] = doc["gravity"];
+  tree["bodies"] = doc["bodies"];
+  return parse_tree_yaml(tree, source);
+}
+
+}  // namespace
+
+bool is_arm_document(const YAML::Node& doc) { return doc && doc.IsMap() && (doc["bodies"] || doc["urdf"]); }
+
+ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
+  LineMap lines;
+  YamlReader top(doc, source, "", &lines);
+  if (!doc || !doc.IsMap()) top.fail("bodies", "expected a map with `bodies` or `urdf`");
+  ArmSpec s;
+  s.source = source;
+  TopBlock tb;
+  read_present(top, kTopFields, tb);
+  s.description = tb.description;
+  s.tree = read_tree(top, doc, tb, source);
+
+  YamlReader tool = top.child("tool");
+  read_present(tool, kToolFields, s);
+  s.tool_point_given = tool.has("point");
+  tool.finish();
+
+  YamlReader controller = top.child("controller");
+  read_present(controller, kControllerFields, s);
+  controller.finish();
+
+  // joints: a map from joint name to its control, in file order.
+  const YAML::Node joints = top.raw("joints");
+  if (joints && !joints.IsMap() && !joints.IsNull()) top.fail("joints", "expected a map from joint name to its control");
+  if (joints && joints.IsMap()) {
+    YamlReader jr(joints, source, "joints", &lines);
+    for (const auto& kv : joints) {
+      const std::string name = kv.first.as<std::string>();
+      YamlReader one = jr.child(name);
+      JointControlSpec c;
+      c.joint = name;
+      YamlReader gains = one.child("controller");
+      read_present(gains, kGainFields, c);
+      gains.finish();
+      YamlReader notch = one.child("notch");
+      read_notch(notch, c.notch);
+      notch.finish();
+      YamlReader shaper = one.child("shaper");
+      read_shaper(shaper, c.shaper);
+      shaper.finish();
+      one.finish();
+      if (!s.tree.dof_index.count(name)) {
+        std::string known;
+        for (const auto& [n, j] : s.tree.dof_index)
+          if (n.find(".cell") == std::string::npos) known += (known.empty() ? "" : ", ") + n;
+        jr.fail(name, "no moving joint of that name (joints: " + known + ")");
+      }
+      s.joints.push_back(c);
+    }
+    jr.finish();
+  }
+
+  YamlReader trajectory = top.child("trajectory");
+  TrajectoryBlock trb;
+  read_present(trajectory, kTrajectoryFields, trb);
+  if (trb.shape == "cubic") s.shape = TrajectoryShape::kCubic;
+  else if (trb.shape == "quintic") s.shape = TrajectoryShape::kQuintic;
+  else trajectory.fail("shape", "unknown shape '" + trb.shape + "' (cubic, quintic)");
+  std::vector<YamlReader> waypoints = trajectory.sequence("waypoints");
+  trajectory.finish();
+  double previous = 0.0;
+  for (YamlReader& w : waypoints) {
+    ArmWaypoint wp;
+    wp.line = w.line();
+    read_present(w, kWaypointFields, wp);
+    wp.cartesian = w.has("tool");
+    const YAML::Node jv = w.raw("joints");
+    if (jv) {
+      if (!jv.IsMap()) w.fail("joints", "expected a map from joint name to its value (rad or m)");
+      YamlReader vr(jv, source, w.full_key("joints"), &lines);
+      for (const auto& kv : jv) {
+        const std::string name = kv.first.as<std::string>();
+        double value = 0.0;
+        vr.optional(name, value);
+        wp.joints.emplace_back(name, value);
+      }
+      vr.finish();
+    }
+    w.finish();
+    require(w, kWaypointFields);
+    if (wp.cartesian && jv) w.fail("tool", "a waypoint is either a tool position or joint values, not both");
+    if (!wp.cartesian && !jv) w.fail("joints", "missing: the joint values (or a `tool` position)");
+    if (!(wp.time > previous)) w.fail("time", "waypoints must be in time order, each after the one before");
+    previous = wp.time;
+    s.waypoints.push_back(std::move(wp));
+  }
+
+  YamlReader sim = top.child("simulation");
+  read_present(sim, kSimulationFields, s);
+  SimulationBlock sb;
+  read_present(sim, kIntegratorFields, sb);
+  sim.finish();
+  s.integrator_given = sb.integrator != "auto";
+  if (sb.integrator == "rk4") s.integrator = Integrator::kRk4;
+  else if (sb.integrator == "sdirk2") s.integrator = Integrator::kSdirk2;
+  else if (sb.integrator == "midpoint") s.integrator = Integrator::kMidpoint;
+  else if (sb.integrator != "auto")
+    sim.fail("integrator", "unknown integrator '" + sb.integrator + "' (auto, rk4, midpoint, sdirk2)");
+  if (s.substeps > 100000) sim.fail("substeps", "must be between 0 (automatic) and 100000");
+
+  YamlReader metrics = top.child("metrics");
+  read_present(metrics, kMetricsFields, s);
+  metrics.finish();
+  if (!(s.band < 1.0)) metrics.fail("band", "must be in (0, 1)");
+  top.finish();
+  return s;
+}
+
+ArmModel parse_arm(const YAML::Node& doc, const std::string& source) { return make_arm(parse_arm_spec(doc, source)); }
+
+std::vector<KeyDoc> arm_yaml_keys() {
+  std::vector<KeyDoc> out;
+  add_keys(out, "", kTopFields);
+  add_keys(out, "tool.", kToolFields);
+  add_keys(out, "controller.", kControllerFields);
+  add_keys(out, "joints.NAME.controller.", kGainFields);
+  add_keys(out, "joints.NAME.notch.", kNotchFields);
+  const NotchSpec n{};
+  out.push_back({"joints.NAME.notch.alpha", "", "no", "[" + format_key_number(n.alpha[0]) + ", " + format_key_number(n.alpha[1]) + "]"});
+  out.push_back({"joints.NAME.notch.zeta", "", "no", "[" + format_key_number(n.zeta[0]) + ", " + format_key_number(n.zeta[1]) + "]"});
+  out.push_back({"joints.NAME.notch.omega_z", "rad/s", "no", "[0, 0]: this joint's closed-loop resonances"});
+  add_keys(out, "joints.NAME.shaper.", kShaperFields);
+  add_keys(out, "trajectory.", kTrajectoryFields);
+  add_keys(out, "trajectory.waypoints[i].", kWaypointFields);
+  out.push_back({"trajectory.waypoints[i].joints", "rad (m)", "no", "none: `tool`"});
+  add_keys(out, "simulation.", kSimulationFields);
+  add_keys(out, "simulation.", kIntegratorFields);
+  add_keys(out, "metrics.", kMetricsFields);
+  return out;
+}
+
+}  // namespace ff

@@ -1,0 +1,181 @@
+// arm/: the per-joint control law against closed forms (a held pendulum's droop kp e = m g l cos q; an
+// exact feed-forward tracks with no error but the hold's), a Cartesian waypoint reached through the
+// IK, a cantilevered flexible link's initial sag against Euler-Bernoulli, a variant's bits the same in
+// any lane of any batch, the metrics of a known trace, and the file's errors at their lines.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "arm/arm_metrics.hpp"
+#include "arm/arm_simulate.hpp"
+#include "arm/arm_yaml.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/yaml_reader.hpp"
+
+namespace ff {
+namespace {
+
+ArmModel arm_from(const std::string& text) { return parse_arm(load_yaml_text(text, "arm.yaml"), "arm.yaml"); }
+
+std::string arm_error(const std::string& text) {
+  try {
+    arm_from(text);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// A 2 kg bob 0.5 m out on a hinge about y (gravity -z: at q = 0 the arm is horizontal), rotor 0.05.
+std::string pendulum(const std::string& controller, const std::string& waypoints = "") {
+  return R"(gravity: [0, 0, -9.81]
+bodies:
+  - name: arm
+    parent: base
+    mass: 2.0
+    com: [0.5, 0, 0]
+    inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01}
+    joint: {type: revolute, axis: [0, 1, 0], armature: 0.05}
+tool: {body: arm, point: [0.5, 0, 0]}
+controller: {rate: 1000}
+joints:
+  arm:
+    controller: )" + controller + "\n" + waypoints + "simulation: {duration: 6.0}\n";
+}
+
+TEST(ArmControl, APdHeldPendulumDroopsUntilKpTimesTheErrorCarriesItsWeight) {
+  // Static balance at the end: kp (0 - q) = m g l cos q about y (+q turns x towards -z: down).
+  const double kp = 400.0, m = 2.0, g = 9.81, l = 0.5;
+  const ArmModel arm = arm_from(pendulum("{kp: 400, kd: 40}"));
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&arm, 1));
+  ASSERT_EQ(run.status[0], LaneStatus::kOk);
+  const double q = run.traces[0].column("arm.q").back();
+  EXPECT_GT(q, 0.02);  // m g l / kp = 0.0245 rad
+  EXPECT_NEAR(-kp * q + m * g * l * std::cos(q), 0.0, 1e-6 * m * g * l);
+  // With gravity compensation at the reference it holds the reference.
+  const ArmModel held = arm_from(pendulum("{kp: 400, kd: 40, gravity_compensation: 1}"));
+  const ArmRun run2 = simulate_arms(std::span<const ArmModel>(&held, 1));
+  EXPECT_NEAR(run2.traces[0].column("arm.q").back(), 0.0, 1e-9);
+}
+
+TEST(ArmControl, TheRigidArmsInverseDynamicsFedForwardTracksAQuinticMoveToTheHoldsError) {
+  // RNEA feed-forward (one algorithm) driving the ABA plant (another): only the zero-order hold's
+  // error remains, O(T) of the move; without it PD lags by tenths of a radian.
+  const std::string move = "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 1.2}}\n";
+  const ArmModel ff = arm_from(pendulum("{kp: 400, kd: 40, feedforward: 1, gravity_compensation: 1}", move));
+  const ArmModel pd = arm_from(pendulum("{kp: 400, kd: 40}", move));
+  const ArmRun a = simulate_arms(std::span<const ArmModel>(&ff, 1));
+  const ArmRun b = simulate_arms(std::span<const ArmModel>(&pd, 1));
+  auto peak_error = [](const ArmTrace& tr) {
+    double e = 0.0;
+    for (std::size_t k = 0; k < tr.t().size(); ++k)
+      e = std::max(e, std::abs(tr.column("arm.q")[k] - tr.column("arm.ref")[k]));
+    return e;
+  };
+  const double e_ff = peak_error(a.traces[0]), e_pd = peak_error(b.traces[0]);
+  RecordProperty("feedforward_peak_error_rad", std::to_string(e_ff));
+  RecordProperty("pd_peak_error_rad", std::to_string(e_pd));
+  EXPECT_LT(e_ff, 2e-3);
+  EXPECT_GT(e_pd, 0.05);
+}
+
+TEST(ArmControl, ACartesianWaypointIsReachedThroughTheInverseKinematics) {
+  // A 2R arm in the horizontal plane (gravity along the joint axes: no load): the tool goes to (0.3, 0.5).
+  const std::string text = R"(gravity: [0, 0, -9.81]
+bodies:
+  - {name: upper, parent: base, mass: 1.0, com: [0.3, 0, 0], inertia: {ixx: 0.001, iyy: 0.03, izz: 0.03}, joint: {armature: 0.02}}
+  - {name: fore, parent: upper, mass: 0.5, com: [0.25, 0, 0], inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01}, joint: {position: [0.6, 0, 0], armature: 0.01}}
+tool: {body: fore, point: [0.5, 0, 0]}
+joints:
+  upper: {controller: {kp: 200, kd: 20, feedforward: 1}}
+  fore: {controller: {kp: 100, kd: 10, feedforward: 1}}
+trajectory:
+  waypoints:
+    - {time: 1.5, tool: [0.3, 0.5, 0]}
+simulation: {settle: 3}
+)";
+  const ArmModel arm = arm_from(text);
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&arm, 1));
+  const ArmTrace& tr = run.traces[0];
+  EXPECT_NEAR(tr.column("tool.ref_x").back(), 0.3, 1e-8);
+  EXPECT_NEAR(tr.column("tool.ref_y").back(), 0.5, 1e-8);
+  EXPECT_NEAR(tr.column("tool.x").back(), 0.3, 1e-5);
+  EXPECT_NEAR(tr.column("tool.y").back(), 0.5, 1e-5);
+  const std::vector<double> v = calc_arm_metrics(arm, tr, run.status[0]);
+  const std::vector<std::string> c = arm_metric_columns(arm);
+  const auto at = [&](const std::string& name) { return v[static_cast<std::size_t>(std::find(c.begin(), c.end(), name) - c.begin())]; };
+  EXPECT_LT(at("tool_final_error_m"), 1e-5);
+  EXPECT_GE(at("tool_settling_s"), 0.0);
+  EXPECT_EQ(calc_arm_status(run.status[0], c, v), "ok");
+  // Out of reach (|p| = 1.2 m > 1.1 m): the IK's failure is the waypoint's error.
+  std::string far = text;
+  far.replace(far.find("[0.3, 0.5, 0]"), 13, "[1.2, 0.0, 0]");
+  EXPECT_NE(arm_error(far).find("arm.yaml:11: trajectory.waypoints[0].tool: the tool cannot reach it"), std::string::npos)
+      << arm_error(far);
+}
+
+TEST(ArmModel, ACantileveredFlexibleLinkStartsAtItsStaticSagUnderGravity) {
+  // A horizontal steel strip, 1 m, 40 x 5 mm, flat side up (bends about y), held by its actuated root
+  // (a motor with a rotor: without one the PD's kd/J on the root segment alone is far beyond 1/T):
+  // its tip sags q L^4 / (8 E I) (Euler-Bernoulli), to the lumping's O(1/N^2) at N = 24.
+  const double L = 1.0, b = 0.04, t = 0.005, E = 200e9, rho = 7850.0, g = 9.81;
+  const double A = b * t, I_y = b * t * t * t / 12.0;
+  const std::string text = R"(gravity: [0, 0, -9.81]
+bodies:
+  - name: beam
+    parent: base
+    joint: {axis: [0, 1, 0], armature: 0.1}
+    flexible:
+      length: 1.0
+      segments: 24
+      torsion: false
+      section: {E: 200e9, G: 80e9, density: 7850, area: 2.0e-4, I_y: 4.1666666666666667e-10, I_z: 2.6666666666666667e-8, J: 1e-9}
+joints:
+  beam: {controller: {kp: 1000, kd: 10}}
+simulation: {duration: 0.01}
+)";
+  const ArmModel arm = arm_from(text);
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&arm, 1));
+  const double sag = -run.traces[0].column("beam.deflection_z").front();
+  const double exact = rho * A * g * std::pow(L, 4) / (8.0 * E * I_y);
+  RecordProperty("sag_relative_error", std::to_string(sag / exact - 1.0));
+  EXPECT_NEAR(sag / exact, 1.0, 5e-3);
+  const std::vector<double> v = calc_arm_metrics(arm, run.traces[0], run.status[0]);
+  const std::vector<std::string> c = arm_metric_columns(arm);
+  EXPECT_NEAR(v[static_cast<std::size_t>(std::find(c.begin(), c.end(), "beam_sag_m") - c.begin())], sag, 1e-15);
+}
+
+TEST(ArmSimulate, AVariantGivesTheSameBitsAloneAndInAnyLaneOfABatch) {
+  const std::string move = "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.8}}\n";
+  std::vector<ArmModel> lanes;
+  for (const char* c : {"{kp: 300, kd: 30, ki: 20}", "{kp: 400, kd: 40, feedforward: 1}", "{kp: 500, kd: 20, torque_limit: 30}"})
+    lanes.push_back(arm_from(pendulum(c, move)));
+  const ArmRun together = simulate_arms(lanes);
+  for (std::size_t l = 0; l < lanes.size(); ++l) {
+    const ArmRun alone = simulate_arms(std::span<const ArmModel>(&lanes[l], 1));
+    EXPECT_EQ(alone.traces[0].columns, together.traces[l].columns) << "lane " << l;
+  }
+  std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
+  const ArmRun back = simulate_arms(reversed);
+  EXPECT_EQ(back.traces[0].columns, together.traces[2].columns);
+}
+
+TEST(ArmYaml, AnUnknownJointAPassiveWaypointAndABadBlockAreNamedAtTheirLines) {
+  EXPECT_EQ(arm_error(pendulum("{kp: 400, kq: 1}")), "arm.yaml:13: joints.arm.controller.kq: unknown key");
+  std::string text = pendulum("{kp: 400}");
+  text.replace(text.find("  arm:\n    controller"), 6, "  elbow:");
+  EXPECT_NE(arm_error(text).find("arm.yaml:12: joints.elbow: no moving joint of that name"), std::string::npos)
+      << arm_error(text);
+  EXPECT_NE(arm_error(pendulum("{kp: -1}")).find("joints.arm.controller.kp: must be >= 0"), std::string::npos);
+  EXPECT_NE(arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {wrist: 1}}\n"))
+                .find("arm.yaml:16: trajectory.waypoints[0].joints.wrist: no moving joint of that name"),
+            std::string::npos)
+      << arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {wrist: 1}}\n"));
+  EXPECT_NE(arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 2.0, joints: {arm: 1}}\n    - {time: 1.0, joints: {arm: 0}}\n"))
+                .find("trajectory.waypoints[1].time: waypoints must be in time order"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace ff
