@@ -11,7 +11,9 @@
 #include "kernel/errors.hpp"
 #include "kernel/files.hpp"
 #include "kernel/modes.hpp"
+#include "multibody/algorithms.hpp"
 #include "multibody/modes.hpp"
+#include "arm/arm_model.hpp"
 
 namespace ff {
 
@@ -39,12 +41,8 @@ int dof_of(const TreeDescription& d, const std::string& name, const std::string&
   throw ConfigError(option, 0, name, "no moving joint of that name (joints: " + known + ")");
 }
 
-// Modes of a tree description at a pose (--at JOINT=VALUE, the rest at 0), --lock JOINT held.
-void tree_modes(const std::string& path, const std::string& sidecar, const std::vector<std::string>& at,
-                const std::vector<std::string>& lock, int count, const std::string& shapes) {
-  const TreeDescription d = load_tree_description(path, sidecar);
-  const Tree tree = make_tree(d.spec);
-  Eigen::VectorXd q0 = Eigen::VectorXd::Zero(tree.nv());
+// The pose --at JOINT=VALUE sets (on top of `q0`).
+Eigen::VectorXd parse_pose(const TreeDescription& d, Eigen::VectorXd q0, const std::vector<std::string>& at) {
   for (const std::string& a : at) {
     const auto eq = a.find('=');
     if (eq == std::string::npos) throw ConfigError("--at", 0, a, "expected JOINT=VALUE");
@@ -57,16 +55,15 @@ void tree_modes(const std::string& path, const std::string& sidecar, const std::
       throw ConfigError("--at", 0, a, "expected a finite number after '=' (rad or m)");
     }
   }
-  TreeModeOptions options;
-  for (const std::string& name : lock) options.locked_dofs.push_back(dof_of(d, name, "--lock"));
-  const std::vector<TreeMode> modes = calc_tree_modes(tree, q0, options);
-  std::printf("tree %s: %d bodies, %d moving joints (%zu locked), gravity (%.4g, %.4g, %.4g) m/s^2\n", path.c_str(),
-              tree.num_bodies(), tree.nv(), options.locked_dofs.size(), tree.gravity()[0], tree.gravity()[1],
-              tree.gravity()[2]);
+  return q0;
+}
+
+// One table of linearised modes.
+void print_tree_modes(const char* title, const std::vector<TreeMode>& modes, int count) {
   // A mode whose omega is round-off of zero (below 1e-9 of the largest) is motion nothing resists.
   double wmax = 0.0;
   for (const TreeMode& m : modes) wmax = std::max(wmax, m.omega_n);
-  std::printf("linearised modes:\n  %-4s %12s %12s %10s\n", "mode", "f (Hz)", "omega (rad/s)", "zeta");
+  std::printf("%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
   for (std::size_t k = 0; k < modes.size() && static_cast<int>(k) < count; ++k) {
     const TreeMode& m = modes[k];
     if (m.oscillatory)
@@ -80,9 +77,11 @@ void tree_modes(const std::string& path, const std::string& sidecar, const std::
       std::printf("  %-4zu %12s %12.4f %10s   real pole, time constant %.4g s\n", k + 1, "-", m.omega_n, "-",
                   1.0 / m.omega_n);
   }
-  if (shapes.empty()) return;
-  // One row per mode: its frequency, damping and the joint coordinates of its shape.
-  std::vector<std::string> names(static_cast<std::size_t>(tree.nv()));
+}
+
+// One row per mode: its frequency, damping and the joint coordinates of its shape.
+void write_mode_shapes(const TreeDescription& d, const std::vector<TreeMode>& modes, int nv, const std::string& path) {
+  std::vector<std::string> names(static_cast<std::size_t>(nv));
   for (const auto& [n, j] : d.dof_index) names[static_cast<std::size_t>(j)] = n;
   std::ostringstream out;
   out.precision(10);
@@ -92,11 +91,98 @@ void tree_modes(const std::string& path, const std::string& sidecar, const std::
   for (std::size_t k = 0; k < modes.size(); ++k) {
     const TreeMode& m = modes[k];
     out << k + 1 << ',' << m.omega_n << ',' << m.frequency_hz() << ',' << m.zeta << ',' << (m.oscillatory ? 1 : 0);
-    for (int j = 0; j < tree.nv(); ++j) out << ',' << m.shape[j];
+    for (int j = 0; j < nv; ++j) out << ',' << m.shape[j];
     out << '\n';
   }
-  write_file_atomic(shapes, out.str());
-  std::printf("mode shapes: %s\n", shapes.c_str());
+  write_file_atomic(path, out.str());
+  std::printf("mode shapes: %s\n", path.c_str());
+}
+
+struct ModesOptions {
+  std::vector<std::string> at, lock;
+  int count = 6;
+  std::string shapes;
+  bool statics = false;
+};
+
+void print_tree_header(const std::string& path, const Tree& tree, std::size_t locked) {
+  std::printf("tree %s: %d bodies, %d moving joints (%zu locked), gravity (%.4g, %.4g, %.4g) m/s^2\n", path.c_str(),
+              tree.num_bodies(), tree.nv(), locked, tree.gravity()[0], tree.gravity()[1], tree.gravity()[2]);
+}
+
+// Modes of a URDF at a pose (--at JOINT=VALUE, the rest at 0), --lock JOINT held.
+void urdf_modes(const std::string& path, const std::string& sidecar, const ModesOptions& o) {
+  const TreeDescription d = load_tree_description(path, sidecar);
+  const Tree tree = make_tree(d.spec);
+  const Eigen::VectorXd q0 = parse_pose(d, Eigen::VectorXd::Zero(tree.nv()), o.at);
+  TreeModeOptions options;
+  for (const std::string& name : o.lock) options.locked_dofs.push_back(dof_of(d, name, "--lock"));
+  const std::vector<TreeMode> modes = calc_tree_modes(tree, q0, options);
+  print_tree_header(path, tree, options.locked_dofs.size());
+  print_tree_modes("linearised modes:", modes, o.count);
+  if (!o.shapes.empty()) write_mode_shapes(d, modes, tree.nv(), o.shapes);
+}
+
+// Modes of an arm model (or a tree YAML) at a pose: its joints there (--at, else the start), its
+// flexible links at their static sag under gravity. Without actuated joints: the tree's modes
+// (--lock held). With them: clamped (the actuated joints locked too) and in the closed loop (their PD
+// gains added); --static prints the sag of each link tip and of the tool.
+void arm_modes(const std::string& path, const std::vector<std::string>& sets, const ModesOptions& o) {
+  const ArmModel arm = load_arm_with(path, sets);
+  const TreeDescription& d = arm.spec.tree;
+  const Tree& tree = arm.tree;
+  const int nv = tree.nv();
+  Eigen::VectorXd start = arm.q0;
+  for (const LinkTip& l : arm.links)
+    for (int j : l.elastic_dofs) start[j] = 0.0;
+  const StaticEquilibriumResult sag = calc_arm_sag(arm, parse_pose(d, start, o.at));
+  if (!sag.converged()) std::printf("static sag not found (%s): linearised at the straight links\n", sag.message.c_str());
+  const Eigen::VectorXd& q0 = sag.q;
+  TreeModeOptions options;
+  for (const std::string& name : o.lock) options.locked_dofs.push_back(dof_of(d, name, "--lock"));
+  print_tree_header(path, tree, options.locked_dofs.size());
+  std::vector<TreeMode> modes;
+  if (arm.actuated.empty()) {
+    modes = calc_tree_modes(tree, q0, options);
+    print_tree_modes("linearised modes:", modes, o.count);
+  } else {
+    TreeModeOptions clamped = options;
+    for (const ActuatedJoint& a : arm.actuated)
+      if (std::find(clamped.locked_dofs.begin(), clamped.locked_dofs.end(), a.dof) == clamped.locked_dofs.end())
+        clamped.locked_dofs.push_back(a.dof);
+    print_tree_modes("clamped (the actuated joints held):", calc_tree_modes(tree, q0, clamped), o.count);
+    TreeModeOptions loop = options;
+    loop.extra_stiffness = Eigen::MatrixXd::Zero(nv, nv);
+    loop.extra_damping = Eigen::MatrixXd::Zero(nv, nv);
+    for (const ActuatedJoint& a : arm.actuated) {
+      loop.extra_stiffness(a.dof, a.dof) = a.control.kp;
+      loop.extra_damping(a.dof, a.dof) = a.control.kd;
+    }
+    modes = calc_tree_modes(tree, q0, loop);
+    print_tree_modes("closed loop (continuous-time PD on the actuated joints):", modes, o.count);
+    std::printf("fixed-step substeps per control period: %d (h = %.3g ms, %s)\n", arm.substeps,
+                1e3 * arm.control_period / arm.substeps, arm.integrator == Integrator::kRk4 ? "rk4" : "implicit");
+  }
+  if (!o.shapes.empty()) write_mode_shapes(d, modes, nv, o.shapes);
+  if (!o.statics) return;
+  // The sag: each link tip from its straight position (root frame), and the tool from the rigid arm's.
+  std::vector<Pose> poses(static_cast<std::size_t>(tree.num_bodies())), rigid(poses.size());
+  calc_body_poses(tree, q0, poses);
+  Eigen::VectorXd straight = q0;
+  for (const LinkTip& l : arm.links)
+    for (int j : l.elastic_dofs) straight[j] = 0.0;
+  calc_body_poses(tree, straight, rigid);
+  std::printf("static deflection under gravity (%s):\n  %-16s %12s %12s %12s\n",
+              sag.converged() ? "converged" : "not converged", "", "dx (mm)", "dy (mm)", "dz (mm)");
+  for (const LinkTip& l : arm.links) {
+    const Pose& root = poses[static_cast<std::size_t>(l.root_body)];
+    const Vec3 d2 = root.rotation.transpose() * (poses[static_cast<std::size_t>(l.tip_body)].point(l.tip_point) - root.position) - l.rigid_tip;
+    std::printf("  %-16s %12.4f %12.4f %12.4f   (tip, link frame)\n", l.name.c_str(), 1e3 * d2.x(), 1e3 * d2.y(), 1e3 * d2.z());
+  }
+  const Vec3 tool = poses[static_cast<std::size_t>(arm.tool_body)].point(arm.tool_point) -
+                    rigid[static_cast<std::size_t>(arm.tool_body)].point(arm.tool_point);
+  std::printf("  %-16s %12.4f %12.4f %12.4f   (base frame; |sag| %.4f mm)\n", "tool", 1e3 * tool.x(), 1e3 * tool.y(),
+              1e3 * tool.z(), 1e3 * tool.norm());
 }
 
 }  // namespace
@@ -111,6 +197,7 @@ void add_modes_verb(CLI::App& app) {
     int count = 6;
     std::string sidecar, shapes;
     std::vector<std::string> at, lock;
+    bool statics = false;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("model", args->model, "model YAML file, e.g. configs/fbtb.yaml")->required()->check(CLI::ExistingFile);
@@ -121,13 +208,20 @@ void add_modes_verb(CLI::App& app) {
   cmd->add_option("--at", args->at, "tree: the pose, JOINT=VALUE (rad or m; others 0); repeatable");
   cmd->add_option("--lock", args->lock, "tree: hold this joint still (a clamped joint); repeatable");
   cmd->add_option("--shapes", args->shapes, "tree: write every mode's frequency, damping and shape to this CSV");
+  cmd->add_flag("--static", args->statics, "arm: also print the static deflection under gravity at the pose");
   cmd->callback([args] {
+    const ModesOptions o{args->at, args->lock, args->count, args->shapes, args->statics};
+    if (is_arm_model_file(args->model)) {
+      if (!args->sidecar.empty()) throw ConfigError("--sidecar", 0, "", "an arm model names its sidecar in `sidecar:`");
+      return arm_modes(args->model, args->sets, o);
+    }
     if (is_tree_description(args->model)) {
       if (!args->sets.empty())
-        throw ConfigError("--set", 0, args->sets[0], "a tree description has no parameter paths; edit the file");
-      tree_modes(args->model, args->sidecar, args->at, args->lock, args->count, args->shapes);
-      return;
+        throw ConfigError("--set", 0, args->sets[0], "a URDF has no parameter paths; write an arm model that names it");
+      if (args->statics) throw ConfigError("--static", 0, "", "is for arm models (docs/formats.md)");
+      return urdf_modes(args->model, args->sidecar, o);
     }
+    if (args->statics) throw ConfigError("--static", 0, "", "is for arm models (the rig's beam has no gravity load)");
     for (const auto* o : {&args->sidecar, &args->shapes})
       if (!o->empty()) throw ConfigError(*o, 0, "", "--sidecar and --shapes are for tree descriptions");
     if (!args->at.empty() || !args->lock.empty())

@@ -1,7 +1,10 @@
 // flexfarm simulate MODEL.yaml --out DIR: one closed-loop run, its trace, metrics and plots.
+#include <cmath>
 #include <cstdio>
 
 #include "apps/verbs.hpp"
+#include "arm/arm_metrics.hpp"
+#include "arm/arm_simulate.hpp"
 #include "kernel/files.hpp"
 #include "jobs/report.hpp"
 #include "kernel/trajectory.hpp"
@@ -12,6 +15,50 @@
 
 namespace ff {
 
+namespace {
+
+const char* integrator_label(Integrator i) {
+  switch (i) {
+    case Integrator::kSdirk2: return "sdirk2";
+    case Integrator::kMidpoint: return "midpoint";
+    case Integrator::kCvodeDense: return "cvode_dense";
+    case Integrator::kCvodeKlu: return "cvode_klu";
+    default: return "rk4";
+  }
+}
+
+// An arm model (arm/): trace.csv, metrics.csv, table.md (metric | value) and the arm plots.
+void simulate_arm(const std::string& path, const std::vector<std::string>& sets, const std::string& out) {
+  const ArmModel m = load_arm_with(path, sets);
+  std::fprintf(stderr, "simulating %s: %d bodies, %d joints (%zu actuated), %.2f s, %s with %d substeps of %.3g ms\n",
+               path.c_str(), m.tree.num_bodies(), m.tree.nv(), m.actuated.size(), m.duration,
+               integrator_label(m.integrator), m.substeps, 1e3 * m.control_period / m.substeps);
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1));
+  ResultTable table;
+  table.columns = arm_metric_columns(m);
+  ResultRow row;
+  row.label = path;
+  row.values = calc_arm_metrics(m, run.traces[0], run.status[0]);
+  row.status = calc_arm_status(run.status[0], table.columns, row.values);
+  table.rows.push_back(row);
+  std::string md = "| metric | value |\n|---|---|\n";
+  for (std::size_t i = 0; i < table.columns.size(); ++i) {
+    char v[64];
+    std::snprintf(v, sizeof v, "%.6g", row.values[i]);
+    md += "| " + table.columns[i] + " | " + (std::isnan(row.values[i]) ? std::string("not settled") : std::string(v)) + " |\n";
+  }
+  make_directories(out);
+  write_arm_trace_csv(run.traces[0], out + "/trace.csv");
+  write_file_atomic(out + "/metrics.csv", format_results_csv(table));
+  write_file_atomic(out + "/table.md", md);
+  const std::vector<std::string> plots = write_arm_plots(out, {"simulation"}, {&run.traces[0]}, m.spec.description.empty() ? "simulation" : m.spec.description);
+  std::string files = "trace.csv, metrics.csv, table.md";
+  for (const std::string& p : plots) files += ", " + p;
+  std::printf("%s\nstatus: %s\nwrote %s/{%s}\n", md.c_str(), row.status.c_str(), out.c_str(), files.c_str());
+}
+
+}  // namespace
+
 void add_simulate_verb(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "Simulate one model: writes DIR/trace.csv, DIR/metrics.csv, "
                                              "DIR/table.md and plots of tip angle, hub angle, tip deflection, torque");
@@ -20,10 +67,13 @@ void add_simulate_verb(CLI::App& app) {
     std::vector<std::string> sets;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("model", args->model, "model YAML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("model", args->model, "model YAML file: the reference rig's, or an arm's (docs/formats.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "output directory (created)")->required();
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->callback([args] {
+    if (is_arm_model_file(args->model)) return simulate_arm(args->model, args->sets, args->out);
     const Model m = load_model_with(args->model, args->sets);
     std::fprintf(stderr, "simulating %s: N = %d, %.1f s, integrator %s\n", args->model.c_str(), m.nseg, m.duration,
                  integrator_name(m.spec.simulation.integrator));

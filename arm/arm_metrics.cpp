@@ -27,16 +27,23 @@ double peak_abs(const std::vector<double>& y) {
   return p;
 }
 
-// Last exit of e(t) >= 0 from [0, band] after t0, interpolated; NaN when still out at the end.
-double last_exit(const std::vector<double>& t, const std::vector<double>& e, double t0, double band) {
+// Last exit of e(t) >= 0 from [0, band] after t0, interpolated, less t0; NaN (not settled) when it is
+// out at the end or has not stayed in for `dwell` before the end.
+double last_exit(const std::vector<double>& t, const std::vector<double>& e, double t0, double band, double dwell) {
   std::size_t last = t.size();
   for (std::size_t k = 0; k < t.size(); ++k)
     if (t[k] >= t0 && e[k] > band) last = k;
   if (last == t.size()) return 0.0;
   if (last + 1 == t.size()) return std::nan("");
   const double f = (e[last] - band) / (e[last] - e[last + 1]);
-  return std::max(0.0, t[last] + f * (t[last + 1] - t[last]) - t0);
+  const double exit = t[last] + f * (t[last + 1] - t[last]);
+  if (exit > t.back() - dwell) return std::nan("");
+  return std::max(0.0, exit - t0);
 }
+
+// How long a response must stay in its band to count as settled: one period of the slowest
+// closed-loop resonance (the reference rig's rule, results/run_metrics.hpp), 1 s without one.
+double settle_dwell(const ArmModel& m) { return m.resonances.empty() ? 1.0 : 2.0 * M_PI / m.resonances.front(); }
 
 }  // namespace
 
@@ -45,7 +52,7 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
   std::vector<double> v(cols.size(), std::nan(""));
   if (status != LaneStatus::kOk) return v;
   const std::vector<double>& t = tr.t();
-  const double t0 = m.move_end, band = m.spec.band;
+  const double t0 = m.move_end, band = m.spec.band, dwell = settle_dwell(m);
   std::size_t c = 0;
   const std::size_t na = m.actuated.size();
   for (std::size_t j = 0; j < na; ++j) {
@@ -62,7 +69,7 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
     const double final_target = from;
     std::vector<double> e(q.size());
     for (std::size_t k = 0; k < q.size(); ++k) e[k] = std::abs(q[k] - final_target);
-    v[c++] = largest > 0.0 ? last_exit(t, e, t0, band * largest) : 0.0;
+    v[c++] = largest > 0.0 ? last_exit(t, e, t0, band * largest, dwell) : 0.0;
     double over = 0.0;
     if (target != start) {
       const double dir = target > start ? 1.0 : -1.0;
@@ -77,22 +84,25 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
   const std::vector<double>*x[3] = {&tr.column("tool.x"), &tr.column("tool.y"), &tr.column("tool.z")};
   const std::vector<double>*xr[3] = {&tr.column("tool.ref_x"), &tr.column("tool.ref_y"), &tr.column("tool.ref_z")};
   const std::size_t n = t.size();
-  Vec3 goal((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
-  Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
+  // Settling and overshoot about where the tool comes to rest (its last sample, as stepinfo's yfinal):
+  // a flexible arm's tool rests off the rigid target by its sag, which tool_final_error_m reports.
+  const Vec3 goal((*x[0])[n - 1], (*x[1])[n - 1], (*x[2])[n - 1]);
+  const Vec3 target((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
+  const Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
   double largest = 0.0;
   for (std::size_t k = 0; k < n; ++k)
     largest = std::max(largest, (Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k]) - begin).norm());
   std::vector<double> err(n), track(n);
   double over = 0.0;
-  const Vec3 dir = (goal - begin).norm() > 0.0 ? Vec3((goal - begin).normalized()) : Vec3::Zero();
+  const Vec3 dir = (target - begin).norm() > 0.0 ? Vec3((target - begin).normalized()) : Vec3::Zero();
   for (std::size_t k = 0; k < n; ++k) {
     const Vec3 p((*x[0])[k], (*x[1])[k], (*x[2])[k]);
     err[k] = (p - goal).norm();
     track[k] = (p - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
     if (t[k] >= t0) over = std::max(over, dir.dot(p - goal));
   }
-  v[c++] = largest > 0.0 ? last_exit(t, err, t0, band * largest) : 0.0;
-  v[c++] = (goal - begin).norm() > 0.0 ? 100.0 * over / (goal - begin).norm() : 0.0;
+  v[c++] = largest > 0.0 ? last_exit(t, err, t0, band * largest, dwell) : 0.0;
+  v[c++] = (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0;
   v[c++] = peak_abs(track);
   v[c++] = track[n - 1];
   // The flexible links' tips.
@@ -107,7 +117,7 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
                         : std::nan("");
     v[c++] = std::hypot(dy[0], dz[0]);
   }
-  v[c++] = std::max(0.0, t[n - 1] - t0);
+  v[c++] = std::max(0.0, t[n - 1] - t0 - dwell);
   return v;
 }
 

@@ -6,15 +6,18 @@
 //   <joint>_overshoot_pct     beyond the target of the joint's last move, % of that move
 //   <joint>_peak_torque_Nm    largest |torque| (prismatic: N)
 //   <joint>_peak_speed        largest |rate|, rad/s (m/s)
-//   tool_settling_s           last exit of the tool point from a ball about its final target of radius
-//                             band x the tool's largest move, NaN = not settled
-//   tool_overshoot_pct        largest excursion past the final target along the last move, % of it
+//   tool_settling_s           last exit of the tool point from a ball about where it comes to rest (its
+//                             last sample, as MATLAB's stepinfo takes yfinal) of radius band x the tool's
+//                             largest move in the rigid reference, NaN = not settled
+//   tool_overshoot_pct        largest excursion past its resting point along the reference's move
+//                             (start to final target), % of that move
 //   tool_peak_error_m         largest |tool - where the rigid arm at the reference puts it|: tracking
-//   tool_final_error_m        that error at the end of the run
+//   tool_final_error_m        that error at the end of the run (a flexible arm's static sag among it)
 //   <link>_peak_deflection_m  largest |tip deflection| of a flexible link
 //   <link>_residual_m         half the peak-to-peak of its tip deflection after the move (the larger plane)
 //   <link>_sag_m              |tip deflection| at the start (the static sag under gravity, held)
-//   settling_horizon_s        the longest settling time the run can confirm: its window (censoring)
+//   settling_horizon_s        the longest settling time the run can confirm: its window less that dwell
+//                             (a NaN settling time is right-censored there, results/censoring.hpp)
 #pragma once
 
 #include <string>

@@ -114,8 +114,12 @@ ArmModel make_arm(const ArmSpec& spec) {
   // The trajectory: joint waypoints as written, tool waypoints by IK on the rigid arm (flexible links
   // straight), each from the pose before it.
   m.trajectory.shape = spec.shape;
-  m.trajectory.start.assign(static_cast<std::size_t>(na), 0.0);
   Eigen::VectorXd pose = Eigen::VectorXd::Zero(nv);
+  for (const auto& [name, value] : spec.start) {
+    if (!std::isfinite(value)) throw ConfigError(src, spec.start_line, "trajectory.start." + name, "must be finite");
+    pose[spec.tree.dof_index.at(name)] = value;
+  }
+  for (const ActuatedJoint& a : m.actuated) m.trajectory.start.push_back(pose[a.dof]);
   std::map<std::string, int> act_index;
   for (int k = 0; k < na; ++k) act_index[m.actuated[static_cast<std::size_t>(k)].name] = k;
   IkOptions ik;
@@ -169,14 +173,11 @@ ArmModel make_arm(const ArmSpec& spec) {
   if (!(m.duration >= m.control_period))
     throw ConfigError(src, 0, "simulation.duration", "shorter than one control period: give a duration or waypoints");
 
-  // The initial state: at rest, the actuated joints at the start, the rest sagging under gravity.
-  m.q0 = Eigen::VectorXd::Zero(nv);
-  if (m.tree.gravity().norm() > 0.0 && !m.passive_dofs.empty()) {
-    StaticEquilibriumOptions held;
-    for (const ActuatedJoint& a : m.actuated) held.locked_dofs.push_back(a.dof);
-    const StaticEquilibriumResult r = solve_static_equilibrium(m.tree, m.q0, Eigen::VectorXd::Zero(nv), held);
-    if (r.converged()) m.q0 = r.q;  // else (a free passive joint): it starts straight, at 0
-  }
+  // The initial state: at rest, every joint at its start (0 unless `trajectory.start` says), the flexible links
+  // sagging under gravity.
+  Eigen::VectorXd start = Eigen::VectorXd::Zero(nv);
+  for (const auto& [name, value] : spec.start) start[spec.tree.dof_index.at(name)] = value;
+  m.q0 = calc_arm_sag(m, start).q;
 
   // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
   m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
@@ -234,6 +235,18 @@ ArmModel make_arm(const ArmSpec& spec) {
     }
   }
   return m;
+}
+
+StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose) {
+  StaticEquilibriumOptions held;
+  std::vector<char> elastic(static_cast<std::size_t>(m.tree.nv()), 0);
+  for (const LinkTip& l : m.links)
+    for (int d : l.elastic_dofs) elastic[static_cast<std::size_t>(d)] = 1;
+  for (int j = 0; j < m.tree.nv(); ++j)
+    if (!elastic[static_cast<std::size_t>(j)]) held.locked_dofs.push_back(j);
+  StaticEquilibriumResult r = solve_static_equilibrium(m.tree, pose, Eigen::VectorXd::Zero(m.tree.nv()), held);
+  if (!r.converged()) r.q = pose;  // a link that buckles under its weight: it starts straight
+  return r;
 }
 
 void eval_arm_reference(const ArmModel& m, double t, double* r, double* rd, double* rdd, double* scratch) {

@@ -20,6 +20,7 @@
 #include "kernel/shaper.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/joint_trajectory.hpp"
+#include "multibody/statics.hpp"
 #include "multibody/tree.hpp"
 
 namespace ff {
@@ -57,6 +58,8 @@ struct ArmSpec {
   double rate = 1000.0;              // controller sample rate, Hz
   std::vector<JointControlSpec> joints;  // the actuated joints, in file order
   TrajectoryShape shape = TrajectoryShape::kQuintic;
+  std::vector<std::pair<std::string, double>> start;  // joint values at t = 0 (others 0), rad (m)
+  int start_line = 0;
   std::vector<ArmWaypoint> waypoints;
   double duration = 0.0;             // s; 0 = the last waypoint's time plus `settle`
   double settle = 5.0;               // s after the last waypoint when duration is 0
@@ -110,6 +113,11 @@ struct ArmModel {
 // passive joint given a controller, a joint controlled twice, a waypoint naming an unknown joint or
 // out of time order, an unreachable tool target (the IK's failure), a notch or shaper it cannot design.
 ArmModel make_arm(const ArmSpec& spec);
+
+// The static equilibrium of the flexible links under gravity at `pose` (nv), every other joint held
+// there (statics.hpp with the non-elastic dofs locked). When it does not converge (a link buckling),
+// q is `pose` and the result says why.
+StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose);
 
 // The joint reference of the actuated joints at t (their order), shaped by each joint's shaper:
 // r_j(t) = sum_i A_i s_j(t - t_i), and its first two derivatives. `scratch` holds 3 x (actuated

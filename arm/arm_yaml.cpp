@@ -195,6 +195,19 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   if (trb.shape == "cubic") s.shape = TrajectoryShape::kCubic;
   else if (trb.shape == "quintic") s.shape = TrajectoryShape::kQuintic;
   else trajectory.fail("shape", "unknown shape '" + trb.shape + "' (cubic, quintic)");
+  if (const YAML::Node sv = trajectory.raw("start"); sv) {
+    if (!sv.IsMap()) trajectory.fail("start", "expected a map from joint name to its value at t = 0 (rad or m)");
+    YamlReader vr(sv, source, trajectory.full_key("start"), &lines);
+    s.start_line = vr.line();
+    for (const auto& kv : sv) {
+      const std::string name = kv.first.as<std::string>();
+      double value = 0.0;
+      vr.optional(name, value);
+      if (!s.tree.dof_index.count(name)) vr.fail(name, "no moving joint of that name");
+      s.start.emplace_back(name, value);
+    }
+    vr.finish();
+  }
   std::vector<YamlReader> waypoints = trajectory.sequence("waypoints");
   trajectory.finish();
   double previous = 0.0;
@@ -260,6 +273,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   out.push_back({"joints.NAME.notch.omega_z", "rad/s", "no", "[0, 0]: this joint's closed-loop resonances"});
   add_keys(out, "joints.NAME.shaper.", kShaperFields);
   add_keys(out, "trajectory.", kTrajectoryFields);
+  out.push_back({"trajectory.start", "rad (m)", "no", "every joint at 0"});
   add_keys(out, "trajectory.waypoints[i].", kWaypointFields);
   out.push_back({"trajectory.waypoints[i].joints", "rad (m)", "no", "none: `tool`"});
   add_keys(out, "simulation.", kSimulationFields);

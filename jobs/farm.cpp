@@ -48,6 +48,11 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
         std::snprintf(name, sizeof name, "/traces/%06d.csv", res.rows[k].eval_id);
         write_trace_csv(res.traces[k], opt.out + name);
       }
+      for (std::size_t k = 0; k < res.arm_traces.size(); ++k) {
+        char name[48];
+        std::snprintf(name, sizeof name, "/traces/%06d.csv", res.rows[k].eval_id);
+        write_arm_trace_csv(res.arm_traces[k], opt.out + name);
+      }
       std::string text;
       for (const auto& r : res.rows) text += format_results_row(r);
       journal.append(text);

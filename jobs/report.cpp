@@ -51,23 +51,108 @@ void write_trace_plots(const std::string& dir, const std::vector<std::string>& l
   }
 }
 
+std::vector<std::string> write_arm_plots(const std::string& dir, const std::vector<std::string>& labels,
+                                         const std::vector<const ArmTrace*>& traces, const std::string& title) {
+  std::vector<std::string> written;
+  if (traces.empty()) return written;
+  const ArmTrace& first = *traces.front();
+  // Which columns go on which plot: joints by their ".q" suffix, links by ".deflection_y".
+  std::vector<std::string> joints, links;
+  for (const std::string& n : first.names) {
+    if (n.ends_with(".q")) joints.push_back(n.substr(0, n.size() - 2));
+    if (n.ends_with(".deflection_y")) links.push_back(n.substr(0, n.size() - 13));
+  }
+  const bool many = traces.size() > 1;
+  auto plot = [&](const std::string& file, const std::string& axis, auto add) {
+    LinePlot p;
+    p.title = title + ": " + axis.substr(0, axis.find(" ("));
+    p.x_label = "time (s)";
+    p.y_label = axis;
+    for (std::size_t i = 0; i < traces.size(); ++i) add(p, *traces[i], labels[i]);
+    render_line_plot(p, dir + "/" + file);
+    written.push_back(file);
+  };
+  // One colour per joint for one trace; per trace (the joints dashed apart) for several.
+  plot("joints.png", "joint angle (rad or m)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+    for (std::size_t j = 0; j < joints.size(); ++j) {
+      Series q{.label = many ? label + " " + joints[j] : joints[j], .x = tr.t(), .y = tr.column(joints[j] + ".q")};
+      Series r{.label = many ? "" : joints[j] + " reference", .x = tr.t(), .y = tr.column(joints[j] + ".ref")};
+      r.dashed = true;
+      r.width = 1.0;
+      r.colour = q.colour = static_cast<int>(p.series.size() / 2);
+      p.series.push_back(std::move(q));
+      p.series.push_back(std::move(r));
+    }
+  });
+  plot("torques.png", "joint torque (N m or N)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+    for (const std::string& j : joints)
+      p.series.push_back({.label = many ? label + " " + j : j, .x = tr.t(), .y = tr.column(j + ".torque")});
+  });
+  plot("tool_error.png", "tool error (mm)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+    Series e{.label = many ? label : "|tool - reference|", .x = tr.t(), .y = {}};
+    for (std::size_t k = 0; k < tr.t().size(); ++k) {
+      double d2 = 0.0;
+      for (const char* c : {"x", "y", "z"}) {
+        const double d = tr.column(std::string("tool.") + c)[k] - tr.column(std::string("tool.ref_") + c)[k];
+        d2 += d * d;
+      }
+      e.y.push_back(1e3 * std::sqrt(d2));
+    }
+    p.series.push_back(std::move(e));
+  });
+  if (!links.empty())
+    plot("deflection.png", "link tip deflection (mm)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+      for (const std::string& l : links) {
+        Series d{.label = many ? label + " " + l : l, .x = tr.t(), .y = {}};
+        const auto& y = tr.column(l + ".deflection_y");
+        const auto& z = tr.column(l + ".deflection_z");
+        for (std::size_t k = 0; k < y.size(); ++k) d.y.push_back(1e3 * std::hypot(y[k], z[k]));
+        p.series.push_back(std::move(d));
+      }
+    });
+  return written;
+}
+
 namespace {
 
-// The responses the study plots and summarises: the first move's.
-const std::vector<std::string> kKeyMetrics = {"m1_tip_settling_s", "m1_tip_overshoot_pct", "m1_peak_tip_deflection_m",
-                                              "m1_residual_vibration_m", "m1_peak_torque_Nm"};
+// The responses a study's report plots and summarises: the reference rig's first move, or an arm's
+// tool, first flexible link (else the tool's tracking error) and first actuated joint.
+struct KeyMetrics {
+  std::string settling, overshoot, deflection, residual, torque;  // result columns
+  std::string what;                                               // "tip" or "tool", for titles
+  std::string deflection_title;
+  std::vector<std::string> all() const { return {settling, overshoot, deflection, residual, torque}; }
+};
+
+KeyMetrics key_metrics(const ResultTable& t) {
+  if (std::find(t.columns.begin(), t.columns.end(), "m1_tip_settling_s") != t.columns.end())
+    return {"m1_tip_settling_s", "m1_tip_overshoot_pct", "m1_peak_tip_deflection_m", "m1_residual_vibration_m",
+            "m1_peak_torque_Nm", "tip", "peak tip deflection"};
+  KeyMetrics k{"tool_settling_s", "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m", "", "tool",
+               "peak tool tracking error"};
+  for (const std::string& c : t.columns) {
+    if (c.ends_with("_peak_deflection_m") && k.deflection == "tool_peak_error_m") {
+      k.deflection = c;
+      k.deflection_title = "peak deflection of " + c.substr(0, c.size() - 18);
+    }
+    if (c.ends_with("_residual_m") && k.residual == "tool_final_error_m") k.residual = c;
+    if (c.ends_with("_peak_torque_Nm") && k.torque.empty()) k.torque = c;
+  }
+  return k;
+}
 
 // Grid and centred designs: settling time over the first two parameters, and against each.
 std::string report_grid(const Study& study, const ResultTable& t, const std::string& dir) {
+  const KeyMetrics km = key_metrics(t);
   const auto& p = t.params;
-  std::string md = "## Tip settling time by " + p[0] + (p.size() > 1 ? " and " + p[1] : "") + "\n\n";
+  std::string md = "## " + std::string(km.what == "tip" ? "Tip" : "Tool") + " settling time by " + p[0] + (p.size() > 1 ? " and " + p[1] : "") + "\n\n";
   md += format_groupby_md(t, std::vector<std::string>(p.begin(), p.begin() + std::min<std::size_t>(2, p.size())),
-                          {"m1_tip_settling_s", "m1_tip_overshoot_pct"}, study.specs);
+                          {km.settling, km.overshoot}, study.specs);
   // Settling times are right-censored (not settled: known only to exceed the run's horizon), so each
   // cell and group is summarised by calc_summary(values, horizons): the restricted mean, Kaplan-Meier
   // percentiles, and a percentile above the horizon drawn at the horizon (a lower bound).
-  const auto settle = column_values(t, "m1_tip_settling_s");
-  const auto horizon = horizon_values(t, "m1_tip_settling_s");
+  const auto settle = column_values(t, km.settling);
+  const auto horizon = horizon_values(t, km.settling);
   const auto summary_of = [&](const std::vector<int>& rows) {
     std::vector<double> v, hz;
     for (int r : rows) {
@@ -82,11 +167,11 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   if (p.size() >= 2) {
     // Heat map: mean settling over the other parameters (restricted mean where some did not settle).
     HeatMap h;
-    h.title = censored ? "tip settling time (restricted mean over the other parameters; not settled counted at the horizon)"
-                       : "tip settling time (mean over the other parameters)";
+    h.title = censored ? km.what + " settling time (restricted mean over the other parameters; not settled counted at the horizon)"
+                       : km.what + " settling time (mean over the other parameters)";
     h.x_label = p[0];
     h.y_label = p[1];
-    h.value_label = "tip settling time (s)";
+    h.value_label = km.what + " settling time (s)";
     const auto groups = make_groups({column_values(t, p[0]), column_values(t, p[1])});
     for (const auto& g : groups) {
       if (std::find(h.x.begin(), h.x.end(), g.key[0]) == h.x.end()) h.x.push_back(g.key[0]);
@@ -106,9 +191,9 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   // Settling against each parameter: median with the 5-95 % band over the others.
   for (const auto& name : p) {
     BandPlot b;
-    b.title = "tip settling time against " + name;
+    b.title = km.what + " settling time against " + name;
     b.x_label = name;
-    b.y_label = "tip settling time (s)";
+    b.y_label = km.what + " settling time (s)";
     BandSeries series;
     series.label = censored ? "p50, band p5-p95 over the other parameters (Kaplan-Meier; above the horizon: at it)"
                             : "p50, band p5-p95 over the other parameters";
@@ -134,12 +219,14 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
   for (const auto& g : groups)
     if (std::find(xs.begin(), xs.end(), g.key[1]) == xs.end()) xs.push_back(g.key[1]);
   std::sort(xs.begin(), xs.end());
-  const std::pair<const char*, const char*> shown[] = {{"m1_tip_settling_s", "tip settling time (s)"},
-                                                        {"m1_tip_overshoot_pct", "tip overshoot (%)"},
-                                                        {"m1_residual_vibration_m", "residual vibration (m)"},
-                                                        {"m1_peak_torque_Nm", "peak torque (N·m)"}};
+  const KeyMetrics km = key_metrics(t);
+  const std::pair<std::string, std::string> shown[] = {{km.settling, km.what + " settling time (s)"},
+                                                       {km.overshoot, km.what + " overshoot (%)"},
+                                                       {km.residual, km.what == "tip" ? "residual vibration (m)" : km.residual},
+                                                       {km.torque, "peak torque (N·m)"}};
   std::string md;
   for (const auto& [metric, title] : shown) {
+    if (metric.empty()) continue;
     const auto values = column_values(t, metric);
     // cell[case][x]: the mean over the group, NaN when any variant of it did not settle
     std::vector<std::vector<double>> cell(study.case_labels.size(), std::vector<double>(xs.size(), NAN));
@@ -149,7 +236,7 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
       const auto ix = std::find(xs.begin(), xs.end(), g.key[1]) - xs.begin();
       cell[static_cast<std::size_t>(g.key[0])][ix] = sum / g.rows.size();
     }
-    md += std::string("## ") + title + " by case and " + x_name + "\n\n| case |";
+    md += "## " + title + " by case and " + x_name + "\n\n| case |";
     for (double x : xs) {
       char buf[32];
       std::snprintf(buf, sizeof buf, " %g |", x);
@@ -208,13 +295,17 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
 // Random designs: statistics with confidence intervals, spec misses, distributions.
 std::string report_monte_carlo(const Study& study, const ResultTable& t, const std::string& dir) {
   std::string md = "## Responses (95 % percentile-bootstrap intervals; P(miss): Wilson interval)\n\n";
-  md += format_monte_carlo_md(t, kKeyMetrics, study.specs, study.seed);
-  const auto settle = column_values(t, "m1_tip_settling_s");
-  const auto horizon = horizon_values(t, "m1_tip_settling_s");
+  const KeyMetrics km = key_metrics(t);
+  std::vector<std::string> shown;
+  for (const std::string& c : km.all())
+    if (!c.empty()) shown.push_back(c);
+  md += format_monte_carlo_md(t, shown, study.specs, study.seed);
+  const auto settle = column_values(t, km.settling);
+  const auto horizon = horizon_values(t, km.settling);
   const Summary s = calc_summary(settle, horizon);
   Histogram h;
-  h.title = "tip settling time";
-  h.x_label = "tip settling time (s)";
+  h.title = km.what + " settling time";
+  h.x_label = km.what + " settling time (s)";
   // Not settled (censored at a horizon) as a bar and CDF mass of its own; runs with no value at all left out.
   for (std::size_t i = 0; i < settle.size(); ++i)
     if (horizon.empty() || !std::isnan(settle[i]) || !std::isnan(horizon[i])) h.values.push_back(settle[i]);
@@ -227,16 +318,16 @@ std::string report_monte_carlo(const Study& study, const ResultTable& t, const s
     h.markers.push_back(s.p95);
     h.marker_labels.push_back(std::isfinite(s.p95) ? "p95" : above);
   }
-  if (study.specs.count("m1_tip_settling_s")) {
-    h.markers.push_back(study.specs.at("m1_tip_settling_s"));
+  if (study.specs.count(km.settling)) {
+    h.markers.push_back(study.specs.at(km.settling));
     h.marker_labels.push_back("spec");
   }
   render_histogram(h, dir + "/hist_settling.png");
   render_cdf(h, dir + "/cdf_settling.png");
   Histogram d;
-  d.title = "peak tip deflection";
-  d.x_label = "peak tip deflection (m)";
-  d.values = column_values(t, "m1_peak_tip_deflection_m");
+  d.title = km.deflection_title;
+  d.x_label = km.deflection_title + " (m)";
+  d.values = column_values(t, km.deflection);
   render_histogram(d, dir + "/hist_peak_deflection.png");
   return md;
 }
@@ -244,16 +335,18 @@ std::string report_monte_carlo(const Study& study, const ResultTable& t, const s
 // Sensitivity designs: Sobol' indices (Saltelli) or Morris screening, with bar charts.
 std::string report_sensitivity(const Study& study, const ResultTable& t, const std::string& dir) {
   // Responses with a value for every variant: the estimators drop a base point with any NaN (not settled).
-  const std::vector<std::string> metrics = {"m1_tip_overshoot_pct", "m1_peak_tip_deflection_m", "m1_residual_vibration_m",
-                                            "m1_peak_torque_Nm", "m1_tip_settling_s"};
+  const KeyMetrics km = key_metrics(t);
+  std::vector<std::string> metrics;
+  for (const std::string& c : {km.overshoot, km.deflection, km.residual, km.torque, km.settling})
+    if (!c.empty()) metrics.push_back(c);
   BarChart b;
   b.names = t.params;
   std::string md;
   if (study.design.kind == DesignKind::kSaltelli) {
     const auto idx = calc_sobol_for(t, metrics, static_cast<int>(t.params.size()), study.seed);
     md = "## Sobol' indices (Saltelli design; first order: Saltelli 2010, total: Jansen 1999)\n\n" + format_sobol_md(idx, t.params);
-    const auto& s = idx.at("m1_peak_tip_deflection_m");
-    b.title = "Sobol' indices of the peak tip deflection";
+    const auto& s = idx.at(km.deflection);
+    b.title = "Sobol' indices of the " + km.deflection_title;
     b.y_label = "index";
     b.groups = {s.first, s.total};
     b.errors = {s.first_ci, s.total_ci};
@@ -263,8 +356,8 @@ std::string report_sensitivity(const Study& study, const ResultTable& t, const s
                                       study.design.morris_levels, study.design.seed);
     const auto idx = calc_morris_for(t, metrics, x);
     md = "## Morris elementary effects (per unit of the parameter range)\n\n" + format_morris_md(idx, t.params);
-    const auto& m = idx.at("m1_peak_tip_deflection_m");
-    b.title = "Morris screening of the peak tip deflection";
+    const auto& m = idx.at(km.deflection);
+    b.title = "Morris screening of the " + km.deflection_title;
     b.y_label = "elementary effect (m)";
     b.groups = {m.mu_star, m.sigma};
     b.group_labels = {"mu*", "sigma"};
@@ -290,7 +383,29 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
                 table.rows.size(), counts[0], counts[1], counts[2], counts[3],
                 counts[4] ? (", " + std::to_string(counts[4]) + " invalid (values the model rejects)").c_str() : "");
   md += status;
-  if (study.listed) {
+  if (study.listed && study.arm) {
+    // One row per run: its key responses.
+    const KeyMetrics km = key_metrics(table);
+    md += "| run | status |";
+    std::vector<std::string> shown;
+    for (const std::string& c : km.all())
+      if (!c.empty()) shown.push_back(c);
+    for (const std::string& c : shown) md += " " + c + " |";
+    md += "\n|---|---|";
+    for (std::size_t i = 0; i < shown.size(); ++i) md += "---|";
+    md += "\n";
+    for (const auto& r : table.rows) {
+      md += "| " + r.label + " | " + r.status + " |";
+      for (const std::string& c : shown) {
+        const double v = r.values[static_cast<std::size_t>(std::find(table.columns.begin(), table.columns.end(), c) - table.columns.begin())];
+        char buf[32];
+        std::snprintf(buf, sizeof buf, " %.4g |", v);
+        md += std::isnan(v) ? std::string(" not settled |") : std::string(buf);
+      }
+      md += "\n";
+    }
+    md += "\n## Every metric\n\n" + format_groupby_md(table, {}, table.columns, study.specs);
+  } else if (study.listed) {
     std::vector<std::vector<std::string>> moves;
     for (const auto& v : study.variants) moves.push_back(describe_moves(make_variant_model(study, v).spec.trajectory));
     md += format_settling_table_md(table, moves);
@@ -308,6 +423,23 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
   write_file_atomic(dir + "/table.md", md);
 
   // Time series of every variant whose trace is on disk, when they are few enough to tell apart.
+  if (study.arm) {
+    std::vector<ArmTrace> traces;
+    std::vector<std::string> labels;
+    for (const auto& r : table.rows) {
+      char name[48];
+      std::snprintf(name, sizeof name, "/traces/%06d.csv", r.eval_id);
+      if (table.rows.size() > 12 || !std::filesystem::exists(dir + name)) break;
+      traces.push_back(read_arm_trace_csv(dir + name));
+      labels.push_back(r.label);
+    }
+    if (!traces.empty() && traces.size() == table.rows.size()) {
+      std::vector<const ArmTrace*> ptrs;
+      for (const auto& t : traces) ptrs.push_back(&t);
+      write_arm_plots(dir, labels, ptrs, study.name);
+    }
+    return md;
+  }
   std::vector<Trace> traces;
   std::vector<std::string> labels;
   for (const auto& r : table.rows) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "arm/arm_simulate.hpp"
 #include "kernel/simulate.hpp"
 #include "results/table.hpp"
 #include "sweep/study.hpp"
@@ -14,6 +15,13 @@ namespace ff {
 // Plots of traces (tip angle, hub angle, tip deflection, torque) against time: DIR/<signal>.png.
 void write_trace_plots(const std::string& dir, const std::vector<std::string>& labels,
                        const std::vector<const Trace*>& traces, const std::string& title);
+
+// Plots of arm traces (arm/arm_simulate.hpp) against time, one line per trace: DIR/joints.png (each
+// actuated joint's angle and, dashed, its reference), DIR/torques.png, DIR/tool_error.png (|tool -
+// where the rigid arm at the reference puts it|, mm) and, with flexible links, DIR/deflection.png (each
+// link tip's |deflection|, mm). Returns the file names written.
+std::vector<std::string> write_arm_plots(const std::string& dir, const std::vector<std::string>& labels,
+                                         const std::vector<const ArmTrace*>& traces, const std::string& title);
 
 // Writes everything into `dir`; returns the Markdown table it also wrote to table.md.
 std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir);

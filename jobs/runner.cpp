@@ -9,6 +9,7 @@
 
 #include "jobs/batches.hpp"
 #include "kernel/errors.hpp"
+#include "arm/arm_metrics.hpp"
 #include "results/run_metrics.hpp"
 
 namespace ff {
@@ -16,7 +17,8 @@ namespace ff {
 ResultTable make_result_table(const Study& study) {
   ResultTable t;
   t.params = study.params;
-  t.columns = calc_metric_columns(static_cast<int>(study.nominal.spec.trajectory.moves.size()));
+  t.columns = study.arm ? arm_metric_columns(study.arm_nominal)
+                        : calc_metric_columns(static_cast<int>(study.nominal.spec.trajectory.moves.size()));
   return t;
 }
 
@@ -43,6 +45,10 @@ ResultRow make_result_row(const Study& study, int i, const Model& model, const T
 std::string explain_invalid_variant(const Study& study, int i) {
   const std::string who = "eval_id " + std::to_string(study.variants[i].eval_id) + ": ";
   try {
+    if (study.arm) {
+      const std::string mismatch = explain_columns_mismatch(study, make_variant_arm(study, study.variants[i]));
+      return mismatch.empty() ? "" : who + mismatch;
+    }
     const std::string mismatch = explain_moves_mismatch(study, make_variant_model(study, study.variants[i]));
     if (!mismatch.empty()) return who + mismatch;
   } catch (const ConfigError& e) {
@@ -51,6 +57,90 @@ std::string explain_invalid_variant(const Study& study, int i) {
   return "";
 }
 
+namespace {
+
+// Arm variants of one shape (arm_simulate.hpp) W at a time, in eval_id order: each variant joins the
+// first open batch of its shape, else opens one. Lanes are independent, so rows do not depend on it.
+std::vector<Batch> make_arm_batches(const std::vector<ArmModel>& models, const std::vector<int>& pending, int lanes) {
+  std::vector<Batch> batches;
+  std::vector<std::size_t> open;
+  for (int k : pending) {
+    std::size_t b = batches.size();
+    for (std::size_t o : open)
+      if (batches[o].variants.size() < static_cast<std::size_t>(lanes) &&
+          explain_arm_shape_mismatch(models[static_cast<std::size_t>(batches[o].variants[0])], models[static_cast<std::size_t>(k)]).empty()) {
+        b = o;
+        break;
+      }
+    if (b == batches.size()) {
+      batches.emplace_back();
+      open.push_back(b);
+    }
+    batches[b].variants.push_back(k);
+  }
+  return batches;
+}
+
+// evaluate_variants for an arm study.
+void evaluate_arm_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
+                           const std::function<void(BatchResult&&)>& done, int threads, std::size_t chunk) {
+  const std::vector<std::string> columns = arm_metric_columns(study.arm_nominal);
+  std::exception_ptr error;
+  auto keep_error = [&] {
+#pragma omp critical(ff_batch_error)
+    if (!error) error = std::current_exception();
+  };
+  for (std::size_t c0 = 0; c0 < pending.size() && !error; c0 += chunk) {
+    const int n = static_cast<int>(std::min(chunk, pending.size() - c0));
+    std::vector<ArmModel> models(static_cast<std::size_t>(n));
+    std::vector<char> valid(static_cast<std::size_t>(n), 0);
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+    for (int k = 0; k < n; ++k) {
+      try {
+        models[static_cast<std::size_t>(k)] = make_variant_arm(study, study.variants[static_cast<std::size_t>(pending[c0 + k])]);
+        valid[static_cast<std::size_t>(k)] = explain_columns_mismatch(study, models[static_cast<std::size_t>(k)]).empty();
+      } catch (const ConfigError&) {
+      } catch (...) {
+        keep_error();
+      }
+    }
+    if (error) break;
+    std::vector<int> local;
+    BatchResult invalid;
+    for (int k = 0; k < n; ++k)
+      if (valid[static_cast<std::size_t>(k)]) local.push_back(k);
+      else invalid.rows.push_back(make_invalid_row(study, pending[c0 + k], columns.size()));
+    if (!invalid.rows.empty()) done(std::move(invalid));
+    const std::vector<Batch> batches = make_arm_batches(models, local, opt.lanes);
+    const int nb = static_cast<int>(batches.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (int b = 0; b < nb; ++b) {
+      try {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<ArmModel> lanes;
+        for (int k : batches[static_cast<std::size_t>(b)].variants) lanes.push_back(models[static_cast<std::size_t>(k)]);
+        ArmRun run = simulate_arms(lanes);
+        BatchResult res;
+        for (std::size_t l = 0; l < lanes.size(); ++l) {
+          const Variant& v = study.variants[static_cast<std::size_t>(pending[c0 + batches[static_cast<std::size_t>(b)].variants[l]])];
+          ResultRow row{v.eval_id, v.seed, v.label, "", v.params, calc_arm_metrics(lanes[l], run.traces[l], run.status[l])};
+          row.status = calc_arm_status(run.status[l], columns, row.values);
+          res.rows.push_back(std::move(row));
+          if (opt.keep_traces) res.arm_traces.push_back(std::move(run.traces[l]));
+        }
+        res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+#pragma omp critical(ff_batch_done)
+        done(std::move(res));
+      } catch (...) {
+        keep_error();
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
 void evaluate_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
                        const std::function<void(BatchResult&&)>& done) {
   const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
@@ -58,6 +148,7 @@ void evaluate_variants(const Study& study, const std::vector<int>& pending, cons
   // Models are built per chunk of variants and dropped after it: memory is bounded by the chunk, not
   // the study. A chunk holds enough batches to keep every thread busy.
   const std::size_t chunk = std::max<std::size_t>(1024, 32u * static_cast<std::size_t>(opt.lanes * threads));
+  if (study.arm) return evaluate_arm_variants(study, pending, opt, done, threads, chunk);
   // Nothing may leave a parallel region by exception: the first error is kept and rethrown.
   std::exception_ptr error;
   auto keep_error = [&] {
@@ -120,12 +211,13 @@ StudyRun run_study(const Study& study, const EvalOptions& opt, const std::functi
   StudyRun out;
   out.table = make_result_table(study);
   out.table.rows.resize(n);
-  if (opt.keep_traces) out.traces.resize(n);
+  if (opt.keep_traces) (study.arm ? out.arm_traces.resize(n) : out.traces.resize(n));
   int finished = 0;
   evaluate_variants(study, pending, opt, [&](BatchResult&& res) {
     for (std::size_t k = 0; k < res.rows.size(); ++k) {
       const int id = res.rows[k].eval_id;
-      if (opt.keep_traces) out.traces[id] = std::move(res.traces[k]);
+      if (opt.keep_traces && study.arm) out.arm_traces[id] = std::move(res.arm_traces[k]);
+      else if (opt.keep_traces) out.traces[id] = std::move(res.traces[k]);
       out.table.rows[id] = std::move(res.rows[k]);
     }
     finished += static_cast<int>(res.rows.size());

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "arm/arm_simulate.hpp"
 #include "kernel/simulate.hpp"
 #include "results/table.hpp"
 #include "sweep/study.hpp"
@@ -23,6 +24,7 @@ struct EvalOptions {
 struct BatchResult {
   std::vector<ResultRow> rows;
   std::vector<Trace> traces;
+  std::vector<ArmTrace> arm_traces;  // an arm study's traces (instead of `traces`)
   double seconds = 0.0;
 };
 
@@ -47,6 +49,7 @@ ResultTable make_result_table(const Study& study);
 struct StudyRun {
   ResultTable table;
   std::vector<Trace> traces;     // (variants) when opt.keep_traces
+  std::vector<ArmTrace> arm_traces;  // (variants) an arm study's, when opt.keep_traces
 };
 StudyRun run_study(const Study& study, const EvalOptions& opt,
                    const std::function<void(int, int)>& progress = nullptr);

@@ -31,7 +31,8 @@ std::string calc_horizon_column(const std::string& column) {
   const std::size_t sep = column.find('_');
   if (sep < 2 || sep == std::string::npos || column[0] != 'm' ||
       column.find_first_not_of("0123456789", 1) != sep)
-    return "";
+    // An arm's settling columns (arm/arm_metrics.hpp) share its one window.
+    return column.ends_with("_settling_s") ? "settling_horizon_s" : "";
   const std::string metric = column.substr(sep + 1);
   return metric == "tip_settling_s" || metric == "hub_settling_s" ? column.substr(0, sep + 1) + "settling_horizon_s" : "";
 }

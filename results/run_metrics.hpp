@@ -28,7 +28,8 @@ extern const std::vector<std::string> kMoveMetrics;
 std::vector<std::string> calc_metric_columns(int nmoves);
 
 // The column holding the horizon a settling column is censored at ("m2_hub_settling_s" ->
-// "m2_settling_horizon_s"); "" for a column that is not a settling time.
+// "m2_settling_horizon_s"; an arm's "<joint>_settling_s" or "tool_settling_s" -> "settling_horizon_s");
+// "" for a column that is not a settling time.
 std::string calc_horizon_column(const std::string& column);
 
 // Values in calc_metric_columns order (every move of the model); all NaN when the trace is not finite (a

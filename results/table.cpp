@@ -102,10 +102,12 @@ ResultTable parse_results_csv(const std::string& text, const std::string& source
       header = cells;
       if (header.size() < 4 || header[0] != "eval_id" || header[1] != "seed" || header[2] != "label" || header[3] != "status")
         bad("header", "expected eval_id,seed,label,status,...");
-      // Parameters come before the metrics: from the first name "m<digit>..." on, every column is a metric.
+      // Parameters come before the metrics: from the first name "m<digit>..." (the reference rig's) or
+      // "..._settling_s" (an arm's first, arm/arm_metrics.hpp) on, every column is a metric.
       for (std::size_t c = 4; c < header.size(); ++c) {
         if (header[c].empty()) bad("header", "column " + std::to_string(c + 1) + " has no name");
-        const bool metric = header[c].size() > 1 && header[c][0] == 'm' && std::isdigit(static_cast<unsigned char>(header[c][1]));
+        const bool metric = (header[c].size() > 1 && header[c][0] == 'm' && std::isdigit(static_cast<unsigned char>(header[c][1]))) ||
+                            header[c].ends_with("_settling_s");
         if (metric && nparams < 0) nparams = static_cast<int>(c) - 4;
         (nparams >= 0 ? t.columns : t.params).push_back(header[c]);
       }

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <vector>
 
+#include "arm/arm_yaml.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/yaml_reader.hpp"
 #include "kernel/model_io.hpp"
@@ -11,11 +12,22 @@ namespace ff {
 
 namespace {
 
-// One step of a path: a map key or a sequence index.
+// One step of a path: a map key, a sequence index, or a sequence element by its `name` ([NAME]:
+// bodies[forearm] is the element of `bodies` with `name: forearm`).
 struct Step {
   std::string key;
   int index = -1;
+  std::string name;  // by name when not empty
 };
+
+// The index of the element named `name` in a sequence of maps, or -1.
+int find_named(const YAML::Node& seq, const std::string& name) {
+  if (!seq.IsSequence()) return -1;
+  for (std::size_t i = 0; i < seq.size(); ++i)
+    if (seq[i].IsMap() && seq[i]["name"] && seq[i]["name"].IsScalar() && seq[i]["name"].Scalar() == name)
+      return static_cast<int>(i);
+  return -1;
+}
 
 std::vector<Step> split_path(const std::string& path, const std::string& source) {
   std::vector<Step> steps;
@@ -27,9 +39,12 @@ std::vector<Step> split_path(const std::string& path, const std::string& source)
       const auto close = path.find(']', i);
       if (close == std::string::npos || close == i + 1) bad("unclosed or empty [ ]");
       const std::string digits = path.substr(i + 1, close - i - 1);
-      for (char c : digits)
-        if (!std::isdigit(static_cast<unsigned char>(c))) bad("index '" + digits + "' is not a number");
-      steps.push_back({"", std::stoi(digits)});
+      bool number = true;
+      for (char c : digits) number &= std::isdigit(static_cast<unsigned char>(c)) != 0;
+      const bool name = std::isalpha(static_cast<unsigned char>(digits[0])) || digits[0] == '_';
+      if (!number && !name) bad("index '" + digits + "' is neither a number nor a name");
+      if (number) steps.push_back({"", std::stoi(digits), ""});
+      else steps.push_back({"", -1, digits});
       i = close + 1;
       if (i < path.size() && path[i] == '.') ++i;
       continue;
@@ -37,7 +52,7 @@ std::vector<Step> split_path(const std::string& path, const std::string& source)
     std::size_t end = i;
     while (end < path.size() && path[end] != '.' && path[end] != '[') ++end;
     if (end == i) bad("empty key");
-    steps.push_back({path.substr(i, end - i), -1});
+    steps.push_back({path.substr(i, end - i), -1, ""});
     i = end;
     if (i < path.size() && path[i] == '.') ++i;
   }
@@ -51,7 +66,11 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
   YAML::Node node = doc;  // yaml-cpp nodes are handles: walking reassigns the handle, not the value
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const bool last = s + 1 == steps.size();
-    const Step& st = steps[s];
+    Step st = steps[s];
+    if (!st.name.empty()) {
+      st.index = find_named(node, st.name);
+      if (st.index < 0) throw ConfigError(source, 0, path, "no element of the list is named '" + st.name + "'");
+    }
     if (st.index >= 0) {
       if (!node.IsSequence() || st.index >= static_cast<int>(node.size()))
         throw ConfigError(source, 0, path, "index [" + std::to_string(st.index) + "] is not in the list");
@@ -76,7 +95,8 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
 
 YAML::Node get_path(const YAML::Node& doc, const std::string& path) {
   YAML::Node node = YAML::Clone(doc);
-  for (const auto& st : split_path(path, "<path>")) {
+  for (Step st : split_path(path, "<path>")) {
+    if (!st.name.empty() && (st.index = find_named(node, st.name)) < 0) return YAML::Node();
     if (st.index >= 0) {
       if (!node.IsSequence() || st.index >= static_cast<int>(node.size())) return YAML::Node();
       YAML::Node next = node[st.index];
@@ -121,7 +141,10 @@ const Assignment* owner_of(const std::string& key, const std::vector<Assignment>
 }
 }  // namespace
 
-Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set) {
+// Applies the assignments to `doc` and parses it with `parse`, naming an error in an assigned value
+// where it was assigned.
+template <class Parse>
+auto parse_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set, Parse parse) {
   for (const auto& a : set) {
     try {
       set_path(doc, a.path, a.value, a.source);
@@ -130,7 +153,7 @@ Model make_model_with(YAML::Node doc, const std::string& model_source, const std
     }
   }
   try {
-    return parse_model(doc, model_source);
+    return parse(doc, model_source);
   } catch (const ConfigError& e) {
     const Assignment* a = owner_of(e.key(), set);
     if (!a) throw;
@@ -138,6 +161,14 @@ Model make_model_with(YAML::Node doc, const std::string& model_source, const std
     const bool below = e.key().size() > a->path.size() && e.key().rfind(a->path, 0) == 0;
     throw ConfigError(a->source, a->line, below ? a->key + e.key().substr(a->path.size()) : a->key, e.message());
   }
+}
+
+Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set) {
+  return parse_with(doc, model_source, set, parse_model);
+}
+
+ArmModel make_arm_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set) {
+  return parse_with(doc, model_source, set, parse_arm);
 }
 
 namespace {
@@ -158,6 +189,18 @@ ModelSource load_model_source(const std::string& path, const std::vector<std::st
   ModelSource src{YAML::Clone(doc), path, parse_assignments(sets)};
   make_model_with(doc, path, src.set);  // on the document as read, so that an error names its line
   return src;
+}
+
+ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets) {
+  return make_arm_with(load_yaml_file(path), path, parse_assignments(sets));
+}
+
+bool is_arm_model_file(const std::string& path) {
+  try {
+    return is_arm_document(load_yaml_file(path));
+  } catch (const std::exception&) {
+    return false;
+  }
 }
 
 Model build_model(const ModelSource& src, const std::vector<Assignment>& extra) {

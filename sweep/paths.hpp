@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "arm/arm_model.hpp"
 #include "kernel/model.hpp"
 
 namespace ff {
@@ -50,5 +51,13 @@ struct ModelSource {
 ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets);
 // The model of a source, with `extra` assignments after its own.
 Model build_model(const ModelSource& src, const std::vector<Assignment>& extra = {});
+
+// Arm models (arm/arm_yaml.hpp) the same way: the document with the overrides applied, errors in an
+// assigned value named where it was assigned.
+ArmModel make_arm_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set);
+ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets);
+// Whether a model file is an arm model (a YAML document with `bodies` or `urdf`) rather than the
+// reference rig's; false for a file that cannot be read or parsed (the loader then says why).
+bool is_arm_model_file(const std::string& path);
 
 }  // namespace ff

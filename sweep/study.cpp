@@ -1,5 +1,8 @@
 #include "sweep/study.hpp"
 
+#include "arm/arm_metrics.hpp"
+#include "arm/arm_yaml.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -359,12 +362,22 @@ void check_models(Study& st) {
       throw ConfigError(e.file(), e.line(), e.key(), e.message() + " (at the design's nominal point, every variable at its median)");
     }
   };
-  st.nominal = build(0);  // variant 0, or case 0's nominal point
+  st.arm = is_arm_document(YAML::Load(st.model_text));
+  auto build_arm = [&](std::size_t i) {
+    try {
+      return make_variant_arm(st, point(i));
+    } catch (const ConfigError& e) {
+      if (!st.drawn) throw;
+      throw ConfigError(e.file(), e.line(), e.key(), e.message() + " (at the design's nominal point, every variable at its median)");
+    }
+  };
+  if (st.arm) st.arm_nominal = build_arm(0);
+  else st.nominal = build(0);  // variant 0, or case 0's nominal point
   std::vector<std::exception_ptr> errors(n);
 #pragma omp parallel for schedule(dynamic, 8)
   for (std::size_t i = 1; i < n; ++i) {
     try {
-      const std::string mismatch = explain_moves_mismatch(st, build(i));
+      const std::string mismatch = st.arm ? explain_columns_mismatch(st, build_arm(i)) : explain_moves_mismatch(st, build(i));
       if (!mismatch.empty())
         throw std::invalid_argument((st.drawn ? "case " + st.case_labels[i] : "eval_id " + std::to_string(i)) + ": " + mismatch);
     } catch (...) {
@@ -406,6 +419,16 @@ Model make_variant_model(const Study& study, const Variant& v) {
   Model m = make_model_with(YAML::Load(study.model_text), study.model_path, make_variant_set(study, v));
   m.spec.simulation.seed = v.seed;  // each variant its own sensor noise
   return m;
+}
+
+ArmModel make_variant_arm(const Study& study, const Variant& v) {
+  return make_arm_with(YAML::Load(study.model_text), study.model_path, make_variant_set(study, v));
+}
+
+std::string explain_columns_mismatch(const Study& study, const ArmModel& a) {
+  if (arm_metric_columns(a) == arm_metric_columns(study.arm_nominal)) return "";
+  return study.source + ": its joints or flexible links differ from the study's nominal model's (every variant of a "
+                        "study needs the same metric columns)";
 }
 
 std::string explain_moves_mismatch(const Study& study, const Model& m) {

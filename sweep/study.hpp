@@ -42,6 +42,8 @@ struct Study {
   std::vector<std::vector<Assignment>> case_sets;  // (case_labels) each case's overrides
   std::vector<std::string> params;          // parameter columns: variable paths, or the paths the runs set
   std::vector<Variant> variants;
+  bool arm = false;             // the model is an arm model (arm/arm_yaml.hpp), not the reference rig's
+  ArmModel arm_nominal;         // then its nominal model (as `nominal`); `nominal` is left default
   Model nominal;                // the study-wide overrides (and case 0's) with every variable at its nominal
                                 // value: the result table's columns; a bad override fails at load
   bool drawn = false;           // the values are drawn from distributions, not written in the file
@@ -75,6 +77,12 @@ std::vector<Assignment> make_variant_set(const Study& study, const Variant& v);
 
 // The model of one variant. Errors in an overridden value name the study file, line and key.
 Model make_variant_model(const Study& study, const Variant& v);
+
+// The arm model of one variant (a study whose model is an arm's).
+ArmModel make_variant_arm(const Study& study, const Variant& v);
+// Every variant of an arm study has the nominal model's metric columns (joints, links): "" when a does,
+// else why not.
+std::string explain_columns_mismatch(const Study& study, const ArmModel& a);
 
 // Every variant of a study has the nominal model's number of moves (its metric columns): "" when m
 // does, else why not.

@@ -128,12 +128,28 @@ TEST(SetPath, KeyInsideAListIsRejected) {
 }
 
 TEST(SetPath, BadSyntaxIsRejected) {
-  for (const std::string path : {"", "payload..mass", ".payload", "moves[x]", "moves[", "moves[]", "moves[-1]"}) {
+  for (const std::string path : {"", "payload..mass", ".payload", "moves[", "moves[]", "moves[-1]", "moves[1x]"}) {
     auto d = doc();
     const auto e = set_error(d, path);
     EXPECT_EQ(e.file(), "study.yaml") << path;
     EXPECT_EQ(e.key(), path);
     EXPECT_NE(e.message().find("bad parameter path"), std::string::npos) << path << ": " << e.what();
+  }
+}
+
+TEST(SetPath, AListElementIsFoundByItsName) {
+  YAML::Node d = YAML::Load("bodies:\n  - {name: upper, mass: 1}\n  - {name: fore, mass: 2}\n");
+  ff::set_path(d, "bodies[fore].mass", YAML::Node(5.0), "--set");
+  EXPECT_EQ(d["bodies"][1]["mass"].as<double>(), 5.0);
+  EXPECT_EQ(d["bodies"][0]["mass"].as<double>(), 1.0);
+  EXPECT_EQ(ff::get_path(d, "bodies[upper].mass").as<double>(), 1.0);
+  EXPECT_TRUE(ff::get_path(d, "bodies[elbow].mass").IsNull());
+  try {
+    ff::set_path(d, "bodies[elbow].mass", YAML::Node(5.0), "--set");
+    ADD_FAILURE() << "no error";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.key(), "bodies[elbow].mass");
+    EXPECT_NE(e.message().find("no element of the list is named 'elbow'"), std::string::npos) << e.what();
   }
 }
 
