@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <stdexcept>
+#include <tuple>
 
 namespace ff {
 namespace {
@@ -184,6 +185,18 @@ struct Painter {
   Style st;
   double near_depth, fade_from, fade_to, fade;
   std::vector<Piece> pieces;
+  std::vector<std::tuple<Vec3, Vec3, double>> tubes;  // the tubes' segments (base frame) and piece depths
+
+  // A piece at `c` of radius r sits on the tubes that pass within r of it (a joint ring where links meet,
+  // a mass on its link, the tool dot at a tip): it is drawn after them whatever the tubes' mean depths.
+  double on_tubes(const Vec3& c, double r, double depth) const {
+    for (const auto& [a, b, d] : tubes) {
+      const Vec3 ab = b - a;
+      const double t = std::clamp((c - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+      if ((a + t * ab - c).norm() <= r) depth = std::min(depth, d - 1e-9);
+    }
+    return depth;
+  }
 
   cv::Scalar faded(const cv::Scalar& c, double depth) const {
     return lighter(c, fade * std::clamp((depth - fade_from) / (fade_to - fade_from), 0.0, 1.0));
@@ -211,6 +224,7 @@ struct Painter {
     }
     if (segs.empty()) return;
     depth /= double(segs.size());
+    for (size_t i = 0; i + 1 < points.size(); ++i) tubes.emplace_back(points[i], points[i + 1], depth);
     const cv::Scalar fill = faded(colour, depth), edge = darker(fill, 0.45), shine = lighter(fill, 0.4);
     const double outline = std::max(1.0, st.s * 1.5);
     pieces.push_back({depth, [=, this](cv::Mat& img) {
@@ -237,7 +251,7 @@ struct Painter {
     const double R = radius_px(r, p.depth);
     const cv::Scalar fill = faded(colour, p.depth), edge = darker(fill, 0.5), shine = lighter(fill, 0.55);
     const double outline = std::max(1.0, st.s * 1.5);
-    pieces.push_back({p.depth - r, [=, this](cv::Mat& img) {
+    pieces.push_back({on_tubes(c, r, p.depth - r), [=, this](cv::Mat& img) {
                         cv::circle(img, fixed_point(px(p)), int(std::lround((R + outline) * 16)), edge, cv::FILLED, cv::LINE_AA, kShift);
                         cv::circle(img, fixed_point(px(p)), int(std::lround(R * 16)), fill, cv::FILLED, cv::LINE_AA, kShift);
                         cv::circle(img, fixed_point(px(p) + cv::Point2d(-0.35 * R, -0.35 * R)), int(std::lround(0.3 * R * 16)), shine,
@@ -250,7 +264,7 @@ struct Painter {
     if (p.depth < near_depth + r) return;
     const double R = std::max(radius_px(r, p.depth), 2.0);
     const cv::Scalar edge = faded(cv::Scalar(kTextColour), p.depth), centre = faded(cv::Scalar(kWhite), p.depth);
-    pieces.push_back({p.depth - 2 * r, [=, this](cv::Mat& img) {
+    pieces.push_back({on_tubes(c, r, p.depth - r), [=, this](cv::Mat& img) {
                         cv::circle(img, fixed_point(px(p)), int(std::lround(R * 16)), edge, cv::FILLED, cv::LINE_AA, kShift);
                         cv::circle(img, fixed_point(px(p)), int(std::lround(0.45 * R * 16)), centre, cv::FILLED, cv::LINE_AA, kShift);
                       }});
@@ -270,6 +284,7 @@ struct Painter {
     std::stable_sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.depth > b.depth; });
     for (const Piece& p : pieces) p.draw(img);
     pieces.clear();
+    tubes.clear();
   }
 };
 
@@ -286,9 +301,10 @@ Vec3 on_ground(const Vec3& p, const Vec3& up, double ground) { return p - (p.dot
 
 void check_camera(const Camera& c) {
   check_image_size("Camera", c.width, c.height, 240, 240);
-  if (!std::isfinite(c.azimuth) || !(std::abs(c.elevation) < 90 * kDegree) || !(c.fov > 0 && c.fov < 180 * kDegree))
-    throw std::invalid_argument("Camera: azimuth, elevation in (-90, 90) degrees and field of view in (0, 180) "
-                                "degrees must be finite");
+  if (!std::isfinite(c.azimuth) || !(std::abs(c.elevation) <= 90 * kDegree + 1e-12) ||
+      !(c.fov > 0 && c.fov < 180 * kDegree))
+    throw std::invalid_argument("Camera: the azimuth must be finite, the elevation within [-90, 90] degrees and the "
+                                "field of view within (0, 180) degrees");
 }
 
 bool automatic(double v) { return !(v > 0) || !std::isfinite(v); }
@@ -312,7 +328,8 @@ CameraView camera_view(const Camera& c, const Vec3& up_in) {
   const Vec3 dir = std::cos(c.elevation) * (std::cos(c.azimuth) * e1 + std::sin(c.azimuth) * e2) + std::sin(c.elevation) * up;
   v.eye = c.target + c.distance * dir;
   v.forward = -dir;
-  v.right = v.forward.cross(up).normalized();
+  v.right = -std::sin(c.azimuth) * e1 + std::cos(c.azimuth) * e2;  // = forward x up, normalised; level even
+                                                                     // straight from above or below
   v.up = v.right.cross(v.forward);
   v.focal = (c.height / 2.0) / std::tan(c.fov / 2);
   v.cx = (c.width - 1) / 2.0, v.cy = (c.height - 1) / 2.0;
@@ -399,6 +416,7 @@ cv::Mat render_arm_frame(const Tree& tree, const ArmShape& shape, const Eigen::V
             to_target - style.grid_half_size,
             to_target + style.grid_half_size,
             std::clamp(style.depth_fade, 0.0, 1.0),
+            {},
             {}};
   const Style& st = p.st;
 

@@ -62,7 +62,8 @@ inline constexpr double kDegree = 3.14159265358979323846 / 180.0;
 // about up from the base x axis laid on the ground (base y when x is vertical) towards base y.
 struct Camera {
   double azimuth = -55 * kDegree;   // rad; the default looks from +x, -y (front right for a z-up base)
-  double elevation = 25 * kDegree;  // rad above the ground plane, within (-90, 90) degrees
+  double elevation = 25 * kDegree;  // rad above the ground plane, within [-90, 90] degrees (90: from above,
+                                    // the azimuth's direction pointing down the image)
   double distance = 0;              // m from the target; 0 = fit: the arm's bounding sphere fills the view
   double fov = 40 * kDegree;        // vertical field of view, rad, in (0, 180) degrees
   Vec3 target = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // base frame; NaN = the
@@ -88,7 +89,8 @@ struct Projected {
 Vec3 up_direction(const Tree& tree);
 // The camera resolved: eye = target + distance (cos el (cos az e1 + sin az e2) + sin el up), looking at
 // the target. Throws std::invalid_argument for a distance <= 0, a non-finite target or angle, an
-// elevation outside (-90, 90) degrees, a field of view outside (0, 180) degrees or a too small image.
+// elevation outside [-90, 90] degrees, a field of view outside (0, 180) degrees or a too small image.
+// The image's right is always level: right = -sin(az) e1 + cos(az) e2.
 CameraView camera_view(const Camera& camera, const Vec3& up);
 // Pinhole projection: depth = (p - eye).forward, x = cx + focal (p - eye).right / depth,
 // y = cy - focal (p - eye).up / depth. A point 1 m off the axis at depth d lies focal / d px out.

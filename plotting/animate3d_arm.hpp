@@ -28,6 +28,14 @@ inline ArmAnimationSummary write_arm_animation(const ArmModel& m, std::span<cons
   return write_arm_animation(m.tree, arm_shape(m), times, qs, video_path, options);
 }
 
+// write_arm_still of the arm's tree and shape (the PNG of the frame at t), the same default title.
+inline double write_arm_still(const ArmModel& m, std::span<const double> times,
+                              const Eigen::Ref<const Eigen::MatrixXd>& qs, double t, const std::string& png_path,
+                              ArmAnimationOptions options = {}) {
+  if (options.style.title.empty()) options.style.title = m.spec.description.empty() ? m.spec.source : m.spec.description;
+  return write_arm_still(m.tree, arm_shape(m), times, qs, t, png_path, options);
+}
+
 // The arm at q (render_arm_frame with the arm's shape).
 inline cv::Mat render_arm_frame(const ArmModel& m, const Eigen::VectorXd& q, const Camera& camera,
                                 const ArmDrawStyle& style, double t = std::numeric_limits<double>::quiet_NaN(),

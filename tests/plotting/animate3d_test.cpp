@@ -81,6 +81,12 @@ TEST(Animate3d, TheProjectionIsThePinholeFormula) {
       EXPECT_GT(w.up.dot(Vec3::UnitZ()), 0.0);  // the image is not upside down
       EXPECT_GT(ff::project(w, c.target + 0.3 * w.right).x, 399.5 + 1.0);
     }
+  // Straight from above (elevation 90 degrees): the azimuth's direction points down the image, right is level.
+  const ff::CameraView top = ff::camera_view(fixed_camera(0.0, 90 * ff::kDegree, 2.0), Vec3::UnitZ());
+  EXPECT_NEAR((top.right - Vec3::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((top.forward + Vec3::UnitZ()).norm(), 0.0, 1e-12);
+  EXPECT_GT(ff::project(top, c.target + Vec3(0.5, 0, 0)).y, 299.5 + 1.0);
+  EXPECT_NEAR(ff::project(top, c.target + Vec3(0, 0.5, 0)).x - 399.5, top.focal * 0.5 / 2.0, 1e-9);
   // Up follows gravity.
   ff::TreeSpec spec;
   spec.bodies.push_back({});
@@ -335,12 +341,11 @@ TEST(Animate3d, AnArmModelsRunIsDrawnWithItsFlexibleLinkExaggerated) {
   const int changed = cv::countNonZero(grey);
   EXPECT_GT(changed, 200);
   EXPECT_LT(changed, a.rows * a.cols / 4);
-  if (const char* out = std::getenv("FLEXFARM_ANIMATE3D_SAMPLE")) {  // a look at it: a PNG of this frame
-    ff::ArmDrawStyle s = many;
-    s.title = "3-DOF arm, flexible forearm";
-    ff::Camera big;
-    big.width = 1280, big.height = 960;
-    cv::imwrite(out, ff::render_arm_frame(arm, q, big, s, 0.4));
+  if (const char* out = std::getenv("FLEXFARM_ANIMATE3D_SAMPLE")) {  // a look at it: the still at 0.45 s
+    ff::ArmAnimationOptions big = o;
+    big.camera.width = 1280, big.camera.height = 960;
+    big.still_path.clear();
+    EXPECT_NEAR(ff::write_arm_still(arm, t, run.q[0], 0.45, out, big), 0.45, 1e-12);
   }
 }
 
