@@ -380,7 +380,7 @@ void fit_arm_view(const Tree& tree, const ArmShape& shape, const Eigen::Ref<cons
     for (const Vec3& p : pts) reach = std::max(reach, (p - camera.target).norm());
     reach = std::max(reach, 0.05);
     const double half = std::min(camera.fov / 2, std::atan(std::tan(camera.fov / 2) * camera.width / camera.height));
-    camera.distance = 1.12 * reach / std::sin(half);
+    camera.distance = 1.25 * reach / std::sin(half);  // room for the title band and the base axes
   }
 }
 
