@@ -78,7 +78,7 @@ void record_kinematics(const ArmModel& m, const Eigen::VectorXd& q, const Eigen:
 
 }  // namespace
 
-ArmRun simulate_arms(std::span<const ArmModel> lanes) {
+ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options) {
   if (lanes.empty()) throw std::invalid_argument("simulate_arms: no lanes");
   const ArmModel& m0 = lanes[0];
   for (std::size_t l = 1; l < lanes.size(); ++l)
@@ -105,6 +105,7 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes) {
     tr.names = names;
     tr.columns.assign(names.size(), std::vector<double>(static_cast<std::size_t>(samples), 0.0));
   }
+  if (options.keep_q) run.q.assign(static_cast<std::size_t>(W), Eigen::MatrixXd::Zero(nv, samples));
   const std::size_t kin0 = 1 + 4 * static_cast<std::size_t>(na);  // first kinematic column
 
   // Controller state; each notch at rest at its first input.
@@ -206,8 +207,10 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes) {
         for (int j = 0; j < nv; ++j) q_lane[j] = s.q[static_cast<std::size_t>(j * W + l)];
         for (int j = 0; j < na; ++j) q_ref[m.actuated[static_cast<std::size_t>(j)].dof] = rl[j];
         record_kinematics(m, q_lane, q_ref, poses, kin.data());
+        if (options.keep_q) run.q[static_cast<std::size_t>(l)].col(k) = q_lane;
       } else {
         std::fill(kin.begin(), kin.end(), std::nan(""));
+        if (options.keep_q) run.q[static_cast<std::size_t>(l)].col(k).setConstant(std::nan(""));
       }
       for (std::size_t c2 = kin0; c2 < names.size(); ++c2) tr.columns[c2][ks] = kin[c2 - kin0];
     }

@@ -29,6 +29,14 @@ struct ArmTrace {
 struct ArmRun {
   std::vector<ArmTrace> traces;      // (W)
   std::vector<LaneStatus> status;    // (W)
+  // With ArmRunOptions::keep_q, each lane's full joint state at every sample: q[l] is nv x samples,
+  // column k the coordinates (tree dof order: actuated, passive and elastic) at the trace's sample k
+  // (the same instant as its row k), NaN from the sample a failed lane went non-finite. Empty without.
+  std::vector<Eigen::MatrixXd> q;    // (W) or empty
+};
+
+struct ArmRunOptions {
+  bool keep_q = false;               // fill ArmRun::q (for drawing the arm: plotting/animate3d.hpp)
 };
 
 // Why arms a and b cannot share a batch ("" when they can): their trees differ in topology, or their
@@ -40,7 +48,9 @@ std::vector<std::string> arm_trace_names(const ArmModel& m);
 
 // Runs every lane to its duration. Throws std::invalid_argument when the lanes' shapes differ.
 // A lane whose state stops being finite is frozen with the status kNonfinite (its trace NaN from then).
-ArmRun simulate_arms(std::span<const ArmModel> lanes);
+// The options change only what is kept, never the results (ArmRun::q is stored into memory reserved
+// before the first step).
+ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options = {});
 
 // Writes a trace as CSV (a header of its names, one row per sample), atomically; reads it back.
 void write_arm_trace_csv(const ArmTrace& trace, const std::string& path);

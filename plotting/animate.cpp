@@ -1,22 +1,12 @@
-// Top view video of the arm, drawn with the shared pieces of canvas.hpp, written with cv::VideoWriter.
+// Top view video of the arm, drawn with the shared pieces of canvas.hpp, written by canvas::write_video.
 #include "plotting/animate.hpp"
 
 #include "plotting/canvas.hpp"
 
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
-#include <opencv2/videoio.hpp>
-#pragma GCC diagnostic pop
-
 #include <array>
-#include <cctype>
-#include <cerrno>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <stdexcept>
-#include <system_error>
 
 namespace ff {
 namespace {
@@ -232,45 +222,6 @@ cv::Mat frame_bgr(const Animation& a, const View& v, size_t k) {
   return img;
 }
 
-// ---------------------------------------------------------------- video output
-
-struct Codec {
-  const char* name;
-  int api;
-  const char* ext;  // container extension the writer needs; nullptr = the requested one
-};
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower((unsigned char)c));
-  return ext;
-}
-
-std::vector<Codec> codecs_for(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  std::vector<Codec> out;
-  if (ext == ".mp4" || ext == ".m4v" || ext == ".mov")
-    out = {{"mp4v", cv::CAP_FFMPEG, nullptr}, {"avc1", cv::CAP_FFMPEG, nullptr}};
-  out.push_back({"MJPG", cv::CAP_FFMPEG, ".avi"});
-  out.push_back({"MJPG", cv::CAP_OPENCV_MJPEG, ".avi"});
-  return out;
-}
-
-[[noreturn]] void fail(const std::string& path, const std::string& why) {
-  throw std::runtime_error("render_animation: cannot write '" + path + "': " + why);
-}
-
-// Throws naming `path` if no file can be created next to it.
-void check_writable(const std::string& path) {
-  const std::string probe = path + ".tmp";
-  {
-    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
-    if (!f) fail(path, std::generic_category().message(errno));
-  }
-  std::error_code ignored;
-  std::filesystem::remove(probe, ignored);
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------- public API
@@ -307,39 +258,8 @@ std::vector<unsigned char> render_animation_frame(const Animation& a, int frame)
 
 void render_animation(const Animation& a, const std::string& video_path) {
   const View v = make_view(a);
-  check_writable(video_path);
-  std::vector<std::string> tried;
-  for (const Codec& c : codecs_for(video_path)) {
-    const std::string tmp = video_path + ".tmp" + (c.ext ? c.ext : lower_extension(video_path));
-    const auto discard = [&] {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-    };
-    tried.push_back(c.name + std::string(c.api == cv::CAP_FFMPEG ? " (FFmpeg)" : " (OpenCV)"));
-    cv::VideoWriter w;
-    try {
-      const int fourcc = cv::VideoWriter::fourcc(c.name[0], c.name[1], c.name[2], c.name[3]);
-      if (!w.open(tmp, c.api, fourcc, a.fps, cv::Size(a.width, a.height), true)) { discard(); continue; }
-      for (size_t k = 0; k < a.frames.size(); ++k) w.write(frame_bgr(a, v, k));
-      w.release();
-    } catch (const cv::Exception&) {
-      w.release();
-      discard();
-      continue;
-    } catch (...) {
-      w.release();
-      discard();
-      throw;
-    }
-    std::error_code ec;
-    if (std::filesystem::file_size(tmp, ec) == 0 || ec) { discard(); continue; }
-    std::filesystem::rename(tmp, video_path, ec);
-    if (ec) { discard(); fail(video_path, ec.message()); }
-    return;
-  }
-  std::string list;
-  for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t;
-  fail(video_path, "no video codec could be opened (tried " + list + ")");
+  write_video("render_animation", video_path, a.fps, cv::Size(a.width, a.height), int(a.frames.size()),
+              [&](int k) { return frame_bgr(a, v, size_t(k)); });
 }
 
 }  // namespace ff

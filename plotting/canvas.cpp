@@ -4,9 +4,11 @@
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #pragma GCC diagnostic pop
 
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <filesystem>
 #include <fstream>
@@ -577,6 +579,82 @@ std::vector<unsigned char> rgb_bytes(const cv::Mat& bgr_image) {
   cv::Mat rgb;
   cv::cvtColor(bgr_image, rgb, cv::COLOR_BGR2RGB);
   return {rgb.data, rgb.data + rgb.total() * rgb.elemSize()};
+}
+
+// ---------------------------------------------------------------- video
+
+namespace {
+
+struct Codec {
+  const char* name;
+  int api;
+  const char* ext;  // container extension the writer needs; nullptr = the requested one
+};
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower((unsigned char)c));
+  return ext;
+}
+
+std::vector<Codec> codecs_for(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  std::vector<Codec> out;
+  if (ext == ".mp4" || ext == ".m4v" || ext == ".mov")
+    out = {{"mp4v", cv::CAP_FFMPEG, nullptr}, {"avc1", cv::CAP_FFMPEG, nullptr}};
+  out.push_back({"MJPG", cv::CAP_FFMPEG, ".avi"});
+  out.push_back({"MJPG", cv::CAP_OPENCV_MJPEG, ".avi"});
+  return out;
+}
+
+}  // namespace
+
+void write_video(const std::string& who, const std::string& path, double fps, cv::Size size, int frames,
+                 const std::function<cv::Mat(int)>& frame) {
+  const auto fail = [&](const std::string& why) {
+    throw std::runtime_error(who + ": cannot write '" + path + "': " + why);
+  };
+  {  // a file next to it can be created at all
+    const std::string probe = path + ".tmp";
+    {
+      std::ofstream f(probe, std::ios::binary | std::ios::trunc);
+      if (!f) fail(std::generic_category().message(errno));
+    }
+    std::error_code ignored;
+    std::filesystem::remove(probe, ignored);
+  }
+  std::vector<std::string> tried;
+  for (const Codec& c : codecs_for(path)) {
+    const std::string tmp = path + ".tmp" + (c.ext ? c.ext : lower_extension(path));
+    const auto discard = [&] {
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);
+    };
+    tried.push_back(c.name + std::string(c.api == cv::CAP_FFMPEG ? " (FFmpeg)" : " (OpenCV)"));
+    cv::VideoWriter w;
+    try {
+      const int fourcc = cv::VideoWriter::fourcc(c.name[0], c.name[1], c.name[2], c.name[3]);
+      if (!w.open(tmp, c.api, fourcc, fps, size, true)) { discard(); continue; }
+      for (int k = 0; k < frames; ++k) w.write(frame(k));
+      w.release();
+    } catch (const cv::Exception&) {
+      w.release();
+      discard();
+      continue;
+    } catch (...) {
+      w.release();
+      discard();
+      throw;
+    }
+    std::error_code ec;
+    if (std::filesystem::file_size(tmp, ec) == 0 || ec) { discard(); continue; }
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) { discard(); fail(ec.message()); }
+    return;
+  }
+  std::string list;
+  for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t;
+  fail("no video codec could be opened (tried " + list + ")");
 }
 
 }  // namespace ff::canvas

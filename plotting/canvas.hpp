@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -231,5 +232,16 @@ void write_atomically(const std::string& who, const std::string& path, const std
 void write_png(const std::string& who, const cv::Mat& bgr_image, const std::string& path);
 // A BGR image as RGB bytes, row-major.
 std::vector<unsigned char> rgb_bytes(const cv::Mat& bgr_image);
+
+// ---------------------------------------------------------------- video
+
+// Writes `frames` BGR frames of `size` (frame(k) draws frame k) as a video at `fps`. The container and
+// codec follow the extension: ".mp4"/".m4v"/".mov" try mp4v then avc1 (FFmpeg); anything else,
+// normally ".avi", is Motion-JPEG in AVI (FFmpeg, then OpenCV's built-in writer); if no mp4 codec
+// opens, Motion-JPEG/AVI data goes under the requested name. Written as "<path>.tmp<ext>" and renamed
+// to `path` when complete. Throws std::runtime_error "<who>: cannot write '<path>': why" when no file
+// can be created there or no codec works, leaving no temporary file behind.
+void write_video(const std::string& who, const std::string& path, double fps, cv::Size size, int frames,
+                 const std::function<cv::Mat(int)>& frame);
 
 }  // namespace ff::canvas

@@ -161,6 +161,50 @@ TEST(ArmSimulate, AVariantGivesTheSameBitsAloneAndInAnyLaneOfABatch) {
   EXPECT_EQ(back.traces[0].columns, together.traces[2].columns);
 }
 
+TEST(ArmSimulate, KeptJointStatesAreTheTracesInstantsAndChangeNoResult) {
+  // A flexible link swung by its root: every dof moves (actuated and elastic). The kept q at sample k
+  // puts the tool where the trace says, holds the joint's .q, starts at q0; the trace is the same bits.
+  const std::string text = R"(gravity: [0, 0, -9.81]
+bodies:
+  - name: beam
+    parent: base
+    joint: {axis: [0, 0, 1], armature: 0.1}
+    flexible:
+      length: 0.8
+      segments: 5
+      section: {E: 70e9, G: 26e9, density: 2700, area: 2.0e-4, I_y: 4.2e-10, I_z: 2.7e-8, J: 1.6e-9}
+joints:
+  beam: {controller: {kp: 200, kd: 20}}
+trajectory:
+  waypoints:
+    - {time: 0.05, joints: {beam: 0.5}}
+simulation: {duration: 0.08}
+)";
+  const ArmModel arm = arm_from(text);
+  const ArmRun plain = simulate_arms(std::span<const ArmModel>(&arm, 1));
+  const ArmRun kept = simulate_arms(std::span<const ArmModel>(&arm, 1), {.keep_q = true});
+  EXPECT_TRUE(plain.q.empty());
+  ASSERT_EQ(kept.q.size(), 1u);
+  EXPECT_EQ(kept.traces[0].columns, plain.traces[0].columns);
+  const ArmTrace& tr = kept.traces[0];
+  const Eigen::MatrixXd& q = kept.q[0];
+  ASSERT_EQ(q.rows(), arm.tree.nv());
+  ASSERT_EQ(static_cast<std::size_t>(q.cols()), tr.t().size());
+  EXPECT_EQ(Eigen::VectorXd(q.col(0)), arm.q0);
+  const int dof = arm.actuated[0].dof;
+  double elastic_motion = 0.0;
+  for (Eigen::Index k = 0; k < q.cols(); ++k) {
+    const std::size_t ks = static_cast<std::size_t>(k);
+    EXPECT_EQ(q(dof, k), tr.column("beam.q")[ks]);
+    const Vec3 tool = calc_point_position(arm.tree, q.col(k), arm.tool_body, arm.tool_point);
+    EXPECT_NEAR(tool.x(), tr.column("tool.x")[ks], 1e-14);  // (another order of the same products)
+    EXPECT_NEAR(tool.y(), tr.column("tool.y")[ks], 1e-14);
+    EXPECT_NEAR(tool.z(), tr.column("tool.z")[ks], 1e-14);
+    for (int d : arm.links[0].elastic_dofs) elastic_motion = std::max(elastic_motion, std::abs(q(d, k) - q(d, 0)));
+  }
+  EXPECT_GT(elastic_motion, 1e-6);  // the link bends as it is swung
+}
+
 TEST(ArmYaml, AnUnknownJointAPassiveWaypointAndABadBlockAreNamedAtTheirLines) {
   EXPECT_EQ(arm_error(pendulum("{kp: 400, kq: 1}")), "arm.yaml:13: joints.arm.controller.kq: unknown key");
   std::string text = pendulum("{kp: 400}");
