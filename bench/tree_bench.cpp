@@ -1,7 +1,7 @@
 // Throughput of the tree kernels (multibody/): forward dynamics per variant by the lane-batched ABA
 // (multibody/lanes) against the scalar one (multibody/algorithms), and RK4 / SDIRK2 steps over lanes,
-// on a rigid 6-DOF arm and a two-link 3-D flexible arm; CVODE (multibody/tree_cvode) dense against
-// KLU on one 3-D flexible link per second of simulated time.
+// on a rigid 6-DOF arm and a two-link 3-D flexible arm; CVODE (multibody/tree_cvode) dense, KLU and
+// preconditioned GMRES on one 3-D flexible link per second of simulated time.
 // Run: build/bench/tree_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
@@ -163,12 +163,14 @@ ff::Tree hub_link(int N) {
 
 // CVODE on hub_link(N), W = 1, from the straight link at rest: 0.1 s of simulated time in 1 ms
 // samples with the hub torque held, constant (one BDF history) or a new value every sample (a
-// restart every sample, as under a controller). args: N, solver (0 dense, 1 KLU), jump (0, 1).
+// restart every sample, as under a controller). args: N, solver (0 dense, 1 KLU, 2 GMRES), jump (0, 1).
 void BM_TreeCvode(benchmark::State& state) {
   const int N = static_cast<int>(state.range(0));
   const ff::TreeLanes tl = ff::make_tree_lanes(std::vector<ff::Tree>{hub_link(N)});
   ff::TreeCvodeOptions opt;
-  opt.solver = state.range(1) == 1 ? ff::TreeCvodeSolver::kKlu : ff::TreeCvodeSolver::kDense;
+  opt.solver = state.range(1) == 1   ? ff::TreeCvodeSolver::kKlu
+               : state.range(1) == 2 ? ff::TreeCvodeSolver::kGmres
+                                     : ff::TreeCvodeSolver::kDense;
   const bool jump = state.range(2) == 1;
   ff::TreeCvode cv(tl, opt);
   std::vector<double> tau(static_cast<std::size_t>(tl.nv), 0.0);
@@ -194,7 +196,7 @@ void BM_TreeCvode(benchmark::State& state) {
   state.counters["sim_s/s"] = benchmark::Counter(samples * h, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_TreeCvode)->ArgNames({"N", "klu", "jump"})->Unit(benchmark::kMillisecond)
-    ->Args({24, 0, 1})->Args({24, 1, 1})->Args({24, 0, 0})->Args({24, 1, 0})
+    ->Args({24, 0, 1})->Args({24, 1, 1})->Args({24, 2, 1})->Args({24, 2, 0})->Args({8, 2, 1})->Args({8, 2, 0})->Args({48, 2, 1})->Args({48, 2, 0})->Args({24, 0, 0})->Args({24, 1, 0})
     ->Args({8, 0, 1})->Args({8, 1, 1})->Args({8, 0, 0})->Args({8, 1, 0})
     ->Args({48, 0, 1})->Args({48, 1, 1})->Args({48, 0, 0})->Args({48, 1, 0})->Iterations(1);
 

@@ -5,6 +5,7 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
@@ -35,6 +36,12 @@ struct Lane {
   VectorXd tau;             // (nv) scratch: applied + passive
   VectorXd ypert, fpert;    // (2 nv) the finite-difference Jacobian's perturbed state and rate
   long fd_rhs_evals = 0;    // right-hand sides of our own Jacobian since the last ReInit
+
+  // kGmres's preconditioner: the lane's tree as one lane without gravity, its ABA with armature.
+  TreeLanes pre;
+  TreeLanesWorkspace pre_ws;
+  std::vector<double> k, c;             // (nv) the joint springs and dampers
+  std::vector<double> zero, D, w, out;  // (nv) qd = 0, gamma c + gamma^2 k, right-hand side, solution
 
   // Where the last successful advance ended, for continuing without ReInit.
   bool live = false;        // CVODE holds a history that ends at (t_end, y_end) under tau_end
@@ -140,6 +147,37 @@ int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_
   return 0;
 }
 
+// kGmres's preconditioner P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]] (K, C: the joint springs and
+// dampers, the stiff part of the Jacobian; gravity, velocity products and dM/dq left out). P z = r:
+//   (M + D) w = -D r_v - gamma K r_q,  z_v = r_v + w,  z_q = r_q + gamma z_v,  D = gamma C + gamma^2 K,
+// one ABA pass with D as extra armature (no gravity, qd = 0), O(nv); nothing to set up.
+int psetup(sunrealtype, N_Vector, N_Vector, sunbooleantype, sunbooleantype* jcur, sunrealtype, void*) {
+  *jcur = SUNTRUE;
+  return 0;
+}
+
+int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector z, sunrealtype gamma,
+           sunrealtype /*delta*/, int /*lr*/, void* user_data) {
+  Lane& L = *static_cast<Lane*>(user_data);
+  const int n = L.nv;
+  const double* yd = N_VGetArrayPointer(y);
+  const double* rd = N_VGetArrayPointer(r);
+  double* zd = N_VGetArrayPointer(z);
+  for (int i = 0; i < n; ++i) {
+    const double gk = gamma * L.k[static_cast<std::size_t>(i)];
+    L.D[static_cast<std::size_t>(i)] = gamma * L.c[static_cast<std::size_t>(i)] + gamma * gk;
+    L.w[static_cast<std::size_t>(i)] = -L.D[static_cast<std::size_t>(i)] * rd[n + i] - gk * rd[i];
+  }
+  compute_tree_forward_dynamics(L.pre, yd, L.zero.data(), L.w.data(), L.D.data(), L.out.data(), L.pre_ws);
+  for (int i = 0; i < n; ++i) {
+    zd[n + i] = rd[n + i] + L.out[static_cast<std::size_t>(i)];
+    zd[i] = rd[i] + gamma * zd[n + i];
+  }
+  for (int i = 0; i < 2 * n; ++i)
+    if (!std::isfinite(zd[i])) return 1;  // recoverable
+  return 0;
+}
+
 // CVODE reports through this handler; advance() must never print.
 void silent_error_handler(int, const char*, const char*, char*, void*) {}
 
@@ -179,6 +217,18 @@ std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptio
     if (!L->ls) fail("SUNLinSol_KLU", l);
     if (CVodeSetLinearSolver(L->mem, L->ls, L->A) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
     if (CVodeSetJacFn(L->mem, jac_klu) != CV_SUCCESS) fail("CVodeSetJacFn", l);
+  } else if (opt.solver == TreeCvodeSolver::kGmres) {
+    const Tree* one = &L->tree;
+    L->pre = make_tree_lanes(std::span<const Tree>(one, 1));
+    std::fill(L->pre.gravity.begin(), L->pre.gravity.end(), 0.0);
+    L->pre_ws = TreeLanesWorkspace(L->pre);
+    L->k = L->pre.stiffness;
+    L->c = L->pre.damping;
+    for (auto* v : {&L->zero, &L->D, &L->w, &L->out}) v->assign(static_cast<std::size_t>(n), 0.0);
+    L->ls = SUNLinSol_SPGMR(L->y, SUN_PREC_LEFT, 0, L->ctx);
+    if (!L->ls) fail("SUNLinSol_SPGMR", l);
+    if (CVodeSetLinearSolver(L->mem, L->ls, nullptr) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
+    if (CVodeSetPreconditioner(L->mem, psetup, psolve) != CV_SUCCESS) fail("CVodeSetPreconditioner", l);
   } else {
     L->A = SUNDenseMatrix(ny, ny, L->ctx);
     if (!L->A) fail("SUNDenseMatrix", l);

@@ -22,34 +22,47 @@
 //           pattern [[0, I], [dqdd/dq, dqdd/dqd]] (the zero diagonal of the top-left block stored so
 //           that CVODE forms I - gamma J in place): 2 nv (nv + 1) stored entries, 2 nv right-hand sides
 //           per Jacobian, as dense.
+//   kGmres  matrix-free: SUNLinSol_SPGMR (left preconditioning, Krylov dimension 5), J v by CVODE's
+//           difference quotient (one right-hand side per iteration), preconditioned by the stiff part
+//           of the Jacobian, the joint springs K and dampers C: P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]],
+//           solved exactly in O(nv) by one ABA pass with gamma C + gamma^2 K as extra armature (the
+//           fixed-step implicit pair's trick, multibody/lane_integrators.hpp), gravity and qd off. No
+//           Jacobian evaluations, no factorisation.
 // Honest note on KLU: the reduced (joint-space) ODE has no sparse Jacobian -- M(q)^-1 couples every
 // joint of a chain, so dqdd/dq and dqdd/dqd are full nv x nv blocks whatever the topology -- and KLU
 // cannot gain from sparsity in the usual sense. What it gains is the ordering: eliminating the
 // identity-structured q block first (AMD does) leaves the dense nv x nv Schur complement
 // I - gamma dqdd/dqd - gamma^2 dqdd/dq, a quarter of the dense 2 nv x 2 nv matrix and an eighth of
-// its LU flops, and KLU refactors with the first factorisation's pivot order. That is where KLU wins,
-// and it wins at every size measured. CPU seconds per second of simulated time, one 3-D flexible
-// link of N segments on a revolute hub (nv = 3 (N - 1) + 1), from the straight link at rest under
-// gravity, 1 ms samples, the default tolerances (rtol 1e-8, atol 1e-10); g++ -O2, one core of a
-// shared machine (bench/tree_bench.cpp BM_TreeCvode):
-//                      torque jumping every sample          torque constant (one BDF history)
-//    N   nv       dense      KLU   dense/KLU  steps/s      dense     KLU   dense/KLU  steps/s
-//    2    4       0.16     0.16      1.0       3.8e4        -        -        -          -
-//    8   22       3.5      2.2       1.6       1.0e5       0.70     0.41     1.7       1.9e4
-//   24   70      41       17         2.4       1.0e5       7.5      2.9      2.6       1.8e4
-//   48  142     231       68         3.4       9.9e4      44       13        3.3       1.7e4
-// The step counts are nearly the same for both solvers (only the difference-quotient Jacobians differ), so
-// the ratio is the linear algebra: the dense 2 nv LU grows as 8 nv^3 against KLU's ~nv^3 and
-// dominates dense from N = 8 on. In KLU's own profile at N = 48 the refactorisation is a third, the
-// forward-dynamics passes (the Jacobian's 2 nv columns, then the Newton iterations) another third,
-// CVODE's sparse copy / zero / I - gamma J a tenth. Not sparsity: along a chain even M(q) is full in
-// joint coordinates, so the descriptor form M(q) qdd = f is no sparser; a truly sparse Jacobian needs
-// body coordinates with joint constraints (a DAE for IDA). Restarting at every sample costs about 5.5 times
-// the steps of one history (BDF restarts at order 1 with a small step; giving it the last step size
-// instead of CVODE's estimate was tried and made it slower); the joint springs and dampers are the
-// stiffness (the cell torsion's real poles at beta omega^2), the lightly damped bending modes at
-// rtol 1e-8 what sets the step.
-// The Jacobian itself (2 nv forward-dynamics passes, O(nv^2)) costs the same in both.
+// its LU flops, and KLU refactors with the first factorisation's pivot order. That is where KLU wins
+// over dense, at every size measured. The better formulation is kGmres: the stiffness sits in the
+// diagonal K and C, whose Newton system the ABA solves in O(nv), so no nv x nv matrix is ever formed.
+// CPU seconds per second of simulated time, one 3-D flexible link of N segments on a revolute hub
+// (nv = 3 (N - 1) + 1), from the straight link at rest under gravity, 1 ms samples, the default
+// tolerances (rtol 1e-8, atol 1e-10); g++ -O2, one core of a shared machine, one run each
+// (bench/tree_bench.cpp BM_TreeCvode):
+//                 torque jumping every sample (restarts)      torque constant (one BDF history)
+//    N   nv      dense    KLU  GMRES  dense/KLU  steps/s      dense    KLU  GMRES  dense/KLU  steps/s
+//    2    4      0.16   0.16     -       1.0     3.8e4          -       -      -       -          -
+//    8   22      3.5    2.2    3.1       1.6     1.0e5        0.70   0.41   0.54     1.7      1.9e4
+//   24   70     41     17      8.8       2.4     1.0e5        7.5    2.9    1.5      2.6      1.8e4
+//   48  142    231     68     16         3.4     9.9e4       44     13      2.9      3.3      1.7e4
+// So: dense never wins; KLU is the fastest on short links (N = 8, nv = 22), preconditioned GMRES from
+// N = 24 on (2x KLU at N = 24, 4x at N = 48, the gap growing with nv: no O(nv^2) Jacobian, no O(nv^3)
+// factorisation). The step counts are nearly the same for all three (the same BDF error control;
+// GMRES's Newton solves are accurate enough), so the ratios are the linear algebra.
+// Dense against KLU: the Jacobian (2 nv forward-dynamics passes, O(nv^2)) costs the same in both; the
+// dense 2 nv LU grows as 8 nv^3 against KLU's ~nv^3 and dominates dense from N = 8 on. In KLU's own
+// profile at N = 48 the refactorisation is a third, the forward-dynamics passes (the Jacobian's 2 nv
+// columns, then the Newton iterations) another third, CVODE's sparse copy / zero / I - gamma J a
+// tenth. Not sparsity: along a chain even M(q) is full in joint coordinates, so the descriptor form
+// M(q) qdd = f is no sparser; a truly sparse Jacobian needs body coordinates with joint constraints
+// (a DAE for IDA).
+// GMRES's preconditioner leaves out gravity, the velocity terms and dM/dq; where they are stiff
+// rather than the joint springs and dampers (not in these links), GMRES needs more iterations.
+// Restarting at every sample costs about 5.5 times the steps of one history (BDF restarts at order 1
+// with a small step; handing it the last step size instead of CVODE's estimate was tried and was
+// slower). The joint springs and dampers are the stiffness (the cell torsion's real poles at
+// beta omega^2); the lightly damped bending modes at rtol 1e-8 set the step.
 #pragma once
 
 #include <memory>
@@ -60,10 +73,10 @@
 
 namespace ff {
 
-enum class TreeCvodeSolver { kDense, kKlu };
+enum class TreeCvodeSolver { kDense, kKlu, kGmres };
 
 struct TreeCvodeOptions {
-  TreeCvodeSolver solver = TreeCvodeSolver::kDense;
+  TreeCvodeSolver solver = TreeCvodeSolver::kDense;  // kGmres is the fastest on long links (above)
   double rtol = 1e-8;       // relative tolerance, > 0
   double atol = 1e-10;      // absolute tolerance (rad, m and their rates alike), > 0
   int max_steps = 100000;   // CVODE's internal steps per lane and advance, > 0

@@ -1,12 +1,13 @@
 // multibody/tree_cvode: CVODE over tree lanes. An undamped double pendulum keeps its energy to the
 // tolerance; on a 3-D flexible arm under gravity with a held torque that jumps, CVODE agrees with the
-// lane RK4 at a small step, and dense and KLU agree; a lane's bits are the same alone and in any
+// lane RK4 at a small step, and dense, KLU and preconditioned GMRES agree; a lane's bits are the same alone and in any
 // position of a batch; a lane CVODE fails on reports it and keeps its state, the others go on.
 #include "multibody/tree_cvode.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "multibody/algorithms.hpp"
@@ -160,32 +161,38 @@ TEST(TreeCvode, FollowsTheLaneRk4OnAFlexibleArmWithAHeldTorque) {
     for (int i = 0; i < sub; ++i) step_tree_rk4(tl, tau.data(), s, ws, hs / sub);
   }
   const VectorXd ref = get_lane(tl, s, 0);
-  long steps = 0;
-  const VectorXd x = run_cvode(tree, {TreeCvodeSolver::kDense, 1e-10, 1e-12, 100000}, hs, samples, &steps);
-  const double rq = test::rel_diff(x.head(tl.nv), ref.head(tl.nv)), rv = test::rel_diff(x.tail(tl.nv), ref.tail(tl.nv));
-  RecordProperty("rel_q", test::sci(rq));
-  RecordProperty("rel_qd", test::sci(rv));
-  RecordProperty("steps", static_cast<int>(steps));
-  EXPECT_LT(rq, 1e-6);
-  EXPECT_LT(rv, 1e-6);
+  for (TreeCvodeSolver solver : {TreeCvodeSolver::kDense, TreeCvodeSolver::kGmres}) {
+    const std::string name = solver == TreeCvodeSolver::kDense ? "dense" : "gmres";
+    long steps = 0;
+    const VectorXd x = run_cvode(tree, {solver, 1e-10, 1e-12, 100000}, hs, samples, &steps);
+    const double rq = test::rel_diff(x.head(tl.nv), ref.head(tl.nv)), rv = test::rel_diff(x.tail(tl.nv), ref.tail(tl.nv));
+    RecordProperty(name + "_rel_q", test::sci(rq));
+    RecordProperty(name + "_rel_qd", test::sci(rv));
+    RecordProperty(name + "_steps", static_cast<int>(steps));
+    EXPECT_LT(rq, 1e-6) << name;
+    EXPECT_LT(rv, 1e-6) << name;
+  }
 }
 
-TEST(TreeCvode, DenseAndKluAgreeToTheTolerance) {
+TEST(TreeCvode, DenseKluAndGmresAgreeToTheTolerance) {
   const Tree tree = flexible_arm(6, 1e-4);
   const VectorXd xd = run_cvode(tree, {TreeCvodeSolver::kDense, 1e-8, 1e-10, 100000}, 0.01, 5);
-  const VectorXd xk = run_cvode(tree, {TreeCvodeSolver::kKlu, 1e-8, 1e-10, 100000}, 0.01, 5);
   const int nv = tree.nv();
-  const double rq = test::rel_diff(xk.head(nv), xd.head(nv)), rv = test::rel_diff(xk.tail(nv), xd.tail(nv));
-  RecordProperty("rel_q", test::sci(rq));
-  RecordProperty("rel_qd", test::sci(rv));
-  EXPECT_LT(rq, 1e-5);
-  EXPECT_LT(rv, 1e-5);
+  for (TreeCvodeSolver solver : {TreeCvodeSolver::kKlu, TreeCvodeSolver::kGmres}) {
+    const std::string name = solver == TreeCvodeSolver::kKlu ? "klu" : "gmres";
+    const VectorXd x = run_cvode(tree, {solver, 1e-8, 1e-10, 100000}, 0.01, 5);
+    const double rq = test::rel_diff(x.head(nv), xd.head(nv)), rv = test::rel_diff(x.tail(nv), xd.tail(nv));
+    RecordProperty(name + "_rel_q", test::sci(rq));
+    RecordProperty(name + "_rel_qd", test::sci(rv));
+    EXPECT_LT(rq, 1e-5) << name;
+    EXPECT_LT(rv, 1e-5) << name;
+  }
 }
 
 TEST(TreeCvode, ALaneGivesTheSameBitsAloneAndInAnyPositionOfABatch) {
   const std::vector<Tree> others = {flexible_arm(3, 1e-4, 2.0), flexible_arm(3, 1e-4, 0.4)};
   const Tree mine = flexible_arm(3, 1e-4, 1.0);
-  for (TreeCvodeSolver solver : {TreeCvodeSolver::kDense, TreeCvodeSolver::kKlu}) {
+  for (TreeCvodeSolver solver : {TreeCvodeSolver::kDense, TreeCvodeSolver::kKlu, TreeCvodeSolver::kGmres}) {
     auto go = [&](int at, int W) {
       std::vector<Tree> trees;
       for (int l = 0, o = 0; l < W; ++l) trees.push_back(l == at ? mine : others[static_cast<std::size_t>(o++)]);
@@ -224,7 +231,7 @@ TEST(TreeCvode, AFailedLaneReportsItAndKeepsItsStateWhileTheOthersGoOn) {
   bad[3] = std::nan("");
   set_lane(tl, s, 2, bad);
   const TreeLanesState before = s;
-  for (TreeCvodeSolver solver : {TreeCvodeSolver::kDense, TreeCvodeSolver::kKlu}) {
+  for (TreeCvodeSolver solver : {TreeCvodeSolver::kDense, TreeCvodeSolver::kKlu, TreeCvodeSolver::kGmres}) {
     s = before;
     TreeCvode cv(tl, {solver, 1e-8, 1e-10, 5});
     std::vector<char> ok;
