@@ -1,6 +1,7 @@
 // Throughput of the tree kernels (multibody/): forward dynamics per variant by the lane-batched ABA
 // (multibody/lanes) against the scalar one (multibody/algorithms), and RK4 / SDIRK2 steps over lanes,
-// on a rigid 6-DOF arm and a two-link 3-D flexible arm.
+// on a rigid 6-DOF arm and a two-link 3-D flexible arm; CVODE (multibody/tree_cvode) dense, KLU and
+// preconditioned GMRES on one 3-D flexible link per second of simulated time.
 // Run: build/bench/tree_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
@@ -11,6 +12,7 @@
 #include "multibody/flexible_link.hpp"
 #include "multibody/lane_integrators.hpp"
 #include "multibody/lanes.hpp"
+#include "multibody/tree_cvode.hpp"
 
 namespace {
 
@@ -142,6 +144,61 @@ void BM_LaneStep(benchmark::State& state) {
 }
 BENCHMARK(BM_LaneStep)->ArgNames({"flex", "N", "W", "sdirk2"})
     ->Args({0, 0, 8, 0})->Args({0, 0, 8, 1})->Args({1, 8, 8, 0})->Args({1, 8, 8, 1});
+
+// One 3-D flexible aluminium link of N segments (bending in two planes and torsion, beta = 1e-4 s, a
+// 0.5 kg payload) on a revolute hub about z, gravity along -z: nv = 3 (N - 1) + 1.
+ff::Tree hub_link(int N) {
+  ff::TreeSpec s;
+  ff::FlexibleLinkSpec link;
+  link.length = 0.5;
+  link.section = {70e9, 26e9, 2700.0, 2.0e-4, 1.7e-9, 6.7e-8, 6.0e-9};
+  link.segments = N;
+  link.damping_time = 1e-4;
+  link.payload.mass = 0.5;
+  link.root_joint.type = ff::JointType::kRevolute;
+  link.root_joint.armature = 0.05;
+  ff::append_flexible_link(s, -1, Vec3::Zero(), Mat3::Identity(), link);
+  return ff::make_tree(s);
+}
+
+// CVODE on hub_link(N), W = 1, from the straight link at rest: 0.1 s of simulated time in 1 ms
+// samples with the hub torque held, constant (one BDF history) or a new value every sample (a
+// restart every sample, as under a controller). args: N, solver (0 dense, 1 KLU, 2 GMRES), jump (0, 1).
+void BM_TreeCvode(benchmark::State& state) {
+  const int N = static_cast<int>(state.range(0));
+  const ff::TreeLanes tl = ff::make_tree_lanes(std::vector<ff::Tree>{hub_link(N)});
+  ff::TreeCvodeOptions opt;
+  opt.solver = state.range(1) == 1   ? ff::TreeCvodeSolver::kKlu
+               : state.range(1) == 2 ? ff::TreeCvodeSolver::kGmres
+                                     : ff::TreeCvodeSolver::kDense;
+  const bool jump = state.range(2) == 1;
+  ff::TreeCvode cv(tl, opt);
+  std::vector<double> tau(static_cast<std::size_t>(tl.nv), 0.0);
+  std::vector<char> ok;
+  const int samples = 100;
+  const double h = 1e-3;
+  bool all_ok = true;
+  for (auto _ : state) {
+    ff::TreeLanesState s = ff::make_tree_lanes_state(tl);
+    for (int k = 0; k < samples; ++k) {
+      tau[0] = jump ? 2.0 * std::sin(0.05 * k) + 0.1 * (k % 2) : 1.0;
+      cv.advance(tl, tau.data(), s, k * h, h, ok);
+      all_ok = all_ok && ok[0];
+    }
+    benchmark::DoNotOptimize(s.q.data());
+  }
+  if (!all_ok) state.SkipWithError("CVODE failed");
+  state.counters["nv"] = tl.nv;
+  const double sim_s = static_cast<double>(state.iterations()) * samples * h;
+  state.counters["steps/sim_s"] = static_cast<double>(cv.steps(0)) / sim_s;
+  state.counters["rhs/sim_s"] = static_cast<double>(cv.rhs_evals(0)) / sim_s;
+  // Wall time per second of simulated time = 1 / this rate.
+  state.counters["sim_s/s"] = benchmark::Counter(samples * h, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TreeCvode)->ArgNames({"N", "klu", "jump"})->Unit(benchmark::kMillisecond)
+    ->Args({24, 0, 1})->Args({24, 1, 1})->Args({24, 2, 1})->Args({24, 2, 0})->Args({8, 2, 1})->Args({8, 2, 0})->Args({48, 2, 1})->Args({48, 2, 0})->Args({24, 0, 0})->Args({24, 1, 0})
+    ->Args({8, 0, 1})->Args({8, 1, 1})->Args({8, 0, 0})->Args({8, 1, 0})
+    ->Args({48, 0, 1})->Args({48, 1, 1})->Args({48, 0, 0})->Args({48, 1, 0})->Iterations(1);
 
 }  // namespace
 

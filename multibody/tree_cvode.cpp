@@ -1,0 +1,332 @@
+#include "multibody/tree_cvode.hpp"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "multibody/algorithms.hpp"
+
+namespace ff {
+
+namespace {
+
+using Eigen::Map;
+using Eigen::VectorXd;
+
+// One lane's solver and everything its right-hand side needs. Never moved once CVODE holds a
+// pointer to it (kept behind unique_ptr).
+struct Lane {
+  Tree tree;                // the lane's own copy
+  TreeWorkspace ws;
+  int nv = 0;
+  VectorXd tau_held;        // (nv) the applied force over the current advance
+  VectorXd tau;             // (nv) scratch: applied + passive
+  VectorXd ypert, fpert;    // (2 nv) the finite-difference Jacobian's perturbed state and rate
+  long fd_rhs_evals = 0;    // right-hand sides of our own Jacobian since the last ReInit
+
+  // kGmres's preconditioner: the lane's tree as one lane without gravity, its ABA with armature.
+  TreeLanes pre;
+  TreeLanesWorkspace pre_ws;
+  std::vector<double> k, c;             // (nv) the joint springs and dampers
+  std::vector<double> zero, D, w, out;  // (nv) qd = 0, gamma c + gamma^2 k, right-hand side, solution
+
+  // Where the last successful advance ended, for continuing without ReInit.
+  bool live = false;        // CVODE holds a history that ends at (t_end, y_end) under tau_end
+  double t_end = 0.0;
+  VectorXd tau_end;
+
+  long steps_done = 0, rhs_done = 0;  // totals before the last ReInit (CVODE's counters restart there)
+
+  SUNContext ctx = nullptr;
+  N_Vector y = nullptr;
+  SUNMatrix A = nullptr;
+  SUNLinearSolver ls = nullptr;
+  void* mem = nullptr;
+
+  Lane() = default;
+  Lane(const Lane&) = delete;
+  Lane& operator=(const Lane&) = delete;
+  ~Lane() {
+    if (mem) CVodeFree(&mem);
+    if (ls) SUNLinSolFree(ls);
+    if (A) SUNMatDestroy(A);
+    if (y) N_VDestroy(y);
+    if (ctx) SUNContext_Free(&ctx);
+  }
+
+  long cvode_steps() const {
+    long n = 0;
+    CVodeGetNumSteps(mem, &n);
+    return n;
+  }
+  long cvode_rhs() const {
+    long nfe = 0, nfe_ls = 0;
+    CVodeGetNumRhsEvals(mem, &nfe);
+    CVodeGetNumLinRhsEvals(mem, &nfe_ls);
+    return nfe + nfe_ls + fd_rhs_evals;
+  }
+};
+
+// f = [qd; qdd](y). Returns false when anything is not finite.
+bool eval(Lane& L, const double* y, double* f) {
+  const int n = L.nv;
+  const Map<const VectorXd> q(y, n), qd(y + n, n);
+  Map<VectorXd> qdd(f + n, n);
+  calc_passive_forces(L.tree, q, qd, L.tau);
+  L.tau += L.tau_held;
+  calc_forward_dynamics(L.tree, q, qd, L.tau, qdd, L.ws);
+  std::copy(y + n, y + 2 * n, f);
+  for (int i = 0; i < 2 * n; ++i)
+    if (!std::isfinite(f[i])) return false;
+  return true;
+}
+
+// A non-finite rate is a recoverable failure (CVODE retries with a smaller step); at the initial
+// point it becomes CV_FIRST_RHSFUNC_ERR.
+int rhs(sunrealtype /*t*/, N_Vector y, N_Vector ydot, void* user_data) {
+  Lane& L = *static_cast<Lane*>(user_data);
+  return eval(L, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot)) ? 0 : 1;
+}
+
+// CSC pattern of J = [[0, I], [dqdd/dq, dqdd/dqd]]: column j < nv holds rows {j} + {nv .. 2nv-1}
+// (the diagonal stored as an explicit zero), column nv + i holds rows {i} + {nv .. 2nv-1}. Written on
+// every call, because CVODE zeroes the matrix (SUNMatZero clears the pattern too).
+void write_pattern(SUNMatrix A, int n) {
+  sunindextype* colptrs = SUNSparseMatrix_IndexPointers(A);
+  sunindextype* rowvals = SUNSparseMatrix_IndexValues(A);
+  sunindextype p = 0;
+  for (int j = 0; j < 2 * n; ++j) {
+    colptrs[j] = p;
+    rowvals[p++] = j < n ? j : j - n;
+    for (int i = 0; i < n; ++i) rowvals[p++] = n + i;
+  }
+  colptrs[2 * n] = p;
+}
+
+// Forward-difference Jacobian for KLU: the top block exact (0 and I); each column of the bottom
+// block one forward-dynamics pass at y + delta_j e_j, delta_j = sqrt(eps) max(|y_j|, 1) (the
+// dynamics are nonlinear on a scale of 1 rad and 1 rad/s), made exactly representable.
+int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_data, N_Vector /*tmp1*/,
+            N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
+  Lane& L = *static_cast<Lane*>(user_data);
+  const int n = L.nv;
+  const double* yd = N_VGetArrayPointer(y);
+  const double* f_low = N_VGetArrayPointer(fy) + n;
+  double* data = SUNSparseMatrix_Data(A);
+  write_pattern(A, n);
+  static const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
+  double* yp = L.ypert.data();
+  double* fp = L.fpert.data();
+  std::copy(yd, yd + 2 * n, yp);
+  sunindextype p = 0;
+  for (int j = 0; j < 2 * n; ++j) {
+    data[p++] = j < n ? 0.0 : 1.0;
+    const double yj = yd[j];
+    const double delta = (yj + srur * std::max(std::abs(yj), 1.0)) - yj;
+    yp[j] = yj + delta;
+    const bool finite = eval(L, yp, fp);
+    ++L.fd_rhs_evals;
+    yp[j] = yj;
+    if (!finite) return 1;  // recoverable: CVODE cuts the step and retries
+    const double r = 1.0 / delta;
+    for (int i = 0; i < n; ++i) data[p++] = (fp[n + i] - f_low[i]) * r;
+  }
+  return 0;
+}
+
+// kGmres's preconditioner P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]] (K, C: the joint springs and
+// dampers, the stiff part of the Jacobian; gravity, velocity products and dM/dq left out). P z = r:
+//   (M + D) w = -D r_v - gamma K r_q,  z_v = r_v + w,  z_q = r_q + gamma z_v,  D = gamma C + gamma^2 K,
+// one ABA pass with D as extra armature (no gravity, qd = 0), O(nv); nothing to set up.
+int psetup(sunrealtype, N_Vector, N_Vector, sunbooleantype, sunbooleantype* jcur, sunrealtype, void*) {
+  *jcur = SUNTRUE;
+  return 0;
+}
+
+int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector z, sunrealtype gamma,
+           sunrealtype /*delta*/, int /*lr*/, void* user_data) {
+  Lane& L = *static_cast<Lane*>(user_data);
+  const int n = L.nv;
+  const double* yd = N_VGetArrayPointer(y);
+  const double* rd = N_VGetArrayPointer(r);
+  double* zd = N_VGetArrayPointer(z);
+  for (int i = 0; i < n; ++i) {
+    const double gk = gamma * L.k[static_cast<std::size_t>(i)];
+    L.D[static_cast<std::size_t>(i)] = gamma * L.c[static_cast<std::size_t>(i)] + gamma * gk;
+    L.w[static_cast<std::size_t>(i)] = -L.D[static_cast<std::size_t>(i)] * rd[n + i] - gk * rd[i];
+  }
+  compute_tree_forward_dynamics(L.pre, yd, L.zero.data(), L.w.data(), L.D.data(), L.out.data(), L.pre_ws);
+  for (int i = 0; i < n; ++i) {
+    zd[n + i] = rd[n + i] + L.out[static_cast<std::size_t>(i)];
+    zd[i] = rd[i] + gamma * zd[n + i];
+  }
+  for (int i = 0; i < 2 * n; ++i)
+    if (!std::isfinite(zd[i])) return 1;  // recoverable
+  return 0;
+}
+
+// CVODE reports through this handler; advance() must never print.
+void silent_error_handler(int, const char*, const char*, char*, void*) {}
+
+[[noreturn]] void fail(const std::string& what, int lane) {
+  throw std::runtime_error("TreeCvode: " + what + " failed for lane " + std::to_string(lane));
+}
+
+std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptions& opt) {
+  auto L = std::make_unique<Lane>();
+  L->tree = tl.trees[static_cast<std::size_t>(l)];
+  L->ws = TreeWorkspace(L->tree);
+  const int n = tl.nv, ny = 2 * n;
+  L->nv = n;
+  L->tau_held = VectorXd::Zero(n);
+  L->tau = VectorXd::Zero(n);
+  L->tau_end = VectorXd::Zero(n);
+  L->ypert = VectorXd::Zero(ny);
+  L->fpert = VectorXd::Zero(ny);
+
+  if (SUNContext_Create(nullptr, &L->ctx) != 0) fail("SUNContext_Create", l);
+  L->y = N_VNew_Serial(ny, L->ctx);
+  if (!L->y) fail("N_VNew_Serial", l);
+  N_VConst(0.0, L->y);
+  L->mem = CVodeCreate(CV_BDF, L->ctx);
+  if (!L->mem) fail("CVodeCreate", l);
+  if (CVodeSetErrHandlerFn(L->mem, silent_error_handler, nullptr) != CV_SUCCESS) fail("CVodeSetErrHandlerFn", l);
+  if (CVodeInit(L->mem, rhs, 0.0, L->y) != CV_SUCCESS) fail("CVodeInit", l);
+  if (CVodeSetUserData(L->mem, L.get()) != CV_SUCCESS) fail("CVodeSetUserData", l);
+  if (CVodeSStolerances(L->mem, opt.rtol, opt.atol) != CV_SUCCESS) fail("CVodeSStolerances", l);
+  if (CVodeSetMaxNumSteps(L->mem, opt.max_steps) != CV_SUCCESS) fail("CVodeSetMaxNumSteps", l);
+
+  if (opt.solver == TreeCvodeSolver::kKlu) {
+    const sunindextype nnz = static_cast<sunindextype>(ny) * (n + 1);
+    L->A = SUNSparseMatrix(ny, ny, nnz, CSC_MAT, L->ctx);
+    if (!L->A) fail("SUNSparseMatrix", l);
+    L->ls = SUNLinSol_KLU(L->y, L->A, L->ctx);
+    if (!L->ls) fail("SUNLinSol_KLU", l);
+    if (CVodeSetLinearSolver(L->mem, L->ls, L->A) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
+    if (CVodeSetJacFn(L->mem, jac_klu) != CV_SUCCESS) fail("CVodeSetJacFn", l);
+  } else if (opt.solver == TreeCvodeSolver::kGmres) {
+    const Tree* one = &L->tree;
+    L->pre = make_tree_lanes(std::span<const Tree>(one, 1));
+    std::fill(L->pre.gravity.begin(), L->pre.gravity.end(), 0.0);
+    L->pre_ws = TreeLanesWorkspace(L->pre);
+    L->k = L->pre.stiffness;
+    L->c = L->pre.damping;
+    for (auto* v : {&L->zero, &L->D, &L->w, &L->out}) v->assign(static_cast<std::size_t>(n), 0.0);
+    L->ls = SUNLinSol_SPGMR(L->y, SUN_PREC_LEFT, 0, L->ctx);
+    if (!L->ls) fail("SUNLinSol_SPGMR", l);
+    if (CVodeSetLinearSolver(L->mem, L->ls, nullptr) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
+    if (CVodeSetPreconditioner(L->mem, psetup, psolve) != CV_SUCCESS) fail("CVodeSetPreconditioner", l);
+  } else {
+    L->A = SUNDenseMatrix(ny, ny, L->ctx);
+    if (!L->A) fail("SUNDenseMatrix", l);
+    L->ls = SUNLinSol_Dense(L->y, L->A, L->ctx);
+    if (!L->ls) fail("SUNLinSol_Dense", l);
+    if (CVodeSetLinearSolver(L->mem, L->ls, L->A) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
+  }
+  return L;
+}
+
+}  // namespace
+
+struct TreeCvode::Impl {
+  int W = 0, nv = 0;
+  std::vector<std::unique_ptr<Lane>> lanes;
+  const Lane& lane(int l) const {
+    if (l < 0 || l >= W) throw std::out_of_range("TreeCvode: lane " + std::to_string(l) + " out of range");
+    return *lanes[static_cast<std::size_t>(l)];
+  }
+};
+
+TreeCvode::TreeCvode(const TreeLanes& tl, const TreeCvodeOptions& opt) : impl_(std::make_unique<Impl>()) {
+  if (!(opt.rtol > 0.0) || !std::isfinite(opt.rtol) || !(opt.atol > 0.0) || !std::isfinite(opt.atol))
+    throw std::invalid_argument("TreeCvode: rtol and atol must be positive and finite");
+  if (opt.max_steps <= 0) throw std::invalid_argument("TreeCvode: max_steps must be positive");
+  if (tl.W <= 0 || static_cast<int>(tl.trees.size()) != tl.W)
+    throw std::invalid_argument("TreeCvode: the lanes hold no trees");
+  impl_->W = tl.W;
+  impl_->nv = tl.nv;
+  impl_->lanes.reserve(static_cast<std::size_t>(tl.W));
+  for (int l = 0; l < tl.W; ++l) impl_->lanes.push_back(make_lane(tl, l, opt));
+}
+
+TreeCvode::~TreeCvode() = default;
+
+void TreeCvode::advance(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, double t, double dt,
+                        std::vector<char>& ok) {
+  const int W = impl_->W, n = impl_->nv;
+  if (tl.W != W || tl.nv != n) throw std::invalid_argument("TreeCvode: lanes of another shape than it was made for");
+  const std::size_t size = static_cast<std::size_t>(n) * W;
+  if (s.q.size() != size || s.qd.size() != size || s.a_prev.size() != size)
+    throw std::invalid_argument("TreeCvode: state vectors are not nv x W");
+  if (!std::isfinite(t) || !std::isfinite(dt) || dt < 0.0)
+    throw std::invalid_argument("TreeCvode: t and dt must be finite, dt >= 0");
+  ok.assign(static_cast<std::size_t>(W), 1);
+  if (dt == 0.0 || n == 0) return;
+  const double t1 = t + dt;
+  for (int l = 0; l < W; ++l) {
+    Lane& L = *impl_->lanes[static_cast<std::size_t>(l)];
+    double* y = N_VGetArrayPointer(L.y);
+    // Gather the lane's state (stride W) and held force; continue CVODE's history only when nothing
+    // differs from where it stopped.
+    bool same = L.live && t == L.t_end;
+    for (int i = 0; i < n; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i) * W + l;
+      const double tau_i = tau_applied ? tau_applied[k] : 0.0;
+      same = same && s.q[k] == y[i] && s.qd[k] == y[n + i] && tau_i == L.tau_end[i];
+      y[i] = s.q[k];
+      y[n + i] = s.qd[k];
+      L.tau_held[i] = tau_i;
+    }
+    int flag = CV_SUCCESS;
+    if (!same) {
+      L.steps_done += L.cvode_steps();
+      L.rhs_done += L.cvode_rhs();
+      L.fd_rhs_evals = 0;
+      flag = CVodeReInit(L.mem, t, L.y);
+    }
+    if (flag >= 0) flag = CVodeSetStopTime(L.mem, t1);
+    sunrealtype tret = t;
+    if (flag >= 0) flag = CVode(L.mem, t1, L.y, &tret, CV_NORMAL);
+    if (flag < 0) {
+      ok[static_cast<std::size_t>(l)] = 0;  // s keeps the lane's state at t
+      L.live = false;
+      continue;
+    }
+    L.live = true;
+    L.t_end = t1;
+    L.tau_end = L.tau_held;
+    // Scatter the new state and its accelerations (one more forward-dynamics pass, outside CVODE).
+    eval(L, y, L.fpert.data());
+    for (int i = 0; i < n; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i) * W + l;
+      s.q[k] = y[i];
+      s.qd[k] = y[n + i];
+      s.a_prev[k] = L.fpert[n + i];
+    }
+  }
+}
+
+long TreeCvode::steps(int lane) const {
+  const Lane& L = impl_->lane(lane);
+  return L.steps_done + L.cvode_steps();
+}
+
+long TreeCvode::rhs_evals(int lane) const {
+  const Lane& L = impl_->lane(lane);
+  return L.rhs_done + L.cvode_rhs();
+}
+
+}  // namespace ff
