@@ -17,22 +17,12 @@ namespace ff {
 
 namespace {
 
-const char* integrator_label(Integrator i) {
-  switch (i) {
-    case Integrator::kSdirk2: return "sdirk2";
-    case Integrator::kMidpoint: return "midpoint";
-    case Integrator::kCvodeDense: return "cvode_dense";
-    case Integrator::kCvodeKlu: return "cvode_klu";
-    default: return "rk4";
-  }
-}
-
 // An arm model (arm/): trace.csv, metrics.csv, table.md (metric | value) and the arm plots.
 void simulate_arm(const std::string& path, const std::vector<std::string>& sets, const std::string& out) {
   const ArmModel m = load_arm_with(path, sets);
   std::fprintf(stderr, "simulating %s: %d bodies, %d joints (%zu actuated), %.2f s, %s with %d substeps of %.3g ms\n",
                path.c_str(), m.tree.num_bodies(), m.tree.nv(), m.actuated.size(), m.duration,
-               integrator_label(m.integrator), m.substeps, 1e3 * m.control_period / m.substeps);
+               integrator_name(m.integrator), m.substeps, 1e3 * m.control_period / m.substeps);
   const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1));
   ResultTable table;
   table.columns = arm_metric_columns(m);

@@ -191,7 +191,9 @@ ArmModel make_arm(const ArmSpec& spec) {
       zetas.push_back(md.zeta);
     }
   }
-  m.substeps = spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
+  const bool cvode = m.integrator == Integrator::kCvodeDense || m.integrator == Integrator::kCvodeKlu ||
+                     m.integrator == Integrator::kCvodeGmres;
+  m.substeps = cvode ? 1 : spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
   for (ActuatedJoint& a : m.actuated) {
     const ShaperSpec& sh = a.control.shaper;
     const ShaperKind kind = parse_shaper_kind(sh.type);

@@ -65,7 +65,8 @@ struct ArmSpec {
   double settle = 5.0;               // s after the last waypoint when duration is 0
   Integrator integrator = Integrator::kRk4;
   bool integrator_given = false;     // default: sdirk2 with a flexible link, rk4 without
-  int substeps = 0;                  // per control period; 0 = from the modes
+  int substeps = 0;                  // per control period; 0 = from the modes (CVODE: 1)
+  double rtol = 1e-8, atol = 1e-10;  // CVODE's tolerances
   double band = 0.02;                // settling band, fraction of each move's amplitude
 };
 

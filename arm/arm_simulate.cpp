@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -11,6 +12,7 @@
 #include "kernel/files.hpp"
 #include "multibody/lane_integrators.hpp"
 #include "multibody/lanes.hpp"
+#include "multibody/tree_cvode.hpp"
 
 namespace ff {
 
@@ -42,8 +44,8 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
       return "joint " + a.actuated[j].name + "'s control differs in shape";
   if (a.links.size() != b.links.size()) return "the flexible links differ";
   if (a.control_period != b.control_period || a.duration != b.duration || a.substeps != b.substeps ||
-      a.integrator != b.integrator)
-    return "the rate, duration, substeps or integrator differ";
+      a.integrator != b.integrator || a.spec.rtol != b.spec.rtol || a.spec.atol != b.spec.atol)
+    return "the rate, duration, substeps, integrator or its tolerances differ";
   return "";
 }
 
@@ -96,6 +98,19 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
     for (int j = 0; j < nv; ++j) s.q[static_cast<std::size_t>(j * W + l)] = lanes[l].q0[j];
 
   const double T = m0.control_period, h = T / m0.substeps;
+  // The variable-step reference: CVODE per lane over each control period.
+  std::unique_ptr<TreeCvode> cvode;
+  std::vector<char> cvode_ok(static_cast<std::size_t>(W), 1);
+  if (m0.integrator == Integrator::kCvodeDense || m0.integrator == Integrator::kCvodeKlu ||
+      m0.integrator == Integrator::kCvodeGmres) {
+    TreeCvodeOptions o;
+    o.solver = m0.integrator == Integrator::kCvodeDense ? TreeCvodeSolver::kDense
+               : m0.integrator == Integrator::kCvodeKlu ? TreeCvodeSolver::kKlu
+                                                        : TreeCvodeSolver::kGmres;
+    o.rtol = m0.spec.rtol;
+    o.atol = m0.spec.atol;
+    cvode = std::make_unique<TreeCvode>(tl, o);
+  }
   const long samples = static_cast<long>(std::floor(m0.duration / T + 1e-9)) + 1;
   const std::vector<std::string> names = arm_trace_names(m0);
   ArmRun run;
@@ -220,21 +235,30 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       const int d = m0.actuated[static_cast<std::size_t>(j)].dof;
       for (int l = 0; l < W; ++l) tau_applied[static_cast<std::size_t>(d * W + l)] = c.tau_held[static_cast<std::size_t>(j * W + l)];
     }
-    for (int sub = 0; sub < m0.substeps; ++sub) {
+    if (cvode) {
+      cvode->advance(tl, tau_applied.data(), s, t, T, cvode_ok);
+      for (int l = 0; l < W; ++l)
+        if (!cvode_ok[static_cast<std::size_t>(l)] && run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) {
+          run.status[static_cast<std::size_t>(l)] = LaneStatus::kSolverFail;
+          for (int j = 0; j < nv; ++j) s.q[static_cast<std::size_t>(j * W + l)] = std::nan("");
+        }
+    }
+    for (int sub = 0; sub < (cvode ? 0 : m0.substeps); ++sub) {
       switch (m0.integrator) {
         case Integrator::kSdirk2: step_tree_sdirk2(tl, tau_applied.data(), s, ws, h); break;
         case Integrator::kMidpoint: step_tree_midpoint(tl, tau_applied.data(), s, ws, h); break;
         default: step_tree_rk4(tl, tau_applied.data(), s, ws, h); break;
       }
     }
-    // A lane gone non-finite is frozen at zero (its neighbours never see it: lanes are independent).
+    // A lane gone non-finite (or whose solver failed) is frozen at zero (its neighbours never see it:
+    // lanes are independent).
     for (int l = 0; l < W; ++l) {
-      if (run.status[static_cast<std::size_t>(l)] != LaneStatus::kOk) continue;
+      if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kNonfinite) continue;
       bool finite = true;
       for (int j = 0; j < nv; ++j)
         finite &= std::isfinite(s.q[static_cast<std::size_t>(j * W + l)]) && std::isfinite(s.qd[static_cast<std::size_t>(j * W + l)]);
       if (!finite) {
-        run.status[static_cast<std::size_t>(l)] = LaneStatus::kNonfinite;
+        if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) run.status[static_cast<std::size_t>(l)] = LaneStatus::kNonfinite;
         for (int j = 0; j < nv; ++j) {
           s.q[static_cast<std::size_t>(j * W + l)] = 0.0;
           s.qd[static_cast<std::size_t>(j * W + l)] = 0.0;

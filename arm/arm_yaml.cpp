@@ -9,6 +9,7 @@
 #include "description/tree_yaml.hpp"
 #include "description/urdf.hpp"
 #include "kernel/errors.hpp"
+#include "kernel/model_io.hpp"
 
 namespace ff {
 
@@ -73,11 +74,13 @@ const std::array<Field<ArmWaypoint>, 2> kWaypointFields{{
 struct SimulationBlock {
   std::string integrator = "auto";
 };
-const std::array<Field<ArmSpec>, 3> kSimulationFields{{
+const std::array<Field<ArmSpec>, 5> kSimulationFields{{
     {.key = "duration", .member = &ArmSpec::duration, .unit = "s", .bound = Bound::kNonNegative,
      .fallback = "0: the last waypoint + settle"},
     {.key = "settle", .member = &ArmSpec::settle, .unit = "s", .bound = Bound::kNonNegative},
     {.key = "substeps", .member = &ArmSpec::substeps, .bound = Bound::kNonNegative, .fallback = "0: from the modes"},
+    {.key = "rtol", .member = &ArmSpec::rtol, .bound = Bound::kPositive},
+    {.key = "atol", .member = &ArmSpec::atol, .bound = Bound::kPositive},
 }};
 const std::array<Field<SimulationBlock>, 1> kIntegratorFields{{
     {.key = "integrator", .member = &SimulationBlock::integrator,
@@ -243,11 +246,13 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   read_present(sim, kIntegratorFields, sb);
   sim.finish();
   s.integrator_given = sb.integrator != "auto";
-  if (sb.integrator == "rk4") s.integrator = Integrator::kRk4;
-  else if (sb.integrator == "sdirk2") s.integrator = Integrator::kSdirk2;
-  else if (sb.integrator == "midpoint") s.integrator = Integrator::kMidpoint;
-  else if (sb.integrator != "auto")
-    sim.fail("integrator", "unknown integrator '" + sb.integrator + "' (auto, rk4, midpoint, sdirk2)");
+  bool known = sb.integrator == "auto";
+  for (Integrator i : {Integrator::kRk4, Integrator::kMidpoint, Integrator::kSdirk2, Integrator::kCvodeDense,
+                       Integrator::kCvodeKlu, Integrator::kCvodeGmres})
+    if (sb.integrator == integrator_name(i)) s.integrator = i, known = true;
+  if (!known)
+    sim.fail("integrator", "unknown integrator '" + sb.integrator +
+                               "' (auto, rk4, midpoint, sdirk2, cvode_dense, cvode_klu, cvode_gmres)");
   if (s.substeps > 100000) sim.fail("substeps", "must be between 0 (automatic) and 100000");
 
   YamlReader metrics = top.child("metrics");

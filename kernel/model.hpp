@@ -177,7 +177,9 @@ struct TrajectorySpec {
 // joint springs and dampers implicit (any N). cvode_*: BDF reference with a dense or KLU solver.
 // midpoint: linearly implicit midpoint rule, joints implicit as in sdirk2, one articulated-body pass
 // per step (A-stable, not L-stable: short chains such as N = 6 at one step per sample).
-enum class Integrator { kRk4, kSdirk2, kCvodeDense, kCvodeKlu, kMidpoint };
+// cvode_gmres (arm models only): matrix-free CVODE, preconditioned by the joint springs
+// (multibody/tree_cvode.hpp).
+enum class Integrator { kRk4, kSdirk2, kCvodeDense, kCvodeKlu, kMidpoint, kCvodeGmres };
 
 struct SimulationSpec {
   double duration = 0.0;          // s; 0 = end of the last hold

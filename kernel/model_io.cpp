@@ -17,6 +17,7 @@ const char* integrator_name(Integrator i) {
     case Integrator::kCvodeDense: return "cvode_dense";
     case Integrator::kCvodeKlu: return "cvode_klu";
     case Integrator::kMidpoint: return "midpoint";
+    case Integrator::kCvodeGmres: return "cvode_gmres";
   }
   return "?";
 }

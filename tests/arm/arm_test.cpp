@@ -205,6 +205,32 @@ simulation: {duration: 0.08}
   EXPECT_GT(elastic_motion, 1e-6);  // the link bends as it is swung
 }
 
+TEST(ArmSimulate, TheFixedStepIntegratorsFollowCvodeOnTheTwoLinkFlexibleArm) {
+  // configs/two_link_flexible.yaml (two flexible links, PD with feed-forward, a 1.5 s move): SDIRK2 at
+  // its automatic substeps and RK4 against CVODE (BDF, rtol 1e-10), the tool within 0.1 mm throughout.
+  const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/two_link_flexible.yaml";
+  auto with = [&](const std::string& integrator, const std::string& extra = "") {
+    YAML::Node doc = load_yaml_file(path);
+    doc["simulation"]["integrator"] = integrator;
+    doc["simulation"]["duration"] = 3.0;
+    if (!extra.empty()) doc["simulation"]["rtol"] = 1e-10, doc["simulation"]["atol"] = 1e-12;
+    const ArmModel m = parse_arm(doc, path);
+    return simulate_arms(std::span<const ArmModel>(&m, 1));
+  };
+  const ArmRun ref = with("cvode_dense", "tight");
+  ASSERT_EQ(ref.status[0], LaneStatus::kOk);
+  for (const char* integrator : {"sdirk2", "rk4", "cvode_klu", "cvode_gmres"}) {
+    const ArmRun r = with(integrator);
+    ASSERT_EQ(r.status[0], LaneStatus::kOk) << integrator;
+    double worst = 0.0;
+    for (const char* c : {"tool.x", "tool.y"})
+      for (std::size_t k = 0; k < r.traces[0].t().size(); ++k)
+        worst = std::max(worst, std::abs(r.traces[0].column(c)[k] - ref.traces[0].column(c)[k]));
+    RecordProperty(std::string(integrator) + "_tool_error_m", std::to_string(worst));
+    EXPECT_LT(worst, 1e-4) << integrator;
+  }
+}
+
 TEST(ArmYaml, AnUnknownJointAPassiveWaypointAndABadBlockAreNamedAtTheirLines) {
   EXPECT_EQ(arm_error(pendulum("{kp: 400, kq: 1}")), "arm.yaml:13: joints.arm.controller.kq: unknown key");
   std::string text = pendulum("{kp: 400}");
