@@ -4,6 +4,8 @@
 #include <cstdio>
 
 #include "apps/verbs.hpp"
+#include "arm/arm_simulate.hpp"
+#include "plotting/animate3d_arm.hpp"
 #include "kernel/batch.hpp"
 #include "kernel/simulate.hpp"
 #include "plotting/animate.hpp"
@@ -11,17 +13,46 @@
 
 namespace ff {
 
+namespace {
+
+struct AnimateArgs {
+  std::string input, out, frame_png;
+  std::vector<std::string> sets;
+  int eval_id = -1;
+  double exaggeration = 1.0, fps = 30.0, speed = 1.0, frame_time = 0.0, azimuth = -55.0, elevation = 25.0;
+  int size = 960;
+};
+
+// An arm model in 3-D (plotting/animate3d.hpp): a perspective view of every body, the flexible links'
+// deflection exaggerated, the tool's path.
+void animate_arm(const ArmModel& m, const std::string& title, const AnimateArgs& a) {
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1), {.keep_q = true});
+  ArmAnimationOptions o;
+  o.fps = a.fps;
+  o.speed = a.speed;
+  o.style.title = title;
+  o.style.exaggeration = a.exaggeration;
+  o.camera.azimuth = a.azimuth * kDegree;
+  o.camera.elevation = a.elevation * kDegree;
+  o.camera.width = a.size;
+  o.camera.height = a.size * 3 / 4;
+  o.still_path = a.frame_png;
+  o.still_time = a.frame_time;
+  const ArmAnimationSummary s = write_arm_animation(m, run.traces[0].t(), run.q[0], a.out, o);
+  std::printf("wrote %s: %d frames, %.1f s of motion at %gx, deflection x%g%s\n", a.out.c_str(), s.frames, m.duration,
+              a.speed, a.exaggeration, a.frame_png.empty() ? "" : (", and " + a.frame_png).c_str());
+  if (run.status[0] != LaneStatus::kOk)
+    std::printf("warning: the run ended %s; %d frames show the warning instead of the arm\n",
+                lane_status_name(run.status[0]), s.nonfinite_frames);
+}
+
+}  // namespace
+
 void add_animate_verb(CLI::App& app) {
-  auto* cmd = app.add_subcommand("animate", "Render one run as a video of the arm seen from above (hub, segments, "
-                                            "payload, tip trace; optional deflection exaggeration)");
-  struct Args {
-    std::string input, out;
-    std::vector<std::string> sets;
-    int eval_id = -1;
-    double exaggeration = 1.0, fps = 30.0, speed = 1.0;
-    int size = 960;
-  };
-  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("animate", "Render one run as a video: the reference rig seen from above (hub, "
+                                            "segments, payload, tip trace), an arm model in 3-D (perspective, every "
+                                            "body, the tool's path); optional deflection exaggeration");
+  auto args = std::make_shared<AnimateArgs>();
   cmd->add_option("input", args->input, "model YAML, or a study YAML with --eval")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "video file: .avi (Motion-JPEG) or .mp4")->required();
   cmd->add_option("--eval", args->eval_id, "the variant of a study to animate (its eval_id)");
@@ -30,8 +61,26 @@ void add_animate_verb(CLI::App& app) {
       ->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--fps", args->fps, "video frames per second")->check(CLI::Range(1.0, 240.0))->capture_default_str();
   cmd->add_option("--speed", args->speed, "simulated seconds per video second")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--size", args->size, "video width and height, px")->check(CLI::Range(240, 4096))->capture_default_str();
+  cmd->add_option("--size", args->size, "video width (and the rig's height; an arm's is 3/4 of it), px")
+      ->check(CLI::Range(320, 4096))->capture_default_str();
+  cmd->add_option("--azimuth", args->azimuth, "arm: camera azimuth, degrees")->capture_default_str();
+  cmd->add_option("--elevation", args->elevation, "arm: camera elevation above the ground, degrees")
+      ->check(CLI::Range(-90.0, 90.0))->capture_default_str();
+  cmd->add_option("--frame", args->frame_png, "arm: also write one frame as this PNG (the time: --at)");
+  cmd->add_option("--at", args->frame_time, "arm: the time of the --frame PNG, s")->capture_default_str();
   cmd->callback([args] {
+    if (args->eval_id >= 0 ? load_study(args->input).arm : is_arm_model_file(args->input)) {
+      if (args->eval_id >= 0) {
+        const Study study = load_study(args->input);
+        if (args->eval_id >= static_cast<int>(study.variants.size()))
+          throw CLI::ValidationError("--eval", "the study has eval_ids 0.." + std::to_string(study.variants.size() - 1));
+        return animate_arm(make_variant_arm(study, study.variants[args->eval_id]),
+                           study.name + ": " + study.variants[args->eval_id].label, *args);
+      }
+      const ArmModel m = load_arm_with(args->input, args->sets);
+      return animate_arm(m, m.spec.description.empty() ? args->input : m.spec.description, *args);
+    }
+    if (!args->frame_png.empty()) throw CLI::ValidationError("--frame", "is for arm models");
     // The model: a file with overrides, or one variant of a study.
     Model m;
     std::string title = args->input;

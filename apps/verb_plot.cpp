@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "apps/verbs.hpp"
+#include "arm/arm_simulate.hpp"
 #include "jobs/report.hpp"
 #include "kernel/files.hpp"
 #include "kernel/simulate.hpp"
@@ -12,8 +13,9 @@
 namespace ff {
 
 void add_plot_verb(CLI::App& app) {
-  auto* cmd = app.add_subcommand("plot", "Plot the time series (tip angle, hub angle, tip deflection, torque) of "
-                                         "chosen variants of a study, and write their traces");
+  auto* cmd = app.add_subcommand("plot", "Plot the time series of chosen variants of a study (the rig: tip angle, hub "
+                                         "angle, tip deflection, torque; an arm: joints, torques, tool error, link "
+                                         "deflection), and write their traces");
   struct Args {
     std::string study, out, evals;
   };
@@ -38,24 +40,42 @@ void add_plot_verb(CLI::App& app) {
       ids.push_back(id);
     }
     if (ids.empty() || ids.size() > 12) throw CLI::ValidationError("--eval", "give 1 to 12 eval_ids");
-    std::vector<Trace> traces;
-    std::vector<std::string> labels;
-    for (int id : ids) {
-      const Model m = make_variant_model(study, study.variants[id]);
-      traces.push_back(std::move(simulate(make_batch(std::span<const Model>(&m, 1))).traces[0]));
-      labels.push_back(std::to_string(id) + ": " + study.variants[id].label);
-    }
     make_directories(args->out);
-    std::vector<const Trace*> ptrs;
-    for (std::size_t k = 0; k < traces.size(); ++k) {
-      char name[48];
-      std::snprintf(name, sizeof name, "/trace_%06d.csv", ids[k]);
-      write_trace_csv(traces[k], args->out + name);
-      ptrs.push_back(&traces[k]);
+    std::vector<std::string> labels;
+    for (int id : ids) labels.push_back(std::to_string(id) + ": " + study.variants[id].label);
+    // Each variant alone (a variant's bits are the same in any lane), its trace written as `write` does.
+    auto run_each = [&](auto simulate_one, auto write) {
+      std::vector<decltype(simulate_one(0))> traces;
+      for (int id : ids) traces.push_back(simulate_one(id));
+      std::vector<const typename decltype(traces)::value_type*> ptrs;
+      for (std::size_t k = 0; k < traces.size(); ++k) {
+        char name[48];
+        std::snprintf(name, sizeof name, "/trace_%06d.csv", ids[k]);
+        write(traces[k], args->out + name);
+        ptrs.push_back(&traces[k]);
+      }
+      return std::make_pair(std::move(traces), ptrs);
+    };
+    std::string files;
+    if (study.arm) {
+      const auto [traces, ptrs] = run_each(
+          [&](int id) {
+            const ArmModel m = make_variant_arm(study, study.variants[id]);
+            return std::move(simulate_arms(std::span<const ArmModel>(&m, 1)).traces[0]);
+          },
+          write_arm_trace_csv);
+      for (const std::string& f : write_arm_plots(args->out, labels, ptrs, study.name)) files += (files.empty() ? "" : ",") + f;
+    } else {
+      const auto [traces, ptrs] = run_each(
+          [&](int id) {
+            const Model m = make_variant_model(study, study.variants[id]);
+            return std::move(simulate(make_batch(std::span<const Model>(&m, 1))).traces[0]);
+          },
+          write_trace_csv);
+      write_trace_plots(args->out, labels, ptrs, study.name);
+      files = "tip_angle.png,hub_angle.png,tip_deflection.png,hub_torque.png";
     }
-    write_trace_plots(args->out, labels, ptrs, study.name);
-    std::printf("wrote %s/{tip_angle,hub_angle,tip_deflection,hub_torque}.png and trace_NNNNNN.csv for %zu variants\n",
-                args->out.c_str(), ids.size());
+    std::printf("wrote %s/{%s} and trace_NNNNNN.csv for %zu variants\n", args->out.c_str(), files.c_str(), ids.size());
   });
 }
 

@@ -81,10 +81,20 @@ std::vector<Batch> make_arm_batches(const std::vector<ArmModel>& models, const s
   return batches;
 }
 
-// evaluate_variants for an arm study.
-void evaluate_arm_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
-                           const std::function<void(BatchResult&&)>& done, int threads, std::size_t chunk) {
-  const std::vector<std::string> columns = arm_metric_columns(study.arm_nominal);
+// The chunked, parallel evaluation of either model family. `Family` gives: Model (its model type),
+// build(variant) (throws ConfigError for a value the model rejects), valid(model) (its columns match
+// the study's), batches(models, local, lanes), and run(lanes, first rows' variants, res) (simulates a
+// batch and appends its rows and traces to `res`).
+template <class Family>
+void evaluate_in_chunks(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
+                        const std::function<void(BatchResult&&)>& done, const Family& family) {
+  using Model = typename Family::Model;
+  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const std::size_t ncolumns = make_result_table(study).columns.size();
+  // Models are built per chunk of variants and dropped after it: memory is bounded by the chunk, not
+  // the study. A chunk holds enough batches to keep every thread busy.
+  const std::size_t chunk = std::max<std::size_t>(1024, 32u * static_cast<std::size_t>(opt.lanes * threads));
+  // Nothing may leave a parallel region by exception: the first error is kept and rethrown.
   std::exception_ptr error;
   auto keep_error = [&] {
 #pragma omp critical(ff_batch_error)
@@ -92,13 +102,14 @@ void evaluate_arm_variants(const Study& study, const std::vector<int>& pending, 
   };
   for (std::size_t c0 = 0; c0 < pending.size() && !error; c0 += chunk) {
     const int n = static_cast<int>(std::min(chunk, pending.size() - c0));
-    std::vector<ArmModel> models(static_cast<std::size_t>(n));
+    // Build: a variant the model rejects (a draw from a distribution's tail) is a result, `invalid`.
+    std::vector<Model> models(static_cast<std::size_t>(n));
     std::vector<char> valid(static_cast<std::size_t>(n), 0);
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
     for (int k = 0; k < n; ++k) {
       try {
-        models[static_cast<std::size_t>(k)] = make_variant_arm(study, study.variants[static_cast<std::size_t>(pending[c0 + k])]);
-        valid[static_cast<std::size_t>(k)] = explain_columns_mismatch(study, models[static_cast<std::size_t>(k)]).empty();
+        models[static_cast<std::size_t>(k)] = family.build(study.variants[static_cast<std::size_t>(pending[c0 + k])]);
+        valid[static_cast<std::size_t>(k)] = family.valid(models[static_cast<std::size_t>(k)]);
       } catch (const ConfigError&) {
       } catch (...) {
         keep_error();
@@ -109,25 +120,23 @@ void evaluate_arm_variants(const Study& study, const std::vector<int>& pending, 
     BatchResult invalid;
     for (int k = 0; k < n; ++k)
       if (valid[static_cast<std::size_t>(k)]) local.push_back(k);
-      else invalid.rows.push_back(make_invalid_row(study, pending[c0 + k], columns.size()));
+      else invalid.rows.push_back(make_invalid_row(study, pending[c0 + k], ncolumns));
     if (!invalid.rows.empty()) done(std::move(invalid));
-    const std::vector<Batch> batches = make_arm_batches(models, local, opt.lanes);
+
+    const std::vector<Batch> batches = family.batches(models, local, opt.lanes);
     const int nb = static_cast<int>(batches.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (int b = 0; b < nb; ++b) {
       try {
         const auto t0 = std::chrono::steady_clock::now();
-        std::vector<ArmModel> lanes;
-        for (int k : batches[static_cast<std::size_t>(b)].variants) lanes.push_back(models[static_cast<std::size_t>(k)]);
-        ArmRun run = simulate_arms(lanes);
-        BatchResult res;
-        for (std::size_t l = 0; l < lanes.size(); ++l) {
-          const Variant& v = study.variants[static_cast<std::size_t>(pending[c0 + batches[static_cast<std::size_t>(b)].variants[l]])];
-          ResultRow row{v.eval_id, v.seed, v.label, "", v.params, calc_arm_metrics(lanes[l], run.traces[l], run.status[l])};
-          row.status = calc_arm_status(run.status[l], columns, row.values);
-          res.rows.push_back(std::move(row));
-          if (opt.keep_traces) res.arm_traces.push_back(std::move(run.traces[l]));
+        std::vector<Model> lanes;
+        std::vector<int> variants;
+        for (int k : batches[static_cast<std::size_t>(b)].variants) {
+          lanes.push_back(models[static_cast<std::size_t>(k)]);
+          variants.push_back(pending[c0 + k]);
         }
+        BatchResult res;
+        family.run(lanes, variants, res);
         res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 #pragma omp critical(ff_batch_done)
         done(std::move(res));
@@ -139,69 +148,54 @@ void evaluate_arm_variants(const Study& study, const std::vector<int>& pending, 
   if (error) std::rethrow_exception(error);
 }
 
+// The reference rig's family: Model, kernel/simulate.
+struct RigFamily {
+  using Model = ff::Model;
+  const Study& study;
+  bool keep_traces;
+  Model build(const Variant& v) const { return make_variant_model(study, v); }
+  bool valid(const Model& m) const { return explain_moves_mismatch(study, m).empty(); }
+  std::vector<Batch> batches(const std::vector<Model>& m, const std::vector<int>& local, int lanes) const {
+    return make_batches(m, local, lanes);
+  }
+  void run(const std::vector<Model>& lanes, const std::vector<int>& variants, BatchResult& res) const {
+    BatchRun run = simulate(make_batch(lanes));
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      res.rows.push_back(make_result_row(study, variants[l], lanes[l], run.traces[l], run.status[l]));
+      if (keep_traces) res.traces.push_back(std::move(run.traces[l]));
+    }
+  }
+};
+
+// Arm models' family: ArmModel, arm/arm_simulate.
+struct ArmFamily {
+  using Model = ArmModel;
+  const Study& study;
+  bool keep_traces;
+  std::vector<std::string> columns = arm_metric_columns(study.arm_nominal);
+  Model build(const Variant& v) const { return make_variant_arm(study, v); }
+  bool valid(const Model& m) const { return explain_columns_mismatch(study, m).empty(); }
+  std::vector<Batch> batches(const std::vector<Model>& m, const std::vector<int>& local, int lanes) const {
+    return make_arm_batches(m, local, lanes);
+  }
+  void run(const std::vector<Model>& lanes, const std::vector<int>& variants, BatchResult& res) const {
+    ArmRun run = simulate_arms(lanes);
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      const Variant& v = study.variants[static_cast<std::size_t>(variants[l])];
+      ResultRow row{v.eval_id, v.seed, v.label, "", v.params, calc_arm_metrics(lanes[l], run.traces[l], run.status[l])};
+      row.status = calc_arm_status(run.status[l], columns, row.values);
+      res.rows.push_back(std::move(row));
+      if (keep_traces) res.arm_traces.push_back(std::move(run.traces[l]));
+    }
+  }
+};
+
 }  // namespace
 
 void evaluate_variants(const Study& study, const std::vector<int>& pending, const EvalOptions& opt,
                        const std::function<void(BatchResult&&)>& done) {
-  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
-  const std::size_t ncolumns = make_result_table(study).columns.size();
-  // Models are built per chunk of variants and dropped after it: memory is bounded by the chunk, not
-  // the study. A chunk holds enough batches to keep every thread busy.
-  const std::size_t chunk = std::max<std::size_t>(1024, 32u * static_cast<std::size_t>(opt.lanes * threads));
-  if (study.arm) return evaluate_arm_variants(study, pending, opt, done, threads, chunk);
-  // Nothing may leave a parallel region by exception: the first error is kept and rethrown.
-  std::exception_ptr error;
-  auto keep_error = [&] {
-#pragma omp critical(ff_batch_error)
-    if (!error) error = std::current_exception();
-  };
-  for (std::size_t c0 = 0; c0 < pending.size() && !error; c0 += chunk) {
-    const int n = static_cast<int>(std::min(chunk, pending.size() - c0));
-    // Build: a variant the model rejects (a draw from a distribution's tail) is a result, `invalid`.
-    std::vector<Model> models(n);
-    std::vector<char> valid(n, 0);
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-    for (int k = 0; k < n; ++k) {
-      try {
-        models[k] = make_variant_model(study, study.variants[pending[c0 + k]]);
-        valid[k] = explain_moves_mismatch(study, models[k]).empty();
-      } catch (const ConfigError&) {
-      } catch (...) {
-        keep_error();
-      }
-    }
-    if (error) break;
-    std::vector<int> local;
-    BatchResult invalid;
-    for (int k = 0; k < n; ++k)
-      if (valid[k]) local.push_back(k);
-      else invalid.rows.push_back(make_invalid_row(study, pending[c0 + k], ncolumns));
-    if (!invalid.rows.empty()) done(std::move(invalid));
-
-    const std::vector<Batch> batches = make_batches(models, local, opt.lanes);
-    const int nb = static_cast<int>(batches.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (int b = 0; b < nb; ++b) {
-      try {
-        const auto t0 = std::chrono::steady_clock::now();
-        std::vector<Model> lanes;
-        for (int k : batches[b].variants) lanes.push_back(models[k]);
-        BatchRun run = simulate(make_batch(lanes));
-        BatchResult res;
-        for (std::size_t l = 0; l < lanes.size(); ++l) {
-          const int k = batches[b].variants[l];
-          res.rows.push_back(make_result_row(study, pending[c0 + k], models[k], run.traces[l], run.status[l]));
-          if (opt.keep_traces) res.traces.push_back(std::move(run.traces[l]));
-        }
-        res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-#pragma omp critical(ff_batch_done)
-        done(std::move(res));
-      } catch (...) {
-        keep_error();
-      }
-    }
-  }
-  if (error) std::rethrow_exception(error);
+  if (study.arm) evaluate_in_chunks(study, pending, opt, done, ArmFamily{study, opt.keep_traces});
+  else evaluate_in_chunks(study, pending, opt, done, RigFamily{study, opt.keep_traces});
 }
 
 StudyRun run_study(const Study& study, const EvalOptions& opt, const std::function<void(int, int)>& progress) {
