@@ -12,7 +12,8 @@ std::vector<std::string> arm_metric_columns(const ArmModel& m) {
   std::vector<std::string> c;
   for (const ActuatedJoint& a : m.actuated)
     for (const char* s : {"_settling_s", "_overshoot_pct", "_peak_torque_Nm", "_peak_speed"}) c.push_back(a.name + s);
-  for (const char* s : {"tool_settling_s", "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m"}) c.push_back(s);
+  for (const char* s : {"tool_settling_s", "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m", "tool_sag_m"})
+    c.push_back(s);
   for (const LinkTip& l : m.links)
     for (const char* s : {"_peak_deflection_m", "_residual_m", "_sag_m"}) c.push_back(l.name + s);
   c.push_back("settling_horizon_s");
@@ -105,6 +106,7 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
   v[c++] = (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0;
   v[c++] = peak_abs(track);
   v[c++] = track[n - 1];
+  v[c++] = track[0];
   // The flexible links' tips.
   for (const LinkTip& l : m.links) {
     const std::vector<double>& dy = tr.column(l.name + ".deflection_y");

@@ -13,6 +13,7 @@
 //                             (start to final target), % of that move
 //   tool_peak_error_m         largest |tool - where the rigid arm at the reference puts it|: tracking
 //   tool_final_error_m        that error at the end of the run (a flexible arm's static sag among it)
+//   tool_sag_m                that error at the start: the static sag under gravity at the start pose
 //   <link>_peak_deflection_m  largest |tip deflection| of a flexible link
 //   <link>_residual_m         half the peak-to-peak of its tip deflection after the move (the larger plane)
 //   <link>_sag_m              |tip deflection| at the start (the static sag under gravity, held)
