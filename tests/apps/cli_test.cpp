@@ -483,3 +483,118 @@ TEST_F(Cli, CompareModelWithItsOwnTraceWritesEveryOutput) {
 }
 
 }  // namespace
+
+// ---- arm models ---------------------------------------------------------------------------
+
+namespace {
+// A 2 kg bob 0.5 m out on a hinge about y, gravity compensated: it holds every pose it is sent to.
+const char* kPendulumArm =
+    "description: held pendulum\n"
+    "gravity: [0, 0, -9.81]\n"
+    "bodies:\n"
+    "  - name: arm\n"
+    "    parent: base\n"
+    "    mass: 2.0\n"
+    "    com: [0.5, 0, 0]\n"
+    "    inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01}\n"
+    "    joint: {axis: [0, 1, 0], armature: 0.05}\n"
+    "tool: {body: arm, point: [0.5, 0, 0]}\n"
+    "controller: {rate: 500}\n"
+    "joints:\n"
+    "  arm: {controller: {kp: 400, kd: 40, feedforward: 1, gravity_compensation: 1}}\n"
+    "trajectory:\n"
+    "  waypoints:\n"
+    "    - {time: 1.0, joints: {arm: -0.5}}\n"
+    "simulation: {settle: 2.0}\n";
+}  // namespace
+
+TEST_F(Cli, SimulateAnArmModelWritesItsTraceMetricsAndPlots) {
+  write("arm.yaml", kPendulumArm);
+  const auto r = run("simulate arm.yaml --out out/arm");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path out = work / "out" / "arm";
+  const auto trace = split_lines(read_text(out / "trace.csv"));
+  ASSERT_EQ(trace.size(), 1u + 1501u);  // 0 .. 3 s at 500 Hz
+  EXPECT_EQ(trace[0], "t,arm.ref,arm.q,arm.qd,arm.torque,tool.x,tool.y,tool.z,tool.ref_x,tool.ref_y,tool.ref_z");
+  // At rest at the end: the tool at 0.5 (cos 0.5, 0, sin 0.5) (a turn of -0.5 about y lifts it).
+  std::vector<std::string> last;
+  std::stringstream row(trace.back());
+  for (std::string cell; std::getline(row, cell, ',');) last.push_back(cell);
+  EXPECT_NEAR(std::stod(last[5]), 0.5 * std::cos(0.5), 1e-5);
+  EXPECT_NEAR(std::stod(last[7]), 0.5 * std::sin(0.5), 1e-5);
+  const auto metrics = split_lines(read_text(out / "metrics.csv"));
+  ASSERT_EQ(metrics.size(), 2u);
+  EXPECT_EQ(metrics[0].rfind("eval_id,seed,label,status,arm_settling_s,arm_overshoot_pct,arm_peak_torque_Nm", 0), 0u)
+      << metrics[0];
+  EXPECT_NE(metrics[1].find(",ok,"), std::string::npos) << metrics[1];
+  for (const char* png : {"joints.png", "torques.png", "tool_error.png"}) expect_png(out / png);
+  EXPECT_FALSE(fs::exists(out / "deflection.png"));  // no flexible link
+  expect_no_tmp_files(work / "out");
+}
+
+TEST_F(Cli, AnArmStudyRunsPlotsAndTabulatesEveryVariant) {
+  write("arm.yaml", kPendulumArm);
+  write("study.yaml",
+        "name: pendulum gains\n"
+        "model: arm.yaml\n"
+        "variables:\n"
+        "  - path: joints.arm.controller.kp\n"
+        "    levels: [200, 400]\n"
+        "  - path: bodies[arm].mass\n"
+        "    levels: [1.0, 2.0]\n"
+        "design: {type: grid}\n");
+  const auto r = run("run study.yaml --out res --threads 2 --lanes 3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto results = split_lines(read_text(work / "res" / "results.csv"));
+  ASSERT_EQ(results.size(), 5u);
+  EXPECT_EQ(results[0].rfind("eval_id,seed,label,status,joints.arm.controller.kp,bodies[arm].mass,arm_settling_s", 0), 0u)
+      << results[0];
+  for (int k = 0; k < 4; ++k) EXPECT_TRUE(fs::exists(work / "res" / "traces" / ("00000" + std::to_string(k) + ".csv")));
+  expect_png(work / "res" / "joints.png");
+  // The same rows with one lane per batch and one thread.
+  ASSERT_EQ(run("run study.yaml --out res1 --threads 1 --lanes 1").exit_code, 0);
+  EXPECT_EQ(read_text(work / "res1" / "results.csv"), read_text(work / "res" / "results.csv"));
+  const auto t = run("table res --by joints.arm.controller.kp");
+  ASSERT_EQ(t.exit_code, 0) << t.output;
+  EXPECT_NE(t.output.find("tool_settling_s"), std::string::npos) << t.output;
+  const auto p = run("plot study.yaml --eval 0,3 --out plots");
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_EQ(read_text(work / "plots" / "trace_000003.csv"), read_text(work / "res" / "traces" / "000003.csv"));
+}
+
+TEST_F(Cli, ModesOfAnArmModelAreClampedAndClosedLoopAndItsSagIsPrinted) {
+  // The held pendulum's closed loop with kd = 10: omega_n^2 = kp / J, zeta = kd / (2 sqrt(kp J)) (no
+  // spring; gravity's stiffness m g l sin q is 0 at q = 0), J = m l^2 + I_yy + armature.
+  write("arm.yaml", kPendulumArm);
+  const auto r = run("modes arm.yaml --static --set joints.arm.controller.kd=10");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("clamped (the actuated joints held)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("closed loop"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("static deflection under gravity"), std::string::npos) << r.output;
+  const double J = 2.0 * 0.25 + 0.01 + 0.05, w = std::sqrt(400.0 / J), zeta = 10.0 / (2.0 * std::sqrt(400.0 * J));
+  char expect[64];
+  std::snprintf(expect, sizeof expect, " %.4f %12.4f %10.4f", w / (2 * 3.141592653589793), w, zeta);
+  EXPECT_NE(r.output.find(expect), std::string::npos) << expect << " in " << r.output;
+}
+
+TEST_F(Cli, AnArmAnimationWritesItsVideoAndFrame) {
+  write("arm.yaml", kPendulumArm);
+  const auto r = run("animate arm.yaml --out arm.avi --frame frame.png --at 1.0 --fps 10");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GT(fs::file_size(work / "arm.avi"), 1000u);
+  expect_png(work / "frame.png");
+}
+
+TEST_F(Cli, ABadArmModelIsOneLineAndWritesNothing) {
+  std::string text = kPendulumArm;
+  text.replace(text.find("kp: 400"), 7, "kq: 400");
+  write("arm.yaml", text);
+  expect_one_error_line(run("simulate arm.yaml --out out/arm"), "arm.yaml:13: joints.arm.controller.kq: unknown key");
+  EXPECT_FALSE(fs::exists(work / "out"));
+  write("arm.yaml", kPendulumArm);
+  expect_one_error_line(run("simulate arm.yaml --out out/arm --set trajectory.waypoints[0].joints.elbow=1"),
+                        "--set: trajectory.waypoints[0].joints.elbow: no moving joint of that name");
+  expect_one_error_line(run("simulate arm.yaml --out out/arm --set trajectory.waypoints[0].tool=[2,0,0]"),
+                        "--set: trajectory.waypoints[0].tool: a waypoint is either");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}

@@ -12,6 +12,7 @@
 #include "arm/arm_yaml.hpp"
 #include "kernel/errors.hpp"
 #include "kernel/yaml_reader.hpp"
+#include "tests/docs_tables.hpp"
 
 namespace ff {
 namespace {
@@ -245,6 +246,10 @@ TEST(ArmYaml, AnUnknownJointAPassiveWaypointAndABadBlockAreNamedAtTheirLines) {
   EXPECT_NE(arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 2.0, joints: {arm: 1}}\n    - {time: 1.0, joints: {arm: 0}}\n"))
                 .find("trajectory.waypoints[1].time: waypoints must be in time order"),
             std::string::npos);
+}
+
+TEST(ArmYaml, DocsListEveryKeyWithTheReadersUnitRequirementAndDefault) {
+  test::expect_documented("Arm models", arm_yaml_keys());
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // every bad document (the three-body arm below with one line changed) rejected with one ConfigError
 // naming the file, the exact line and the full key path; and docs/formats.md held to the field tables.
 #include "description/tree_yaml.hpp"
+#include "tests/docs_tables.hpp"
 
 #include <gtest/gtest.h>
 
@@ -205,48 +206,10 @@ TEST(TreeYaml, AFileErrorNamesTheFile) {
 
 // --- the docs ------------------------------------------------------------------------------------
 
-// docs/formats.md's section on trees: the rows of its key tables (header "| key | unit | required |
-// default | meaning |") by key.
-std::map<std::string, std::vector<std::string>> documented_rows() {
-  std::ifstream in(std::string(FLEXFARM_SOURCE_DIR) + "/docs/formats.md");
-  std::map<std::string, std::vector<std::string>> rows;
-  bool section = false, table = false;
-  for (std::string line; std::getline(in, line);) {
-    if (line.rfind("## ", 0) == 0) section = line == "## Kinematic trees (YAML) and URDF";
-    if (line.rfind("|", 0) != 0) table = false;
-    if (line == "| key | unit | required | default | meaning |") table = section;
-    if (!table || line.rfind("| `", 0) != 0) continue;
-    std::vector<std::string> cells;
-    std::stringstream s(line.substr(1));
-    for (std::string cell; std::getline(s, cell, '|');) {
-      const auto a = cell.find_first_not_of(' '), b = cell.find_last_not_of(' ');
-      cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
-    }
-    const std::string key = cells.at(0).substr(1, cells.at(0).size() - 2);  // without the backticks
-    rows[key] = cells;
-  }
-  return rows;
-}
-
 TEST(TreeYaml, DocsListEveryKeyWithTheReadersUnitRequirementAndDefault) {
-  const auto rows = documented_rows();
-  std::set<std::string> keys;
   std::vector<ff::KeyDoc> all = ff::tree_yaml_keys();
   for (const auto& k : ff::urdf_sidecar_keys()) all.push_back(k);
-  for (const ff::KeyDoc& k : all) {
-    SCOPED_TRACE(k.key);
-    keys.insert(k.key);
-    const auto it = rows.find(k.key);
-    ASSERT_NE(it, rows.end()) << "not in docs/formats.md";
-    ASSERT_GE(it->second.size(), 5u);
-    EXPECT_EQ(it->second[1], k.unit);
-    EXPECT_EQ(it->second[2], k.required);
-    EXPECT_EQ(it->second[3], k.fallback);
-  }
-  EXPECT_EQ(rows.size(), all.size());
-  for (const auto& [key, cells] : rows) {
-    EXPECT_TRUE(keys.count(key)) << "docs/formats.md documents `" << key << "`, which no reader reads";
-  }
+  ff::test::expect_documented("Kinematic trees (YAML) and URDF", all);
 }
 
 }  // namespace
