@@ -562,6 +562,35 @@ TEST_F(Cli, AnArmStudyRunsPlotsAndTabulatesEveryVariant) {
   EXPECT_EQ(read_text(work / "plots" / "trace_000003.csv"), read_text(work / "res" / "traces" / "000003.csv"));
 }
 
+TEST_F(Cli, AnArmStudyInShardsMergesToTheOneProcessTableAndAKilledRunResumes) {
+  write("arm.yaml", kPendulumArm);
+  write("study.yaml",
+        "name: pendulum draws\n"
+        "model: arm.yaml\n"
+        "seed: 3\n"
+        "variables:\n"
+        "  - path: bodies[arm].mass\n"
+        "    distribution: {type: uniform, lower: 1.0, upper: 3.0}\n"
+        "design: {type: monte_carlo, samples: 10}\n");
+  ASSERT_EQ(run("run study.yaml --out one").exit_code, 0);
+  for (const char* shard : {"0/2", "1/2"}) ASSERT_EQ(run(std::string("run study.yaml --out two --shard ") + shard).exit_code, 0);
+  const auto m = run("merge study.yaml --out two");
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  EXPECT_EQ(read_text(work / "two" / "results.csv"), read_text(work / "one" / "results.csv"));
+  // A journal cut after its first rows (a run killed mid-way) resumes to the same table.
+  ASSERT_EQ(run("run study.yaml --out three --lanes 2").exit_code, 0);
+  const auto journal = split_lines(read_text(work / "three" / "journal-main.csv"));
+  ASSERT_GT(journal.size(), 4u);
+  {
+    std::ofstream cut(work / "three" / "journal-main.csv");
+    for (std::size_t k = 0; k < 4; ++k) cut << journal[k] << "\n";
+  }
+  fs::remove(work / "three" / "results.csv");
+  const auto r = run("run study.yaml --out three --resume");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_text(work / "three" / "results.csv"), read_text(work / "one" / "results.csv"));
+}
+
 TEST_F(Cli, ModesOfAnArmModelAreClampedAndClosedLoopAndItsSagIsPrinted) {
   // The held pendulum's closed loop with kd = 10: omega_n^2 = kp / J, zeta = kd / (2 sqrt(kp J)) (no
   // spring; gravity's stiffness m g l sin q is 0 at q = 0), J = m l^2 + I_yy + armature.
