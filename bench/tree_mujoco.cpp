@@ -421,6 +421,7 @@ struct Setting {
   double sec_per_step = NAN;   // one variant, one thread, from the sweep
   bool timed = false;
   long timed_steps = 0;        // steps per variant in the timed window
+  int inner = 1;               // whole runs per timing (a short run is repeated to ~0.5 s)
   double rate = NAN;           // variant-steps/s, median
   double wall = NAN;           // s for the whole run (extrapolated when timed_steps < steps)
 };
@@ -430,9 +431,10 @@ struct Setting {
 void plan_timing(const Rig& rig, Setting& st, const Options& opt) {
   const double est = st.sec_per_step * st.steps * rig.M / opt.threads;
   st.timed_steps = est > opt.budget ? std::max(1L, std::lround(st.steps * opt.budget / est)) : st.steps;
+  st.inner = est < 0.5 ? static_cast<int>(std::ceil(0.5 / est)) : 1;
 }
 
-// One timed run of the window for all M variants on opt.threads threads: OpenMP over batches of W
+// One timed run (the mean of st.inner) of the window for all M variants on opt.threads threads: OpenMP over batches of W
 // lanes (flexfarm) or over variants (MuJoCo, one mjData each); seconds.
 double time_once(Rig& rig, const Setting& st, const Options& opt) {
   const Case& c = *rig.c;
@@ -441,15 +443,17 @@ double time_once(Rig& rig, const Setting& st, const Options& opt) {
   if (!is_flexfarm(st.k))
     for (auto* m : rig.models) set_option(m, st.k, st.h);
   const auto t0 = std::chrono::steady_clock::now();
-  if (is_flexfarm(st.k)) {
-    const int nbatch = static_cast<int>(rig.batches.size());
+  for (int rep = 0; rep < st.inner; ++rep) {
+    if (is_flexfarm(st.k)) {
+      const int nbatch = static_cast<int>(rig.batches.size());
 #pragma omp parallel for num_threads(opt.threads) schedule(static) reduction(+ : bad)
-    for (int b = 0; b < nbatch; ++b) bad += !run_flexfarm(rig.batches[b], rig.tau[b].data(), c, st.k, st.h, n, nullptr);
-  } else {
+      for (int b = 0; b < nbatch; ++b) bad += !run_flexfarm(rig.batches[b], rig.tau[b].data(), c, st.k, st.h, n, nullptr);
+    } else {
 #pragma omp parallel for num_threads(opt.threads) schedule(static) reduction(+ : bad)
-    for (int v = 0; v < rig.M; ++v) bad += !run_mujoco(rig.models[v], rig.data[v], c, n);
+      for (int v = 0; v < rig.M; ++v) bad += !run_mujoco(rig.models[v], rig.data[v], c, n);
+    }
   }
-  const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / st.inner;
   if (bad) std::printf("  (%d runs of %s h=%g diverged in the timed run)\n", bad, method_name(st.k), st.h);
   return t;
 }
@@ -510,6 +514,7 @@ void run_case(const Case& c, const Options& opt) {
   // whole run; MuJoCo RK4 against flexfarm RK4 at ref_h over the first tw seconds (MuJoCo's RK4 costs
   // ~10 times flexfarm's a step on the flexible arm).
   Eigen::VectorXd ref[2], sd[2], ref2[2], mjw[2], ffw[2];
+  double us_mj = 0.0, us_ff = 0.0;  // s a step of MuJoCo RK4 and flexfarm RK4 (one lane) at ref_h, first variant
   {
     const auto t0 = std::chrono::steady_clock::now();
     const int nsd = std::lround(opt.seconds / 1e-6);
@@ -519,8 +524,8 @@ void run_case(const Case& c, const Options& opt) {
       if (job < 2) ref[i] = end_state(rig, checked[i], Method::kFfRk4, ref_h, nref, nullptr);
       else if (job < 4) sd[i] = end_state(rig, checked[i], Method::kFfSdirk2, 1e-6, nsd, nullptr);
       else if (job < 6) ref2[i] = end_state(rig, checked[i], Method::kFfRk4, 2 * ref_h, nref / 2, nullptr);
-      else if (job < 8) mjw[i] = end_state(rig, checked[i], Method::kMjRk4, ref_h, nwin, nullptr);
-      else ffw[i] = end_state(rig, checked[i], Method::kFfRk4, ref_h, nwin, nullptr);
+      else if (job < 8) mjw[i] = end_state(rig, checked[i], Method::kMjRk4, ref_h, nwin, i ? nullptr : &us_mj);
+      else ffw[i] = end_state(rig, checked[i], Method::kFfRk4, ref_h, nwin, i ? nullptr : &us_ff);
     }
     auto diff = [](const Eigen::VectorXd* a, const Eigen::VectorXd* b) {
       double d = 0.0;
@@ -535,12 +540,13 @@ void run_case(const Case& c, const Options& opt) {
     for (int i = 0; i < 2; ++i) swing = std::max(swing, (ref[i] - c.q0).cwiseAbs().maxCoeff());
     const double d2 = diff(ref, ref2);
     char self[96] = "unstable (2h beyond RK4's stability limit)";
-    if (std::isfinite(d2)) std::snprintf(self, sizeof self, "%.2e rad (its own error ~ this / 15)", d2);
+    if (d2 < 1.0) std::snprintf(self, sizeof self, "%.2e rad (its own error ~ this / 15)", d2);
     std::printf("reference: flexfarm RK4, h = %g s (%ld steps; the checks took %.0f s on %d threads); max |q(T) - q(0)| "
-                "%.3g rad\n  vs MuJoCo RK4 at the same h over the first %g s: %.2e rad\n  vs flexfarm SDIRK2 at h = 1e-6 "
+                "%.3g rad\n  vs MuJoCo RK4 at the same h over the first %g s: %.2e rad (a step: MuJoCo RK4 %.3g us, flexfarm "
+                "RK4 one lane %.3g us)\n  vs flexfarm SDIRK2 at h = 1e-6 "
                 "over the run: %.2e rad\n  vs flexfarm RK4 at 2h over the run: %s\n",
                 ref_h, nref, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), opt.threads,
-                swing, tw, diff(mjw, ffw), diff(ref, sd),
+                swing, tw, diff(mjw, ffw), 1e6 * us_mj, 1e6 * us_ff, diff(ref, sd),
                 self);
   }
 
