@@ -7,8 +7,11 @@
 #include <map>
 #include <stdexcept>
 
+#include "kernel/batch.hpp"  // calc_sensor_hold
 #include "kernel/errors.hpp"
+#include "kernel/friction.hpp"
 #include "kernel/modes.hpp"
+#include "kernel/random.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/inverse_kinematics.hpp"
 #include "multibody/modes.hpp"
@@ -47,6 +50,71 @@ const JointInfo& joint_info(const ArmSpec& spec, const Tree& tree, int dof) {
   throw std::logic_error("joint_info: no body moves dof " + std::to_string(dof));
 }
 
+// A joint's friction, torque offset and sensors, checked as the rig checks its hub's (kernel/model.cpp).
+void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
+  const std::string& src = spec.source;
+  const std::string key = "joints." + c.joint + ".";
+  auto non_negative = [&](double x, const std::string& k) {
+    if (!(x >= 0.0)) throw ConfigError(src, 0, key + k, "must be >= 0, got " + std::to_string(x));
+  };
+  auto positive = [&](double x, const std::string& k) {
+    if (!(x > 0.0)) throw ConfigError(src, 0, key + k, "must be > 0, got " + std::to_string(x));
+  };
+  const FrictionSpec& f = c.friction;
+  non_negative(f.viscous, "friction.viscous");
+  non_negative(f.coulomb, "friction.coulomb");
+  non_negative(f.stiction, "friction.stiction");
+  if (f.stiction > 0 && f.stiction < f.coulomb)
+    throw ConfigError(src, 0, key + "friction.stiction", "must be >= friction.coulomb (or 0 for no Stribeck peak)");
+  positive(f.stribeck_velocity, "friction.stribeck_velocity");
+  positive(f.smoothing, "friction.smoothing");
+  if (f.model != "static")
+    throw ConfigError(src, 0, key + "friction.model", "an arm joint has the static map only, got '" + f.model + "'");
+  if (!std::isfinite(c.torque_offset)) throw ConfigError(src, 0, key + "torque_offset", "must be finite");
+  for (const auto& [ch, name] : {std::pair{&c.angle_sensor, "sensors.angle"}, std::pair{&c.rate_sensor, "sensors.rate"}}) {
+    const std::string k(name);
+    non_negative(ch->resolution, k + ".resolution");
+    non_negative(ch->noise, k + ".noise");
+    if (!std::isfinite(ch->resolution) || !std::isfinite(ch->noise))
+      throw ConfigError(src, 0, key + k, "resolution and noise must be finite");
+    if (ch->delay < 0 || ch->delay > 10000)
+      throw ConfigError(src, 0, key + k + ".delay", "must be between 0 and 10000 samples");
+    non_negative(ch->rate, k + ".rate");
+    if (ch->rate > 0) {
+      const double ratio = spec.rate / ch->rate;
+      if (!(ratio >= 1.0 - 1e-9) || std::fabs(ratio - std::round(ratio)) > 1e-9 * ratio || ratio > 1e6)
+        throw ConfigError(src, 0, key + k + ".rate",
+                          "must divide controller.rate = " + std::to_string(spec.rate) + " Hz a whole number of times, got " +
+                              std::to_string(ch->rate) + " Hz");
+    }
+  }
+}
+
+// The rate (1/s) of the steepest joint friction on its joint's effective inertia 1 / (M^-1)_jj at q,
+// as the integrator must resolve it: the map's slope (b + max(Fc, Fs) / eps) / J_eff is a real
+// eigenvalue; RK4 is stable to h rate = 2.78 (allowed 2.5); the midpoint rule takes the friction
+// backward-Euler implicit and follows at h rate <= 250 (the rig's bound, kernel/drive.cpp); SDIRK2 and
+// CVODE need nothing. 0 without friction.
+double calc_friction_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator integ) {
+  if (integ != Integrator::kRk4 && integ != Integrator::kMidpoint) return 0.0;
+  bool any = false;
+  for (const ActuatedJoint& a : m.actuated) any = any || is_friction_on(make_friction_map(a.control.friction));
+  if (!any) return 0.0;
+  const int n = m.tree.nv();
+  Eigen::MatrixXd M(n, n);
+  TreeWorkspace ws(m.tree);
+  calc_mass_matrix(m.tree, q, M, ws);
+  const Eigen::MatrixXd Minv = M.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  double rate = 0.0;
+  for (const ActuatedJoint& a : m.actuated) {
+    const FrictionSpec& f = a.control.friction;
+    if (!is_friction_on(make_friction_map(f))) continue;
+    const double slope = (f.viscous + std::max(f.coulomb, f.stiction) / f.smoothing) * Minv(a.dof, a.dof);
+    rate = std::max(rate, integ == Integrator::kRk4 ? slope / 2.5 : slope / 250.0);
+  }
+  return rate;
+}
+
 }  // namespace
 
 ArmModel make_arm(const ArmSpec& spec) {
@@ -61,6 +129,7 @@ ArmModel make_arm(const ArmSpec& spec) {
   for (const JointControlSpec& c : spec.joints) {
     const auto it = spec.tree.dof_index.find(c.joint);
     if (it == spec.tree.dof_index.end()) throw ConfigError(src, 0, "joints." + c.joint, "no moving joint of that name");
+    check_joint_blocks(spec, c);
     if (!by_dof.emplace(it->second, &c).second)
       throw ConfigError(src, 0, "joints." + c.joint, "this joint has a controller already");
   }
@@ -73,6 +142,11 @@ ArmModel make_arm(const ArmSpec& spec) {
     const JointInfo& info = joint_info(spec, m.tree, dof);
     a.torque_limit = c->torque_limit > 0.0 ? c->torque_limit : (std::isfinite(info.effort) ? info.effort : 0.0);
     a.notch_on_feedback = c->notch.placement == "feedback";
+    const std::uint64_t i = m.actuated.size();
+    a.angle_hold = calc_sensor_hold(c->angle_sensor, spec.rate);
+    a.rate_hold = calc_sensor_hold(c->rate_sensor, spec.rate);
+    a.angle_key = calc_variant_seed(spec.seed, 2 * i);
+    a.rate_key = calc_variant_seed(spec.seed, 2 * i + 1);
     m.actuated.push_back(std::move(a));
     actuated[static_cast<std::size_t>(dof)] = 1;
   }
@@ -178,6 +252,7 @@ ArmModel make_arm(const ArmSpec& spec) {
   Eigen::VectorXd start = Eigen::VectorXd::Zero(nv);
   for (const auto& [name, value] : spec.start) start[spec.tree.dof_index.at(name)] = value;
   m.q0 = calc_arm_sag(m, start).q;
+  m.qd0 = Eigen::VectorXd::Zero(nv);
 
   // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
   m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
@@ -194,6 +269,8 @@ ArmModel make_arm(const ArmSpec& spec) {
   const bool cvode = m.integrator == Integrator::kCvodeDense || m.integrator == Integrator::kCvodeKlu ||
                      m.integrator == Integrator::kCvodeGmres;
   m.substeps = cvode ? 1 : spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
+  if (!cvode && spec.substeps == 0)
+    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(calc_friction_rate(m, m.q0, m.integrator) * m.control_period)));
   for (ActuatedJoint& a : m.actuated) {
     const ShaperSpec& sh = a.control.shaper;
     const ShaperKind kind = parse_shaper_kind(sh.type);

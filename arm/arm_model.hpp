@@ -6,16 +6,19 @@
 // models"), the reference rig's law (kernel/controller.hpp) per joint:
 //   e_j   = F_j(r_j) - q_j                        (notch on the reference; on the feedback: r_j - F_j(q_j))
 //   tau_j = sat(kp e_j + ki int e_j - kd qd_j + f_i (ID(r, r', r'') - G(r) + kd r'_j) + f_g G(r)_j)
-// with r the shaped joint reference, ID the rigid arm's inverse dynamics (RNEA, flexible links held
+// with q_j and qd_j as the joint's sensors give them (quantised, noisy, held, delayed: sensors.angle,
+// sensors.rate; exact by default), the joint getting tau_j - torque_offset_j and its friction, and r
+// the shaped joint reference, ID the rigid arm's inverse dynamics (RNEA, flexible links held
 // straight) and G(r) its gravity torques, f_i and f_g the feed-forward gains, the integral frozen
 // while the torque saturates in the direction of the error (clamping anti-windup).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "description/tree_description.hpp"
-#include "kernel/model.hpp"  // NotchSpec, ShaperSpec, Integrator
+#include "kernel/model.hpp"  // NotchSpec, ShaperSpec, FrictionSpec, ChannelSpec, Integrator
 #include "kernel/notch.hpp"
 #include "kernel/shaper.hpp"
 #include "multibody/algorithms.hpp"
@@ -36,6 +39,13 @@ struct JointControlSpec {
   double gravity_compensation = 0.0;  // f_g: gain on the rigid arm's gravity torques at the reference
   NotchSpec notch;             // on this joint's reference or feedback; omega_z 0 = this joint's resonances
   ShaperSpec shaper;           // on this joint's reference; frequency 0 = the arm's first resonance
+  // The joint's plant and sensors (the reference rig's hub blocks, per joint):
+  FrictionSpec friction;       // the static map (kernel/friction.hpp) on this joint, in the plant, at every
+                               // integrator stage (multibody/lane_integrators.hpp); off by default
+  double torque_offset = 0.0;  // a constant load torque the drive must supply, N·m (N): the joint gets
+                               // tau - torque_offset (the rig's hub_torque_offset)
+  ChannelSpec angle_sensor;    // what the controller measures of q (sensors.angle), rad (m)
+  ChannelSpec rate_sensor;     // and of qd (sensors.rate), rad/s (m/s)
 };
 
 // Where a waypoint goes: joint values by name (the others keep the previous waypoint's), or a tool
@@ -68,6 +78,7 @@ struct ArmSpec {
   int substeps = 0;                  // per control period; 0 = from the modes (CVODE: 1)
   double rtol = 1e-8, atol = 1e-10;  // CVODE's tolerances
   double band = 0.02;                // settling band, fraction of each move's amplitude
+  std::uint64_t seed = 1;            // sensor noise (simulation.seed); a study gives each variant its own
 };
 
 // A flexible link's tip, for its deflection.
@@ -89,6 +100,11 @@ struct ActuatedJoint {
   std::vector<Biquad> notch;         // sections; empty when off
   bool notch_on_feedback = false;
   std::vector<Impulse> shaper;       // one of amplitude 1 at 0 when off
+  // The sensors (kernel/sensors.hpp, sample_channel): controller samples per sensor sample, and the
+  // noise streams calc_variant_seed(seed, 2 i) (angle) and (seed, 2 i + 1) (rate), i the joint's index
+  // in ArmModel::actuated.
+  int angle_hold = 1, rate_hold = 1;
+  std::uint64_t angle_key = 0, rate_key = 0;
 };
 
 struct ArmModel {
@@ -102,6 +118,7 @@ struct ArmModel {
   JointTrajectory trajectory;        // of the actuated joints (their order), start = the initial pose
   Eigen::VectorXd q0;                // the initial state: actuated joints at the start, elastic dofs at
                                      // the static sag under gravity with the actuated joints held
+  Eigen::VectorXd qd0;               // the initial joint rates: zero (a caller may set them, e.g. a coasting test)
   double control_period = 0.0;       // s
   double duration = 0.0;             // s
   int substeps = 1;

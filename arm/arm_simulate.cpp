@@ -10,6 +10,7 @@
 
 #include "kernel/errors.hpp"
 #include "kernel/files.hpp"
+#include "kernel/sensors.hpp"
 #include "multibody/lane_integrators.hpp"
 #include "multibody/lanes.hpp"
 #include "multibody/tree_cvode.hpp"
@@ -29,6 +30,8 @@ std::vector<std::string> arm_trace_names(const ArmModel& m) {
   for (const char* s : {"tool.x", "tool.y", "tool.z", "tool.ref_x", "tool.ref_y", "tool.ref_z"}) n.push_back(s);
   for (const LinkTip& l : m.links)
     for (const char* s : {".deflection_y", ".deflection_z"}) n.push_back(l.name + s);
+  for (const ActuatedJoint& a : m.actuated)
+    for (const char* s : {".q_measured", ".qd_measured"}) n.push_back(a.name + s);
   return n;
 }
 
@@ -91,11 +94,20 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   const int nv = m0.tree.nv();
   std::vector<Tree> trees;
   for (const ArmModel& m : lanes) trees.push_back(m.tree);
-  const TreeLanes tl = make_tree_lanes(trees);
+  TreeLanes tl = make_tree_lanes(trees);
+  // Each actuated joint's friction, in the plant (every integrator stage, CVODE's right-hand side).
+  for (int j = 0; j < na; ++j) {
+    std::vector<FrictionSpec> f;
+    for (const ArmModel& m : lanes) f.push_back(m.actuated[static_cast<std::size_t>(j)].control.friction);
+    set_tree_lanes_friction(tl, m0.actuated[static_cast<std::size_t>(j)].dof, f);
+  }
   TreeLanesState s = make_tree_lanes_state(tl);
   TreeStepWorkspace ws(tl);
   for (int l = 0; l < W; ++l)
-    for (int j = 0; j < nv; ++j) s.q[static_cast<std::size_t>(j * W + l)] = lanes[l].q0[j];
+    for (int j = 0; j < nv; ++j) {
+      s.q[static_cast<std::size_t>(j * W + l)] = lanes[l].q0[j];
+      s.qd[static_cast<std::size_t>(j * W + l)] = lanes[l].qd0.size() == nv ? lanes[l].qd0[j] : 0.0;
+    }
 
   const double T = m0.control_period, h = T / m0.substeps;
   // The variable-step reference: CVODE per lane over each control period.
@@ -122,6 +134,7 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   }
   if (options.keep_q) run.q.assign(static_cast<std::size_t>(W), Eigen::MatrixXd::Zero(nv, samples));
   const std::size_t kin0 = 1 + 4 * static_cast<std::size_t>(na);  // first kinematic column
+  const std::size_t meas0 = names.size() - 2 * static_cast<std::size_t>(na);  // first measured column
 
   // Controller state; each notch at rest at its first input.
   ControlLanes c;
@@ -157,9 +170,31 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   Eigen::VectorXd q_lane(nv), q_ref(nv);
   std::vector<double> tau_applied(static_cast<std::size_t>(nv * W), 0.0), kin(names.size());
   std::vector<double> e(static_cast<std::size_t>(na * W));  // the control errors
+  // The sensors: what each joint's controller measures (joint j, lane l at [j * W + l]), and per joint
+  // and channel a ring of past readings (H x W), H the longest delay + hold of any joint and lane.
+  int H = 1;
+  for (const ArmModel& m : lanes)
+    for (const ActuatedJoint& a : m.actuated)
+      H = std::max({H, a.control.angle_sensor.delay + a.angle_hold, a.control.rate_sensor.delay + a.rate_hold});
+  std::vector<double> q_meas(static_cast<std::size_t>(na * W)), qd_meas(q_meas.size());
+  std::vector<std::vector<double>> ring_q(static_cast<std::size_t>(na), std::vector<double>(static_cast<std::size_t>(H * W), 0.0));
+  std::vector<std::vector<double>> ring_qd = ring_q;
 
   for (long k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * T;
+    // What the sensors give the controllers now.
+    for (int j = 0; j < na; ++j) {
+      const int d = m0.actuated[static_cast<std::size_t>(j)].dof;
+      for (int l = 0; l < W; ++l) {
+        const ActuatedJoint& a = lanes[l].actuated[static_cast<std::size_t>(j)];
+        const ChannelSpec &ca = a.control.angle_sensor, &cr = a.control.rate_sensor;
+        const std::size_t jl = static_cast<std::size_t>(j * W + l), dl = static_cast<std::size_t>(d * W + l);
+        q_meas[jl] = sample_channel(s.q[dl], ca.noise, a.angle_key, ca.resolution, ca.delay, a.angle_hold, k, H, W, l,
+                                    ring_q[static_cast<std::size_t>(j)].data());
+        qd_meas[jl] = sample_channel(s.qd[dl], cr.noise, a.rate_key, cr.resolution, cr.delay, a.rate_hold, k, H, W, l,
+                                     ring_qd[static_cast<std::size_t>(j)].data());
+      }
+    }
     // The reference of every lane (its own trajectory and shapers).
     for (int l = 0; l < W; ++l)
       eval_arm_reference(lanes[l], t, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
@@ -169,13 +204,13 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
       const int ns = static_cast<int>(a0.notch.size());
       for (int l = 0; l < W; ++l) {
-        const double q = s.q[static_cast<std::size_t>(a0.dof * W + l)];
+        const double q = q_meas[static_cast<std::size_t>(j * W + l)];
         c.in[static_cast<std::size_t>(l)] = a0.notch_on_feedback ? q : r[static_cast<std::size_t>(l * na + j)];
       }
       if (ns > 0) step_notch(ns, W, c.coef[static_cast<std::size_t>(j)].data(), c.state[static_cast<std::size_t>(j)].data(), c.in.data(), c.out.data());
       else std::copy(c.in.begin(), c.in.end(), c.out.begin());
       for (int l = 0; l < W; ++l) {
-        const double q = s.q[static_cast<std::size_t>(a0.dof * W + l)];
+        const double q = q_meas[static_cast<std::size_t>(j * W + l)];
         const double ref = r[static_cast<std::size_t>(l * na + j)];
         e[static_cast<std::size_t>(j * W + l)] = a0.notch_on_feedback ? ref - c.out[static_cast<std::size_t>(l)] : c.out[static_cast<std::size_t>(l)] - q;
       }
@@ -191,7 +226,7 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       for (int j = 0; j < na; ++j) {
         const ActuatedJoint& a = m.actuated[static_cast<std::size_t>(j)];
         const std::size_t jl = static_cast<std::size_t>(j * W + l);
-        const double qd = s.qd[static_cast<std::size_t>(a.dof * W + l)];
+        const double qd = qd_meas[jl];
         const double err = e[jl];
         double u = a.control.kp * err + a.control.ki * c.integral[jl] - a.control.kd * qd;
         if (need_ff)
@@ -227,13 +262,19 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
         std::fill(kin.begin(), kin.end(), std::nan(""));
         if (options.keep_q) run.q[static_cast<std::size_t>(l)].col(k).setConstant(std::nan(""));
       }
-      for (std::size_t c2 = kin0; c2 < names.size(); ++c2) tr.columns[c2][ks] = kin[c2 - kin0];
+      for (std::size_t c2 = kin0; c2 < meas0; ++c2) tr.columns[c2][ks] = kin[c2 - kin0];
+      for (int j = 0; j < na; ++j) {
+        tr.columns[meas0 + 2 * static_cast<std::size_t>(j)][ks] = q_meas[static_cast<std::size_t>(j * W + l)];
+        tr.columns[meas0 + 2 * static_cast<std::size_t>(j) + 1][ks] = qd_meas[static_cast<std::size_t>(j * W + l)];
+      }
     }
     if (k + 1 == samples) break;
-    // The plant over one period with the torques held.
+    // The plant over one period with the torques held, less each joint's constant load.
     for (int j = 0; j < na; ++j) {
       const int d = m0.actuated[static_cast<std::size_t>(j)].dof;
-      for (int l = 0; l < W; ++l) tau_applied[static_cast<std::size_t>(d * W + l)] = c.tau_held[static_cast<std::size_t>(j * W + l)];
+      for (int l = 0; l < W; ++l)
+        tau_applied[static_cast<std::size_t>(d * W + l)] =
+            c.tau_held[static_cast<std::size_t>(j * W + l)] - lanes[l].actuated[static_cast<std::size_t>(j)].control.torque_offset;
     }
     if (cvode) {
       cvode->advance(tl, tau_applied.data(), s, t, T, cvode_ok);

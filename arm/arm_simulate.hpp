@@ -19,6 +19,8 @@ namespace ff {
 //                                                        at the reference puts it, base frame, m
 //   <link>.deflection_y, <link>.deflection_z             a flexible link's tip from the straight link's
 //                                                        tip, in the link's root frame, m
+//   <joint>.q_measured, <joint>.qd_measured              per actuated joint, what its controller measured
+//                                                        at this sample (joints.NAME.sensors), rad, rad/s
 struct ArmTrace {
   std::vector<std::string> names;
   std::vector<std::vector<double>> columns;  // (names) x (samples)

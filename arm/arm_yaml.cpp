@@ -2,6 +2,8 @@
 #include "arm/arm_yaml.hpp"
 
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -58,6 +60,38 @@ const std::array<Field<ShaperSpec>, 4> kShaperFields{{
      .fallback = "0: the arm's first closed-loop resonance"},
     {.key = "damping", .member = &ShaperSpec::damping, .fallback = "-1: that resonance's"},
     {.key = "vtol", .member = &ShaperSpec::vtol, .bound = Bound::kPositive},
+}};
+
+// A joint's plant and sensor blocks (the reference rig's hub blocks, per actuated joint).
+const std::array<Field<JointControlSpec>, 1> kJointFields{{
+    {.key = "torque_offset", .member = &JointControlSpec::torque_offset, .unit = "N·m (N)"},
+}};
+
+const std::array<Field<FrictionSpec>, 5> kFrictionFields{{
+    {.key = "viscous", .member = &FrictionSpec::viscous, .unit = "N·m·s/rad (N·s/m)", .bound = Bound::kNonNegative},
+    {.key = "coulomb", .member = &FrictionSpec::coulomb, .unit = "N·m (N)", .bound = Bound::kNonNegative},
+    {.key = "stiction", .member = &FrictionSpec::stiction, .unit = "N·m (N)", .bound = Bound::kNonNegative,
+     .fallback = "0: no Stribeck peak"},
+    {.key = "stribeck_velocity", .member = &FrictionSpec::stribeck_velocity, .unit = "rad/s (m/s)", .bound = Bound::kPositive},
+    {.key = "smoothing", .member = &FrictionSpec::smoothing, .unit = "rad/s (m/s)", .bound = Bound::kPositive},
+}};
+
+const std::array<Field<ChannelSpec>, 4> kAngleSensorFields{{
+    {.key = "resolution", .member = &ChannelSpec::resolution, .unit = "rad (m)", .bound = Bound::kNonNegative,
+     .fallback = "0: none"},
+    {.key = "noise", .member = &ChannelSpec::noise, .unit = "rad (m)", .bound = Bound::kNonNegative, .fallback = "0: none"},
+    {.key = "delay", .member = &ChannelSpec::delay, .unit = "controller samples", .bound = Bound::kNonNegative},
+    {.key = "rate", .member = &ChannelSpec::rate, .unit = "Hz", .bound = Bound::kNonNegative,
+     .fallback = "0: controller.rate"},
+}};
+const std::array<Field<ChannelSpec>, 4> kRateSensorFields{{
+    {.key = "resolution", .member = &ChannelSpec::resolution, .unit = "rad/s (m/s)", .bound = Bound::kNonNegative,
+     .fallback = "0: none"},
+    {.key = "noise", .member = &ChannelSpec::noise, .unit = "rad/s (m/s)", .bound = Bound::kNonNegative,
+     .fallback = "0: none"},
+    {.key = "delay", .member = &ChannelSpec::delay, .unit = "controller samples", .bound = Bound::kNonNegative},
+    {.key = "rate", .member = &ChannelSpec::rate, .unit = "Hz", .bound = Bound::kNonNegative,
+     .fallback = "0: controller.rate"},
 }};
 
 struct TrajectoryBlock {
@@ -180,6 +214,20 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       YamlReader shaper = one.child("shaper");
       read_shaper(shaper, c.shaper);
       shaper.finish();
+      read_present(one, kJointFields, c);
+      YamlReader friction = one.child("friction");
+      read_present(friction, kFrictionFields, c.friction);
+      if (c.friction.stiction > 0 && c.friction.stiction < c.friction.coulomb)
+        friction.fail("stiction", "must be >= coulomb (or 0 for no Stribeck peak)");
+      friction.finish();
+      YamlReader sensors = one.child("sensors");
+      YamlReader angle = sensors.child("angle");
+      read_present(angle, kAngleSensorFields, c.angle_sensor);
+      angle.finish();
+      YamlReader rate = sensors.child("rate");
+      read_present(rate, kRateSensorFields, c.rate_sensor);
+      rate.finish();
+      sensors.finish();
       one.finish();
       if (!s.tree.dof_index.count(name)) {
         std::string known;
@@ -244,6 +292,10 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   read_present(sim, kSimulationFields, s);
   SimulationBlock sb;
   read_present(sim, kIntegratorFields, sb);
+  double seed = 1;
+  sim.optional("seed", seed);
+  if (!(seed >= 0) || seed != std::floor(seed) || seed > 9.0e15) sim.fail("seed", "must be a whole number >= 0");
+  s.seed = static_cast<std::uint64_t>(seed);
   sim.finish();
   s.integrator_given = sb.integrator != "auto";
   bool known = sb.integrator == "auto";
@@ -277,12 +329,17 @@ std::vector<KeyDoc> arm_yaml_keys() {
   out.push_back({"joints.NAME.notch.zeta", "", "no", "[" + format_key_number(n.zeta[0]) + ", " + format_key_number(n.zeta[1]) + "]"});
   out.push_back({"joints.NAME.notch.omega_z", "rad/s", "no", "[0, 0]: this joint's closed-loop resonances"});
   add_keys(out, "joints.NAME.shaper.", kShaperFields);
+  add_keys(out, "joints.NAME.", kJointFields);
+  add_keys(out, "joints.NAME.friction.", kFrictionFields);
+  add_keys(out, "joints.NAME.sensors.angle.", kAngleSensorFields);
+  add_keys(out, "joints.NAME.sensors.rate.", kRateSensorFields);
   add_keys(out, "trajectory.", kTrajectoryFields);
   out.push_back({"trajectory.start", "rad (m)", "no", "every joint at 0"});
   add_keys(out, "trajectory.waypoints[i].", kWaypointFields);
   out.push_back({"trajectory.waypoints[i].joints", "rad (m)", "no", "none: `tool`"});
   add_keys(out, "simulation.", kSimulationFields);
   add_keys(out, "simulation.", kIntegratorFields);
+  out.push_back({"simulation.seed", "", "no", "1"});
   add_keys(out, "metrics.", kMetricsFields);
   return out;
 }

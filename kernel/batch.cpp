@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "kernel/drive.hpp"
+#include "kernel/friction.hpp"
 #include "kernel/notch.hpp"
 #include "kernel/random.hpp"
 
@@ -100,11 +101,12 @@ BatchModel make_batch(std::span<const Model> models) {
 
   for (const auto& m : models) {
     const auto& f = m.spec.friction;
-    bm.fric_b.push_back(f.viscous);
-    bm.fric_c.push_back(f.coulomb);
-    bm.fric_s.push_back(f.stiction > 0 ? f.stiction - f.coulomb : 0.0);
-    bm.fric_inv_vs.push_back(1.0 / f.stribeck_velocity);
-    bm.fric_inv_eps.push_back(1.0 / f.smoothing);
+    const FrictionMap fm = make_friction_map(f);
+    bm.fric_b.push_back(fm.b);
+    bm.fric_c.push_back(fm.fc);
+    bm.fric_s.push_back(fm.fs);
+    bm.fric_inv_vs.push_back(fm.inv_vs);
+    bm.fric_inv_eps.push_back(fm.inv_eps);
     bm.hub_offset.push_back(m.spec.hub_torque_offset);
   }
   for (const auto& m : models) {

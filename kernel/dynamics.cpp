@@ -5,6 +5,7 @@
 
 #include "kernel/drive.hpp"
 #include "kernel/fastmath.hpp"
+#include "kernel/friction.hpp"
 
 namespace ff {
 
@@ -13,19 +14,17 @@ namespace ff {
 // Parent-to-child transform (Featherstone's plnr(q, [L_parent, 0])):
 //   X = [[1, 0, 0], [s L, c, s], [c L, -s, c]],  c = cos q, s = sin q.
 
-double calc_hub_friction(const BatchModel& bm, int l, double w) {
-  const double b = bm.fric_b[l], fc = bm.fric_c[l], fs = bm.fric_s[l];
-  if (b == 0.0 && fc == 0.0 && fs == 0.0) return 0.0;
-  const double x = w * bm.fric_inv_vs[l];
-  return -(b * w + (fc + fs * std::exp(-x * x)) * std::tanh(w * bm.fric_inv_eps[l]));
+namespace {
+// Lane l's friction map (kernel/friction.hpp).
+FrictionMap hub_friction_map(const BatchModel& bm, int l) {
+  return {bm.fric_b[l], bm.fric_c[l], bm.fric_s[l], bm.fric_inv_vs[l], bm.fric_inv_eps[l]};
 }
+}  // namespace
+
+double calc_hub_friction(const BatchModel& bm, int l, double w) { return calc_friction_torque(hub_friction_map(bm, l), w); }
 
 double calc_hub_friction_damping(const BatchModel& bm, int l, double w) {
-  const double b = bm.fric_b[l], fc = bm.fric_c[l], fs = bm.fric_s[l];
-  if (fc == 0.0 && fs == 0.0) return std::max(b, 0.0);
-  const double x = w * bm.fric_inv_vs[l], e = std::exp(-x * x), th = std::tanh(w * bm.fric_inv_eps[l]);
-  const double g = fc + fs * e, dg = -2.0 * x * bm.fric_inv_vs[l] * fs * e;
-  return std::max(0.0, b + dg * th + g * (1.0 - th * th) * bm.fric_inv_eps[l]);
+  return calc_friction_damping(hub_friction_map(bm, l), w);
 }
 
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,

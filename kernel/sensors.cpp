@@ -8,12 +8,6 @@
 
 namespace ff {
 
-namespace {
-
-// One channel of lane l at sample k: the reading y = Q(x + sigma n), n ~ N(0, 1) from the counter-based
-// stream `key` at sample k, goes into the ring (H x W); returned is what the channel gives now, the
-// reading of the last sensor sample j = n floor((k - d) / n) <= k - d (delay d, hold n), or the first
-// reading while k < d.
 double sample_channel(double x, double sigma, std::uint64_t key, double quantum, long d, long n, long k, int H, int W,
                       int l, double* ring) {
   double y = x;
@@ -23,8 +17,6 @@ double sample_channel(double x, double sigma, std::uint64_t key, double quantum,
   const long j = k >= d ? (k - d) / n * n : 0;
   return ring[(j % H) * W + l];
 }
-
-}  // namespace
 
 void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle, double* hub_rate) {
   const int W = bm.W, H = bm.sensor_history;

@@ -5,12 +5,21 @@
 // go to the trace only.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "kernel/batch.hpp"
 
 namespace ff {
+
+// One channel of lane l at controller sample k: the reading y = Q(x + sigma n), n ~ N(0, 1) from the
+// counter-based stream `key` at sample k (kernel/random.hpp; Q rounds to the nearest multiple of
+// `quantum`, none when 0), goes into the ring (H x W, H >= d + n); returned is what the channel gives
+// now, the reading of the last sensor sample j = n floor((k - d) / n) <= k - d (delay d, hold n), or
+// the first reading while k < d. With sigma = quantum = d = 0 and n = 1 it returns x.
+double sample_channel(double x, double sigma, std::uint64_t key, double quantum, long d, long n, long k, int H, int W,
+                      int l, double* ring);
 
 // Takes this sample's measurement of every lane (s.sample, s.q, s.v), stores it in the ring
 // s.measured, and writes what the controller sees now (W each): the measurement of sample

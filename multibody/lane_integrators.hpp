@@ -7,6 +7,13 @@
 //             the velocity terms at a predictor: one ABA pass a step; A-stable.
 //   SDIRK2    Alexander's (1977) two-stage L-stable SDIRK, gamma = 1 - 1/sqrt(2), the springs and
 //             dampers implicit in the same way (armature gamma h c + (gamma h)^2 k): two passes a step.
+// Joint friction (TreeLanes::friction, kernel/friction.hpp) acts at every stage of all three, at the
+// stage's rate: explicitly in RK4 (its substeps must resolve the map's slope: h D / J <= 2.8), and in
+// the implicit pair linearly implicit like the dampers, its slope D(w) = -d tau_f / dw at the stage's
+// spring-state rate on the diagonal (armature gh D; the midpoint rule takes the Coulomb and Stribeck
+// part's h D_c, backward Euler), as the reference rig takes its hub friction (kernel/fixed_step.cpp):
+// viscous friction is then exactly a damper, and a Coulomb joint holds still without chattering at
+// any smoothing.
 // The springs of a finely lumped flexible link are what make the tree stiff (in 3-D its torsion
 // above all: omega ~ sqrt(G / rho) / l, 5.8e4 rad/s for aluminium cells of 8 cm), and its
 // stiffness-proportional dampers too (a real pole at beta omega^2); the implicit pair steps at the
@@ -40,7 +47,7 @@ struct TreeStepWorkspace {
 };
 
 // One step h (s) of every lane with the generalised force tau_applied (nv x W) held; the joints'
-// springs and dampers (TreeLanes stiffness, damping) act as well.
+// springs and dampers (TreeLanes stiffness, damping) and friction (TreeLanes::friction) act as well.
 void step_tree_rk4(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws, double h);
 void step_tree_midpoint(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws,
                         double h);

@@ -1,5 +1,6 @@
 #include "multibody/lanes.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -425,6 +426,47 @@ void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const dou
   for (std::size_t j = 0; j < n; ++j) {
     const double t = -k[j] * (q[j] - q0[j]) - c[j] * qd[j];
     tau[j] = tau_applied ? tau_applied[j] + t : t;
+  }
+  const std::size_t W = static_cast<std::size_t>(tl.W);
+  for (std::size_t f = 0; f < tl.friction_dofs.size(); ++f) {
+    const std::size_t o = static_cast<std::size_t>(tl.friction_dofs[f]) * W;
+    const FrictionMap* fm = tl.friction.data() + f * W;
+    for (std::size_t l = 0; l < W; ++l)
+      if (is_friction_on(fm[l])) tau[o + l] += calc_friction_torque(fm[l], qd[o + l]);
+  }
+}
+
+void set_tree_lanes_friction(TreeLanes& tl, int dof, std::span<const FrictionSpec> per_lane) {
+  if (dof < 0 || dof >= tl.nv) throw std::invalid_argument("set_tree_lanes_friction: dof " + std::to_string(dof) + " out of range");
+  if (per_lane.size() != static_cast<std::size_t>(tl.W))
+    throw std::invalid_argument("set_tree_lanes_friction: " + std::to_string(per_lane.size()) + " maps for " +
+                                std::to_string(tl.W) + " lanes");
+  std::vector<FrictionMap> maps;
+  bool on = false;
+  for (std::size_t l = 0; l < per_lane.size(); ++l) {
+    const FrictionSpec& f = per_lane[l];
+    if (!(f.viscous >= 0.0) || !(f.coulomb >= 0.0) || !(f.stiction >= 0.0) ||
+        (f.stiction > 0.0 && f.stiction < f.coulomb) || !(f.stribeck_velocity > 0.0) || !(f.smoothing > 0.0))
+      throw std::invalid_argument("set_tree_lanes_friction: lane " + std::to_string(l) + ", dof " + std::to_string(dof) +
+                                  ": not a physical friction map");
+    maps.push_back(make_friction_map(f));
+    on = on || is_friction_on(maps.back());
+  }
+  const std::size_t W = static_cast<std::size_t>(tl.W);
+  const auto it = std::lower_bound(tl.friction_dofs.begin(), tl.friction_dofs.end(), dof);
+  const std::size_t f = static_cast<std::size_t>(it - tl.friction_dofs.begin());
+  const bool present = it != tl.friction_dofs.end() && *it == dof;
+  if (present) {
+    if (on) {
+      std::copy(maps.begin(), maps.end(), tl.friction.begin() + static_cast<std::ptrdiff_t>(f * W));
+    } else {
+      tl.friction_dofs.erase(it);
+      tl.friction.erase(tl.friction.begin() + static_cast<std::ptrdiff_t>(f * W),
+                        tl.friction.begin() + static_cast<std::ptrdiff_t>((f + 1) * W));
+    }
+  } else if (on) {
+    tl.friction_dofs.insert(it, dof);
+    tl.friction.insert(tl.friction.begin() + static_cast<std::ptrdiff_t>(f * W), maps.begin(), maps.end());
   }
 }
 

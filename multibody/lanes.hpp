@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "kernel/friction.hpp"
 #include "multibody/tree.hpp"
 
 namespace ff {
@@ -30,6 +31,11 @@ struct TreeLanes {
                                 //   (xx, xy, xz, yy, yz, zz, kg·m²): the spatial inertia's blocks
   std::vector<double> armature, stiffness, damping, spring_reference;  // (nv x W), Body's units
   std::vector<double> gravity;  // K = 3 per lane: [k * W + l], m/s²
+  // Joint friction (kernel/friction.hpp; none from make_tree_lanes, set_tree_lanes_friction adds it):
+  // the dofs some lane has friction on, ascending, and per such dof f and lane l its map at [f * W + l]
+  // (a lane without friction there holds the zero map). compute_tree_passive_forces adds it.
+  std::vector<int> friction_dofs;
+  std::vector<FrictionMap> friction;
 };
 
 // Gathers trees of one topology (the same number of bodies, parents and joint types) into lanes.
@@ -37,6 +43,12 @@ struct TreeLanes {
 // or more than kMaxTreeLanes.
 inline constexpr int kMaxTreeLanes = 256;
 TreeLanes make_tree_lanes(std::span<const Tree> trees);
+
+// Puts friction on joint coordinate `dof` of every lane: per_lane[l] is lane l's (W of them). A dof
+// given again is replaced; one whose maps are all zero is dropped. Throws std::invalid_argument on a dof
+// out of range, a count other than W, or a map that is not physical (negative b, Fc or stiction,
+// stiction below Fc unless 0, non-positive stribeck_velocity or smoothing).
+void set_tree_lanes_friction(TreeLanes& tl, int dof, std::span<const FrictionSpec> per_lane);
 
 // Scratch of the recursions for every body and lane, sized once: nothing is allocated per call.
 struct TreeLanesWorkspace {
@@ -59,8 +71,9 @@ struct TreeLanesWorkspace {
 void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const double* qd, const double* tau,
                                    const double* extra_armature, double* qdd, TreeLanesWorkspace& ws);
 
-// tau = tau_applied - k (q - q0) - c qd in every lane and dof (calc_passive_forces plus a given
-// force; tau_applied may be null for none). (nv x W) each.
+// tau = tau_applied - k (q - q0) - c qd + tau_f(qd) in every lane and dof (calc_passive_forces plus a
+// given force, plus the joint friction of TreeLanes::friction at the rate qd; tau_applied may be null
+// for none). (nv x W) each.
 void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,
                                  double* tau);
 

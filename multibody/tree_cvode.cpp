@@ -33,7 +33,8 @@ struct Lane {
   TreeWorkspace ws;
   int nv = 0;
   VectorXd tau_held;        // (nv) the applied force over the current advance
-  VectorXd tau;             // (nv) scratch: applied + passive
+  VectorXd tau;             // (nv) scratch: applied + passive + friction
+  std::vector<std::pair<int, FrictionMap>> friction;  // the lane's joint friction (TreeLanes::friction)
   VectorXd ypert, fpert;    // (2 nv) the finite-difference Jacobian's perturbed state and rate
   long fd_rhs_evals = 0;    // right-hand sides of our own Jacobian since the last ReInit
 
@@ -87,6 +88,7 @@ bool eval(Lane& L, const double* y, double* f) {
   Map<VectorXd> qdd(f + n, n);
   calc_passive_forces(L.tree, q, qd, L.tau);
   L.tau += L.tau_held;
+  for (const auto& [d, fm] : L.friction) L.tau[d] += calc_friction_torque(fm, qd[d]);
   calc_forward_dynamics(L.tree, q, qd, L.tau, qdd, L.ws);
   std::copy(y + n, y + 2 * n, f);
   for (int i = 0; i < 2 * n; ++i)
@@ -166,8 +168,12 @@ int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector 
   for (int i = 0; i < n; ++i) {
     const double gk = gamma * L.k[static_cast<std::size_t>(i)];
     L.D[static_cast<std::size_t>(i)] = gamma * L.c[static_cast<std::size_t>(i)] + gamma * gk;
-    L.w[static_cast<std::size_t>(i)] = -L.D[static_cast<std::size_t>(i)] * rd[n + i] - gk * rd[i];
   }
+  // The joint friction's slope at the current rate, a damper like C.
+  for (const auto& [d, fm] : L.friction)
+    L.D[static_cast<std::size_t>(d)] += gamma * calc_friction_damping(fm, yd[n + d]);
+  for (int i = 0; i < n; ++i)
+    L.w[static_cast<std::size_t>(i)] = -L.D[static_cast<std::size_t>(i)] * rd[n + i] - gamma * L.k[static_cast<std::size_t>(i)] * rd[i];
   compute_tree_forward_dynamics(L.pre, yd, L.zero.data(), L.w.data(), L.D.data(), L.out.data(), L.pre_ws);
   for (int i = 0; i < n; ++i) {
     zd[n + i] = rd[n + i] + L.out[static_cast<std::size_t>(i)];
@@ -195,6 +201,10 @@ std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptio
   L->tau = VectorXd::Zero(n);
   L->tau_end = VectorXd::Zero(n);
   L->ypert = VectorXd::Zero(ny);
+  for (std::size_t f = 0; f < tl.friction_dofs.size(); ++f) {
+    const FrictionMap& fm = tl.friction[f * static_cast<std::size_t>(tl.W) + static_cast<std::size_t>(l)];
+    if (is_friction_on(fm)) L->friction.emplace_back(tl.friction_dofs[f], fm);
+  }
   L->fpert = VectorXd::Zero(ny);
 
   if (SUNContext_Create(nullptr, &L->ctx) != 0) fail("SUNContext_Create", l);

@@ -4,7 +4,8 @@
 // held (the controller's zero-order hold), the joints' springs and dampers acting as well.
 //
 // Each lane is an independent ODE y = [q; qd] (2 nv), ydot = [qd; qdd] with
-// qdd = calc_forward_dynamics(tree_l, q, qd, tau_applied_l + calc_passive_forces(tree_l, q, qd)): the
+// qdd = calc_forward_dynamics(tree_l, q, qd, tau_applied_l + calc_passive_forces(tree_l, q, qd) + the
+// joint friction of TreeLanes::friction at qd, kernel/friction.hpp): the
 // scalar ABA of multibody/algorithms.hpp on the lane's own tree. Each lane owns its SUNContext, vector,
 // matrix, linear solver, CVODE memory, tree copy and workspace, so a lane's result depends on its own
 // inputs and history only: the same bits alone or in a batch, in any position.
@@ -26,7 +27,8 @@
 //           difference quotient (one right-hand side per iteration), preconditioned by the stiff part
 //           of the Jacobian, the joint springs K and dampers C: P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]],
 //           solved exactly in O(nv) by one ABA pass with gamma C + gamma^2 K as extra armature (the
-//           fixed-step implicit pair's trick, multibody/lane_integrators.hpp), gravity and qd off. No
+//           fixed-step implicit pair's trick, multibody/lane_integrators.hpp; the joint friction's
+//           slope at the current rate added to C), gravity and qd off. No
 //           Jacobian evaluations, no factorisation.
 // Honest note on KLU: the reduced (joint-space) ODE has no sparse Jacobian -- M(q)^-1 couples every
 // joint of a chain, so dqdd/dq and dqdd/dqd are full nv x nv blocks whatever the topology -- and KLU

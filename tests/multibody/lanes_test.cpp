@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -176,6 +177,43 @@ TEST(TreeLanes, PassiveForcesAreMinusStiffnessTimesStretchMinusDampingTimesRate)
                         qd[static_cast<std::size_t>(l)], expect);
     EXPECT_EQ(lane(tau, tl.nv, tl.W, l), expect);
   }
+}
+
+TEST(TreeLanes, JointFrictionAddsTheStaticMapAtTheRateToThePassiveForcesOfItsDofOnly) {
+  test::Rng rng(4);
+  const std::vector<Tree> trees = random_lanes(rng, 6, 3);
+  TreeLanes tl = make_tree_lanes(trees);
+  std::vector<VectorXd> q, qd;
+  for (const Tree& t : trees) q.push_back(test::random_q(rng, t)), qd.push_back(test::random_vector(rng, t.nv(), -1, 1));
+  const std::vector<double> Q = gather(q), QD = gather(qd);
+  std::vector<double> plain(Q.size()), with(Q.size());
+  compute_tree_passive_forces(tl, Q.data(), QD.data(), nullptr, plain.data());
+  // Lane 1 without friction (the zero map), lanes 0 and 2 with their own.
+  std::vector<FrictionSpec> f(3);
+  f[0].viscous = 0.3, f[0].coulomb = 0.2;
+  f[2].coulomb = 0.5, f[2].stiction = 0.8, f[2].stribeck_velocity = 0.05, f[2].smoothing = 1e-2;
+  const int d = tl.nv - 1;
+  set_tree_lanes_friction(tl, d, f);
+  ASSERT_EQ(tl.friction_dofs, std::vector<int>{d});
+  compute_tree_passive_forces(tl, Q.data(), QD.data(), nullptr, with.data());
+  for (int l = 0; l < tl.W; ++l)
+    for (int j = 0; j < tl.nv; ++j) {
+      const std::size_t k = static_cast<std::size_t>(j * tl.W + l);
+      const double expect = j == d && l != 1 ? plain[k] + calc_friction_torque(make_friction_map(f[static_cast<std::size_t>(l)]), QD[k])
+                                             : plain[k];
+      EXPECT_EQ(with[k], expect) << "dof " << j << " lane " << l;
+    }
+  // -(0.3 w + 0.2 tanh(w / 1e-3)) at lane 0's rate.
+  const double w0 = QD[static_cast<std::size_t>(d * tl.W)];
+  EXPECT_NEAR(with[static_cast<std::size_t>(d * tl.W)] - plain[static_cast<std::size_t>(d * tl.W)],
+              -(0.3 * w0 + 0.2 * std::tanh(w0 / 1e-3)), 1e-13);  // less the passive force it is added to
+  // All-zero maps drop the dof; an unphysical map is refused.
+  set_tree_lanes_friction(tl, d, std::vector<FrictionSpec>(3));
+  EXPECT_TRUE(tl.friction_dofs.empty());
+  EXPECT_TRUE(tl.friction.empty());
+  f[1].coulomb = 1.0, f[1].stiction = 0.5;
+  EXPECT_THROW(set_tree_lanes_friction(tl, d, f), std::invalid_argument);
+  EXPECT_THROW(set_tree_lanes_friction(tl, tl.nv, std::vector<FrictionSpec>(3)), std::invalid_argument);
 }
 
 TEST(TreeLanes, TreesOfAnotherTopologyAreRejectedNamingTheLaneAndBody) {

@@ -1,0 +1,58 @@
+// The static friction map of FrictionSpec (kernel/model.hpp) as a pure function of the rate, shared by
+// the reference rig's hub (kernel/dynamics.cpp: calc_hub_friction, calc_hub_friction_damping) and the
+// arm models' actuated joints (multibody/lanes.hpp: TreeLanes::friction):
+//   tau_f(w) = -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) tanh(w/eps))
+// (Armstrong-Helouvry 1994, tanh smoothing). Never adds energy: tau_f w <= 0.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/model.hpp"
+
+namespace ff {
+
+// The map's coefficients, as the evaluation uses them.
+struct FrictionMap {
+  double b = 0.0;        // viscous, N·m·s/rad (prismatic: N·s/m)
+  double fc = 0.0;       // Coulomb level Fc, N·m (N)
+  double fs = 0.0;       // the Stribeck excess Fs - Fc (0 when stiction is 0), N·m (N)
+  double inv_vs = 0.0;   // 1 / stribeck_velocity
+  double inv_eps = 0.0;  // 1 / smoothing
+};
+
+inline FrictionMap make_friction_map(const FrictionSpec& f) {
+  return {f.viscous, f.coulomb, f.stiction > 0 ? f.stiction - f.coulomb : 0.0, 1.0 / f.stribeck_velocity,
+          1.0 / f.smoothing};
+}
+
+// True when the map is not identically zero.
+inline bool is_friction_on(const FrictionMap& f) { return f.b != 0.0 || f.fc != 0.0 || f.fs != 0.0; }
+
+// tau_f at rate w, N·m (N).
+inline double calc_friction_torque(const FrictionMap& f, double w) {
+  if (f.b == 0.0 && f.fc == 0.0 && f.fs == 0.0) return 0.0;
+  const double x = w * f.inv_vs;
+  return -(f.b * w + (f.fc + f.fs * std::exp(-x * x)) * std::tanh(w * f.inv_eps));
+}
+
+// The map's damping -d tau_f / dw at rate w, not below 0 (the Stribeck drop's negative slope left
+// out): b + g'(w) tanh(w/eps) + g(w) sech^2(w/eps) / eps, g = Fc + (Fs - Fc) exp(-(w/vs)^2).
+// What a linearly implicit stage adds to the joint's armature (times its coefficient gh).
+inline double calc_friction_damping(const FrictionMap& f, double w) {
+  if (f.fc == 0.0 && f.fs == 0.0) return std::max(f.b, 0.0);
+  const double x = w * f.inv_vs, e = std::exp(-x * x), th = std::tanh(w * f.inv_eps);
+  const double g = f.fc + f.fs * e, dg = -2.0 * x * f.inv_vs * f.fs * e;
+  return std::max(0.0, f.b + dg * th + g * (1.0 - th * th) * f.inv_eps);
+}
+
+// The damping of the Coulomb and Stribeck part alone, d/dw of g(w) tanh(w/eps), not below 0: the
+// map's damping less b (where the Stribeck drop does not clip it). 0 when Fc = Fs = 0.
+inline double calc_coulomb_friction_damping(const FrictionMap& f, double w) {
+  if (f.fc == 0.0 && f.fs == 0.0) return 0.0;
+  const double x = w * f.inv_vs, e = std::exp(-x * x), th = std::tanh(w * f.inv_eps);
+  const double g = f.fc + f.fs * e, dg = -2.0 * x * f.inv_vs * f.fs * e;
+  return std::max(0.0, dg * th + g * (1.0 - th * th) * f.inv_eps);
+}
+
+}  // namespace ff

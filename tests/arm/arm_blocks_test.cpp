@@ -1,0 +1,319 @@
+// arm/: the reference rig's hub blocks on an arm's actuated joints, against closed forms: a coasting
+// joint's viscous friction decays its rate as exp(-b t / J) and its Coulomb friction decelerates it at
+// Fc / J to a stop at J w0 / Fc; a PD hold against a constant load stops where Coulomb friction allows
+// (|kp e - offset| <= Fc); friction never adds energy; the sensors quantise, hold, delay and add noise
+// that repeats with the seed; a variant's bits the same in any lane.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "arm/arm_simulate.hpp"
+#include "arm/arm_yaml.hpp"
+#include "kernel/errors.hpp"
+#include "kernel/friction.hpp"
+#include "kernel/random.hpp"
+#include "kernel/yaml_reader.hpp"
+
+namespace ff {
+namespace {
+
+ArmModel arm_from(const std::string& text) { return parse_arm(load_yaml_text(text, "arm.yaml"), "arm.yaml"); }
+
+std::string arm_error(const std::string& text) {
+  try {
+    arm_from(text);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// A rotor about the vertical z (gravity along the axis: no load): 1 kg at 0.5 m, izz 0.05 about its
+// centre, armature 0.1, so J = 0.05 + 1 * 0.5^2 + 0.1 = 0.4 kg·m².
+constexpr double kJ = 0.4;
+std::string rotor(const std::string& joint, const std::string& simulation) {
+  return R"(gravity: [0, 0, -9.81]
+bodies:
+  - name: arm
+    parent: base
+    mass: 1.0
+    com: [0.5, 0, 0]
+    inertia: {ixx: 0.001, iyy: 0.05, izz: 0.05}
+    joint: {type: revolute, axis: [0, 0, 1], armature: 0.1}
+controller: {rate: 1000}
+joints:
+  arm: )" + joint + "\nsimulation: " + simulation + "\n";
+}
+
+// A measured value for the test report, to 6 significant digits.
+std::string fmt(double x) {
+  std::ostringstream o;
+  o << std::setprecision(6) << x;
+  return o.str();
+}
+
+ArmRun run_one(const ArmModel& m) { return simulate_arms(std::span<const ArmModel>(&m, 1)); }
+
+const char* const kIntegrators[] = {"rk4", "midpoint", "sdirk2", "cvode_dense", "cvode_klu", "cvode_gmres"};
+
+// The simulation block for an integrator, CVODE tight (at its default rtol 1e-8 its global error on
+// these runs is 3e-6, the same with the tree's own joint damper in place of viscous friction).
+std::string sim_with(const char* integ, const std::string& rest) {
+  const bool cvode = std::string(integ).starts_with("cvode");
+  return "{" + rest + ", integrator: " + integ + (cvode ? ", rtol: 1.0e-11, atol: 1.0e-13}" : "}");
+}
+
+TEST(ArmFriction, AFreelyCoastingJointWithViscousFrictionDecaysAsExpOfMinusBtOverJ) {
+  // w = w0 exp(-b t / J), q = w0 J / b (1 - exp(-b t / J)); b / J = 0.5 /s.
+  const double b = 0.2, w0 = 2.0;
+  for (const char* integ : kIntegrators) {
+    ArmModel m = arm_from(rotor("{controller: {}, friction: {viscous: 0.2}}", sim_with(integ, "duration: 3.0")));
+    m.qd0[0] = w0;
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const ArmTrace& tr = run.traces[0];
+    double err_w = 0.0, err_q = 0.0;
+    for (std::size_t k = 0; k < tr.t().size(); ++k) {
+      const double t = tr.t()[k], decay = std::exp(-b * t / kJ);
+      err_w = std::max(err_w, std::abs(tr.column("arm.qd")[k] - w0 * decay));
+      err_q = std::max(err_q, std::abs(tr.column("arm.q")[k] - w0 * kJ / b * (1.0 - decay)));
+    }
+    RecordProperty(std::string(integ) + "_rate_error", fmt(err_w));
+    EXPECT_LT(err_w, 5e-8 * w0) << integ;  // every method at its order (h b / J = 5e-4 a step)
+    EXPECT_LT(err_q, 1e-6) << integ;
+    // Viscous friction is the joint's damper: the same bits as the tree's own (joint.damping) in the
+    // fixed-step methods (both implicit with armature gh b in the implicit pair).
+    if (!std::string(integ).starts_with("cvode")) {
+      ArmModel d = arm_from(rotor("{controller: {}}", sim_with(integ, "duration: 3.0")));
+      d.spec.tree.spec.bodies[0].damping = b;
+      d = make_arm(d.spec);
+      d.qd0[0] = w0;
+      EXPECT_EQ(run_one(d).traces[0].column("arm.qd"), tr.column("arm.qd")) << integ;
+    }
+  }
+}
+
+TEST(ArmFriction, ACoastingJointWithCoulombFrictionDeceleratesAtFcOverJToAStopAtJw0OverFc) {
+  // Fc / J = 1 rad/s², w0 = 2 rad/s: w = w0 - t until t = 2 s, then at rest at q = J w0^2 / (2 Fc) = 2 rad.
+  const double fc = 0.4, w0 = 2.0, t_stop = kJ * w0 / fc, q_stop = kJ * w0 * w0 / (2.0 * fc);
+  for (const char* integ : kIntegrators) {
+    ArmModel m = arm_from(rotor("{controller: {}, friction: {coulomb: 0.4, smoothing: 1.0e-4}}",
+                                sim_with(integ, "duration: 3.0")));
+    m.qd0[0] = w0;
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const ArmTrace& tr = run.traces[0];
+    double err_w = 0.0;
+    for (std::size_t k = 0; k < tr.t().size(); ++k) {
+      const double t = tr.t()[k];
+      if (t < t_stop - 0.01) err_w = std::max(err_w, std::abs(tr.column("arm.qd")[k] - (w0 - fc / kJ * t)));
+      if (t > t_stop + 0.01) {
+        EXPECT_LT(std::abs(tr.column("arm.qd")[k]), 1e-6) << integ << " t = " << t;
+      }
+    }
+    RecordProperty(std::string(integ) + "_rate_error", fmt(err_w));
+    RecordProperty(std::string(integ) + "_stop_angle_error", fmt(tr.column("arm.q").back() - q_stop));
+    EXPECT_LT(err_w, 1e-6) << integ;  // tanh(w / eps) = 1 to 1e-80 while w > 0.01 rad/s
+    // The smoothing's error: the last eps of rate is shed over ~ J eps / Fc, O(J eps^2 / Fc) of angle.
+    EXPECT_NEAR(tr.column("arm.q").back(), q_stop, 1e-7) << integ;
+  }
+}
+
+TEST(ArmFriction, APdHoldAgainstATorqueOffsetStopsWhereCoulombFrictionAllows) {
+  // kp = 100, offset 2 N·m: without friction the joint settles at q* = -offset / kp = -0.02 rad. With
+  // Fc = 0.5 N·m it stops anywhere |kp (0 - q) - offset| <= Fc, q in [-0.025, -0.015], short of q*
+  // (approaching from q = 0 with kd = 5: zeta 0.4, one overshoot into the band).
+  const double kp = 100.0, offset = 2.0, fc = 0.5;
+  const ArmModel free = arm_from(rotor("{controller: {kp: 100, kd: 5}, torque_offset: 2.0}", "{duration: 4.0}"));
+  EXPECT_NEAR(run_one(free).traces[0].column("arm.q").back(), -offset / kp, 1e-9);
+  for (const char* integ : {"rk4", "midpoint", "sdirk2", "cvode_dense"}) {
+    const ArmModel m = arm_from(rotor("{controller: {kp: 100, kd: 5}, torque_offset: 2.0, friction: {coulomb: 0.5, smoothing: 1.0e-4}}",
+                                      sim_with(integ, "duration: 4.0")));
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const std::vector<double>& q = run.traces[0].column("arm.q");
+    const double q_end = q.back();
+    RecordProperty(std::string(integ) + "_stop_angle", fmt(q_end));
+    EXPECT_LE(std::abs(kp * (0.0 - q_end) - offset), fc) << integ;
+    EXPECT_GT(std::abs(q_end + offset / kp), 0.1 * fc / kp) << integ;  // friction, not the PD, holds it
+    // At rest: over the last second it creeps by no more than eps atanh(|n| / Fc) a second.
+    EXPECT_LT(std::abs(q_end - q[q.size() - 1001]), 1e-4) << integ;
+  }
+}
+
+TEST(ArmFriction, FrictionNeverAddsEnergy) {
+  // The map's power tau_f w <= 0 at every rate, for viscous, Coulomb and Stribeck parts.
+  FrictionSpec f;
+  f.viscous = 0.05, f.coulomb = 0.3, f.stiction = 0.5, f.stribeck_velocity = 0.1, f.smoothing = 1e-3;
+  const FrictionMap map = make_friction_map(f);
+  for (double w = -3.0; w <= 3.0; w += 1e-4) EXPECT_LE(calc_friction_torque(map, w) * w, 0.0) << w;
+  // A coasting rotor with all three: its kinetic energy never rises from one sample to the next, in
+  // every integrator, and it stops.
+  for (const char* integ : kIntegrators) {
+    ArmModel m = arm_from(rotor("{controller: {}, friction: {viscous: 0.05, coulomb: 0.3, stiction: 0.5, stribeck_velocity: 0.1}}",
+                                sim_with(integ, "duration: 4.0")));
+    m.qd0[0] = 3.0;
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const std::vector<double>& w = run.traces[0].column("arm.qd");
+    double rise = -1.0;
+    for (std::size_t k = 1; k < w.size(); ++k) rise = std::max(rise, 0.5 * kJ * (w[k] * w[k] - w[k - 1] * w[k - 1]));
+    RecordProperty(std::string(integ) + "_largest_rise_J", fmt(rise));
+    EXPECT_LE(rise, 1e-20) << integ;  // CVODE's rate at rest jitters at 1e-15 rad/s
+    EXPECT_LT(std::abs(w.back()), 1e-6) << integ;
+  }
+  // A pendulum (hinge about y, gravity -z) released horizontal: E = J w^2 / 2 - m g l sin q never rises
+  // by more than the method's own energy error (the midpoint rule's, at the swing's turning points
+  // where friction takes nothing, is 1e-6 J: left out), and falls by joules.
+  const std::string text = R"(gravity: [0, 0, -9.81]
+bodies:
+  - name: arm
+    parent: base
+    mass: 2.0
+    com: [0.5, 0, 0]
+    inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01}
+    joint: {type: revolute, axis: [0, 1, 0], armature: 0.05}
+joints:
+  arm: {controller: {}, friction: {viscous: 0.05, coulomb: 0.3, stiction: 0.5, stribeck_velocity: 0.1, smoothing: 1.0e-3}}
+simulation: )";
+  const double J = 0.01 + 2.0 * 0.25 + 0.05, mgl = 2.0 * 9.81 * 0.5;
+  for (const char* integ : {"rk4", "sdirk2", "cvode_dense"}) {
+    const ArmModel m = arm_from(text + sim_with(integ, "duration: 4.0") + "\n");
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const std::vector<double>&q = run.traces[0].column("arm.q"), &w = run.traces[0].column("arm.qd");
+    double rise = -1.0;
+    std::vector<double> E(q.size());
+    for (std::size_t k = 0; k < q.size(); ++k) E[k] = 0.5 * J * w[k] * w[k] - mgl * std::sin(q[k]);
+    for (std::size_t k = 1; k < q.size(); ++k) rise = std::max(rise, E[k] - E[k - 1]);
+    RecordProperty(std::string(integ) + "_pendulum_largest_rise_J", fmt(rise));
+    RecordProperty(std::string(integ) + "_pendulum_energy_lost_J", fmt(E.front() - E.back()));
+    EXPECT_LE(rise, 1e-9) << integ;
+    EXPECT_GT(E.front() - E.back(), 1.0) << integ;
+  }
+}
+
+// A joint tracking a move, its sensors as given.
+std::string tracked(const std::string& sensors, const std::string& simulation = "{duration: 2.0}") {
+  return rotor("{controller: {kp: 100, kd: 10}, sensors: " + sensors + "}",
+               simulation + "\ntrajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.5}}");
+}
+
+TEST(ArmSensors, TheMeasuredAngleIsAMultipleOfTheResolutionWithinHalfOfItOfTheTruth) {
+  const double res = 1e-3, res_rate = 0.01;
+  const ArmRun run = run_one(arm_from(tracked("{angle: {resolution: 1.0e-3}, rate: {resolution: 0.01}}")));
+  const ArmTrace& tr = run.traces[0];
+  int differ = 0;
+  for (std::size_t k = 0; k < tr.t().size(); ++k) {
+    const double qm = tr.column("arm.q_measured")[k], q = tr.column("arm.q")[k];
+    EXPECT_EQ(qm, res * std::nearbyint(qm / res));
+    EXPECT_LE(std::abs(qm - q), 0.5 * res * (1 + 1e-12));
+    const double wm = tr.column("arm.qd_measured")[k];
+    EXPECT_EQ(wm, res_rate * std::nearbyint(wm / res_rate));
+    EXPECT_LE(std::abs(wm - tr.column("arm.qd")[k]), 0.5 * res_rate * (1 + 1e-12));
+    differ += qm != q;
+  }
+  EXPECT_GT(differ, 1000);
+  EXPECT_NEAR(tr.column("arm.q").back(), 0.5, res);  // the loop holds to within the quantum
+}
+
+TEST(ArmSensors, ADelayOfDSamplesShiftsTheMeasuredSignalByExactlyDSamples) {
+  const int d = 3;
+  const ArmRun run = run_one(arm_from(tracked("{angle: {delay: 3}, rate: {delay: 3}}")));
+  const ArmTrace& tr = run.traces[0];
+  const std::vector<double>&q = tr.column("arm.q"), &qm = tr.column("arm.q_measured");
+  const std::vector<double>&w = tr.column("arm.qd"), &wm = tr.column("arm.qd_measured");
+  for (std::size_t k = 0; k < q.size(); ++k) {
+    const std::size_t j = k >= d ? k - d : 0;
+    ASSERT_EQ(qm[k], q[j]) << k;
+    ASSERT_EQ(wm[k], w[j]) << k;
+  }
+  // A sensor at a quarter of the controller's rate holds each reading four samples.
+  const ArmRun held = run_one(arm_from(tracked("{angle: {rate: 250}}")));
+  const ArmTrace& th = held.traces[0];
+  for (std::size_t k = 0; k < th.t().size(); ++k) ASSERT_EQ(th.column("arm.q_measured")[k], th.column("arm.q")[k / 4 * 4]) << k;
+  // The delay costs the loop: it tracks worse than with none.
+  const ArmRun none = run_one(arm_from(tracked("{}")));
+  auto peak_error = [](const ArmTrace& t) {
+    double e = 0.0;
+    for (std::size_t k = 0; k < t.t().size(); ++k) e = std::max(e, std::abs(t.column("arm.q")[k] - t.column("arm.ref")[k]));
+    return e;
+  };
+  EXPECT_NE(peak_error(tr), peak_error(none.traces[0]));
+  EXPECT_EQ(none.traces[0].column("arm.q_measured"), none.traces[0].column("arm.q"));
+}
+
+TEST(ArmSensors, NoiseWithTheSameSeedRepeatsBitForBitAndDiffersWithAnother) {
+  const std::string s = "{angle: {noise: 1.0e-3}, rate: {noise: 0.01}}";
+  const ArmModel a = arm_from(tracked(s, "{duration: 2.0, seed: 7}"));
+  const ArmRun r1 = run_one(a), r2 = run_one(a);
+  EXPECT_EQ(r1.traces[0].columns, r2.traces[0].columns);
+  const ArmRun r3 = run_one(arm_from(tracked(s, "{duration: 2.0, seed: 8}")));
+  EXPECT_NE(r1.traces[0].column("arm.q_measured"), r3.traces[0].column("arm.q_measured"));
+  EXPECT_NE(r1.traces[0].column("arm.q"), r3.traces[0].column("arm.q"));  // the loop felt it
+  // The noise is the stream (seed, channel 0) at each sample; its moments those of N(0, sigma^2).
+  const ArmTrace& tr = r1.traces[0];
+  const std::uint64_t key = calc_variant_seed(7, 0);
+  double sum = 0.0, sum2 = 0.0;
+  const std::size_t n = tr.t().size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const double e = tr.column("arm.q_measured")[k] - tr.column("arm.q")[k];
+    EXPECT_NEAR(e, 1e-3 * CounterRng(key, k).normal(), 1e-15);
+    sum += e;
+    sum2 += e * e;
+  }
+  const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
+  RecordProperty("angle_noise_sd", fmt(sd));
+  EXPECT_NEAR(sd, 1e-3, 0.1e-3);
+  EXPECT_NEAR(mean, 0.0, 4.0 * 1e-3 / std::sqrt(static_cast<double>(n)));
+}
+
+TEST(ArmSimulate, AVariantWithFrictionSensorsAndALoadGivesTheSameBitsAloneAndInAnyLane) {
+  for (const char* integ : {"rk4", "sdirk2"}) {
+    const std::string sim = std::string("{duration: 1.5, substeps: 8, integrator: ") + integ;
+    std::vector<ArmModel> lanes;
+    lanes.push_back(arm_from(rotor("{controller: {kp: 100, kd: 10}, friction: {viscous: 0.1, coulomb: 0.3, stiction: 0.4}}",
+                                   sim + "}\ntrajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.5}}")));
+    lanes.push_back(arm_from(rotor("{controller: {kp: 120, kd: 10}, sensors: {angle: {noise: 1.0e-3, delay: 2}, rate: {resolution: 0.01}}}",
+                                   sim + ", seed: 3}\ntrajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.5}}")));
+    lanes.push_back(arm_from(rotor("{controller: {kp: 100, kd: 12}, torque_offset: 1.5}",
+                                   sim + "}\ntrajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.5}}")));
+    const ArmRun together = simulate_arms(lanes);
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      const ArmRun alone = simulate_arms(std::span<const ArmModel>(&lanes[l], 1));
+      EXPECT_EQ(alone.traces[0].columns, together.traces[l].columns) << integ << " lane " << l;
+    }
+    std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
+    const ArmRun back = simulate_arms(reversed);
+    for (std::size_t l = 0; l < lanes.size(); ++l)
+      EXPECT_EQ(back.traces[lanes.size() - 1 - l].columns, together.traces[l].columns) << integ << " lane " << l;
+  }
+}
+
+TEST(ArmYaml, TheJointBlocksAreListedAndTheirErrorsNamedAtTheirLines) {
+  std::vector<std::string> keys;
+  for (const KeyDoc& k : arm_yaml_keys()) keys.push_back(k.key);
+  for (const char* k : {"joints.NAME.torque_offset", "joints.NAME.friction.viscous", "joints.NAME.friction.coulomb",
+                        "joints.NAME.friction.stiction", "joints.NAME.friction.stribeck_velocity",
+                        "joints.NAME.friction.smoothing", "joints.NAME.sensors.angle.resolution",
+                        "joints.NAME.sensors.angle.noise", "joints.NAME.sensors.angle.delay",
+                        "joints.NAME.sensors.angle.rate", "joints.NAME.sensors.rate.noise", "simulation.seed"})
+    EXPECT_NE(std::find(keys.begin(), keys.end(), k), keys.end()) << k;
+  const std::string bad_stiction = arm_error(rotor("{controller: {}, friction: {coulomb: 0.5, stiction: 0.2}}", "{duration: 1}"));
+  EXPECT_NE(bad_stiction.find("joints.arm.friction.stiction"), std::string::npos) << bad_stiction;
+  const std::string misspelt = arm_error(rotor("{controller: {}, friction: {colomb: 0.5}}", "{duration: 1}"));
+  EXPECT_NE(misspelt.find("colomb"), std::string::npos) << misspelt;
+  const std::string rate = arm_error(rotor("{controller: {}, sensors: {angle: {rate: 300}}}", "{duration: 1}"));
+  EXPECT_NE(rate.find("joints.arm.sensors.angle.rate"), std::string::npos) << rate;
+  const std::string neg = arm_error(rotor("{controller: {}, sensors: {rate: {noise: -1}}}", "{duration: 1}"));
+  EXPECT_NE(neg.find("arm.yaml:11: joints.arm.sensors.rate.noise"), std::string::npos) << neg;
+  const std::string seed = arm_error(rotor("{controller: {}}", "{duration: 1, seed: 1.5}"));
+  EXPECT_NE(seed.find("simulation.seed"), std::string::npos) << seed;
+}
+
+}  // namespace
+}  // namespace ff
