@@ -292,10 +292,15 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   read_present(sim, kSimulationFields, s);
   SimulationBlock sb;
   read_present(sim, kIntegratorFields, sb);
-  double seed = 1;
-  sim.optional("seed", seed);
-  if (!(seed >= 0) || seed != std::floor(seed) || seed > 9.0e15) sim.fail("seed", "must be a whole number >= 0");
-  s.seed = static_cast<std::uint64_t>(seed);
+  // The seed: any 64-bit whole number (a study writes each variant's own, up to 2^64 - 1).
+  if (const YAML::Node seed = sim.raw("seed"); seed) {
+    try {
+      if (!seed.IsScalar() || seed.Scalar().empty() || seed.Scalar()[0] == '-') throw YAML::Exception(YAML::Mark(), "");
+      s.seed = seed.as<std::uint64_t>();
+    } catch (const YAML::Exception&) {
+      sim.fail("seed", "must be a whole number >= 0");
+    }
+  }
   sim.finish();
   s.integrator_given = sb.integrator != "auto";
   bool known = sb.integrator == "auto";

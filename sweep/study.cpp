@@ -422,7 +422,10 @@ Model make_variant_model(const Study& study, const Variant& v) {
 }
 
 ArmModel make_variant_arm(const Study& study, const Variant& v) {
-  return make_arm_with(YAML::Load(study.model_text), study.model_path, make_variant_set(study, v));
+  // Each variant its own sensor noise, as the rig's: its seed set last.
+  std::vector<Assignment> set = make_variant_set(study, v);
+  set.push_back({"simulation.seed", YAML::Node(std::to_string(v.seed)), study.source, 0, "the variant's seed"});
+  return make_arm_with(YAML::Load(study.model_text), study.model_path, set);
 }
 
 std::string explain_columns_mismatch(const Study& study, const ArmModel& a) {

@@ -515,7 +515,7 @@ TEST_F(Cli, SimulateAnArmModelWritesItsTraceMetricsAndPlots) {
   const fs::path out = work / "out" / "arm";
   const auto trace = split_lines(read_text(out / "trace.csv"));
   ASSERT_EQ(trace.size(), 1u + 1501u);  // 0 .. 3 s at 500 Hz
-  EXPECT_EQ(trace[0], "t,arm.ref,arm.q,arm.qd,arm.torque,tool.x,tool.y,tool.z,tool.ref_x,tool.ref_y,tool.ref_z");
+  EXPECT_EQ(trace[0], "t,arm.ref,arm.q,arm.qd,arm.torque,tool.x,tool.y,tool.z,tool.ref_x,tool.ref_y,tool.ref_z,arm.q_measured,arm.qd_measured");
   // At rest at the end: the tool at 0.5 (cos 0.5, 0, sin 0.5) (a turn of -0.5 about y lifts it).
   std::vector<std::string> last;
   std::stringstream row(trace.back());

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "kernel/errors.hpp"
+#include "arm/arm_simulate.hpp"
 #include "tests/temp_dir.hpp"
 
 namespace {
@@ -516,3 +517,35 @@ TEST_F(StudyFiles, ARejectedGridLevelIsAnErrorOfTheFile) {
   EXPECT_EQ(e.line(), 3);
   EXPECT_NE(e.message().find(">= 0"), std::string::npos) << e.what();
 }
+
+namespace {
+
+// An arm study: each variant gets its own seed for its sensors' noise, so two variants with the same
+// parameters measure differently, and a variant built twice measures the same.
+TEST(ArmStudies, EachVariantHasItsOwnSensorNoiseAndTheSameVariantRepeatsIt) {
+  ff::test::TempDir dir("arm_study");
+  dir.write("arm.yaml",
+            "bodies:\n"
+            "  - {name: arm, parent: base, mass: 2.0, com: [0.5, 0, 0], inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01},\n"
+            "     joint: {axis: [0, 0, 1], armature: 0.05}}\n"
+            "joints:\n"
+            "  arm: {controller: {kp: 100, kd: 10}, sensors: {angle: {noise: 1.0e-3}}}\n"
+            "simulation: {duration: 0.1}\n");
+  const std::string path = dir.write("study.yaml",
+                                     "model: arm.yaml\n"
+                                     "runs:\n"
+                                     "  - label: a\n"
+                                     "  - label: b\n");
+  const ff::Study st = ff::load_study(path);
+  ASSERT_TRUE(st.arm);
+  auto measured = [&](int i) {
+    const ff::ArmModel m = ff::make_variant_arm(st, st.variants[static_cast<std::size_t>(i)]);
+    return ff::simulate_arms(std::span<const ff::ArmModel>(&m, 1)).traces[0].column("arm.q_measured");
+  };
+  const auto a = measured(0), b = measured(1);
+  EXPECT_NE(a, b);
+  EXPECT_EQ(a, measured(0));
+  EXPECT_NE(st.variants[0].seed, st.variants[1].seed);
+}
+
+}  // namespace
