@@ -6,7 +6,7 @@
 
 #include "apps/verbs.hpp"
 #include "jobs/mpi.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 
 int main(int argc, char** argv) {
   ff::MpiSession session(&argc, &argv);  // one rank of one unless started by mpirun

@@ -8,8 +8,8 @@
 
 #include "apps/verbs.hpp"
 #include "description/load.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/files.hpp"
+#include "common/errors.hpp"
+#include "common/files.hpp"
 #include "kernel/modes.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/modes.hpp"

@@ -6,7 +6,7 @@
 #include "apps/verbs.hpp"
 #include "arm/arm_simulate.hpp"
 #include "jobs/report.hpp"
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "kernel/simulate.hpp"
 #include "sweep/study.hpp"
 

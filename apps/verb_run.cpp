@@ -8,7 +8,7 @@
 #include "jobs/mpi.hpp"
 #include "jobs/progress.hpp"
 #include "jobs/report.hpp"
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 
 namespace ff {
 

@@ -5,7 +5,7 @@
 #include "apps/verbs.hpp"
 #include "arm/arm_metrics.hpp"
 #include "arm/arm_simulate.hpp"
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "jobs/report.hpp"
 #include "kernel/trajectory.hpp"
 #include "kernel/model_io.hpp"

@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "apps/verbs.hpp"
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "kernel/model_io.hpp"
 #include "validate/diagnose.hpp"
 #include "validate/ledger.hpp"

@@ -8,10 +8,10 @@
 #include <stdexcept>
 
 #include "kernel/batch.hpp"  // calc_sensor_hold
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/friction.hpp"
 #include "kernel/modes.hpp"
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/inverse_kinematics.hpp"
 #include "multibody/modes.hpp"

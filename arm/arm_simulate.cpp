@@ -8,8 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kernel/errors.hpp"
-#include "kernel/files.hpp"
+#include "common/errors.hpp"
+#include "common/files.hpp"
 #include "kernel/sensors.hpp"
 #include "multibody/lane_integrators.hpp"
 #include "multibody/lanes.hpp"

@@ -10,7 +10,7 @@
 
 #include "description/tree_yaml.hpp"
 #include "description/urdf.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/model_io.hpp"
 
 namespace ff {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "arm/arm_model.hpp"
-#include "description/field_table.hpp"
+#include "common/field_table.hpp"
 
 namespace ff {
 

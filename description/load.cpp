@@ -6,7 +6,7 @@
 
 #include "description/tree_yaml.hpp"
 #include "description/urdf.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 
 namespace ff {
 

@@ -11,8 +11,8 @@
 #include <utility>
 #include <variant>
 
-#include "description/field_table.hpp"
-#include "kernel/errors.hpp"
+#include "common/field_table.hpp"
+#include "common/errors.hpp"
 #include "multibody/flexible_link.hpp"
 
 namespace ff {

@@ -1,6 +1,6 @@
 // Tree YAML files (docs/formats.md, "Kinematic trees (YAML) and URDF"): a kinematic tree as a list of
 // bodies, parents first, each with the joint to its parent, rigid or flexible (a `flexible:` block,
-// made a flexible link by make_flexible, tree_description.hpp). Read strictly (kernel/yaml_reader.hpp):
+// made a flexible link by make_flexible, tree_description.hpp). Read strictly (common/yaml_reader.hpp):
 // every error, make_tree's included, is one ConfigError naming the file, the line and the key path.
 #pragma once
 
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "description/field_table.hpp"
+#include "common/field_table.hpp"
 #include "description/tree_description.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/yaml_reader.hpp"
 
 namespace ff {
 

@@ -23,7 +23,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 
 namespace ff {
 

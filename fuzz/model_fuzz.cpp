@@ -5,7 +5,7 @@
 
 #include "fuzz/fuzz_support.hpp"
 #include "kernel/model_io.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/yaml_reader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "fuzz/fuzz_support.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/yaml_reader.hpp"
 #include "sweep/paths.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

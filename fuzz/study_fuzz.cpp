@@ -7,8 +7,8 @@
 #include <exception>
 
 #include "fuzz/fuzz_support.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "sweep/study.hpp"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "jobs/journal.hpp"
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 
 namespace ff {
 

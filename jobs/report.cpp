@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "kernel/simulate.hpp"
 #include "kernel/trajectory.hpp"
 #include "plotting/plot.hpp"

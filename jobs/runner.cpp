@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "jobs/batches.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "arm/arm_metrics.hpp"
 #include "results/run_metrics.hpp"
 

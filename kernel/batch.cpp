@@ -8,7 +8,7 @@
 #include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "kernel/notch.hpp"
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 
 namespace ff {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/batch.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/modes.hpp"

@@ -5,8 +5,8 @@
 #include <string>
 #include <utility>
 
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 
 namespace ff {
 

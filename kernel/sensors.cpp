@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "kernel/dynamics.hpp"
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 
 namespace ff {
 

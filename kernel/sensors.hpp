@@ -14,7 +14,7 @@
 namespace ff {
 
 // One channel of lane l at controller sample k: the reading y = Q(x + sigma n), n ~ N(0, 1) from the
-// counter-based stream `key` at sample k (kernel/random.hpp; Q rounds to the nearest multiple of
+// counter-based stream `key` at sample k (common/random.hpp; Q rounds to the nearest multiple of
 // `quantum`, none when 0), goes into the ring (H x W, H >= d + n); returned is what the channel gives
 // now, the reading of the last sensor sample j = n floor((k - d) / n) <= k - d (delay d, hold n), or
 // the first reading while k < d. With sigma = quantum = d = 0 and n = 1 it returns x.

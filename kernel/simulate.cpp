@@ -10,7 +10,7 @@
 #include "kernel/cvode.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "kernel/fixed_step.hpp"
 #include "kernel/sensors.hpp"
 #include "kernel/trajectory.hpp"

@@ -70,7 +70,7 @@ std::size_t draw_index(std::uint64_t seed, std::uint64_t counter, std::size_t n)
 
 // Two-sided standard normal critical value z = Phi^-1((1 + confidence) / 2), confidence in (0, 1) (else
 // std::invalid_argument): 1.959964 for 0.95. Acklam's rational approximation refined by one Halley step on
-// std::erfc (relative error ~1e-15). (kernel/random.hpp has a full calc_normal_quantile; this one keeps results/
+// std::erfc (relative error ~1e-15). (common/random.hpp has a full calc_normal_quantile; this one keeps results/
 // self-contained.)
 double calc_two_sided_z(double confidence);
 

@@ -15,7 +15,7 @@
 #include <system_error>
 #include <utility>
 
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 
 namespace ff {
 

@@ -3,7 +3,7 @@
 // A design is a matrix: rows = evaluations (row r becomes eval_id r), columns = variables in the order
 // given, values in the variables' own units. Every design is a pure function of (DesignSpec, variables):
 // the same call gives the same bits on any machine, thread count or rank count (all randomness comes from
-// kernel/random.hpp's counter-based streams keyed by spec.seed).
+// common/random.hpp's counter-based streams keyed by spec.seed).
 //
 // Row layouts (the result and sensitivity code elsewhere relies on them):
 //   grid        full factorial over each variable's `levels`; the LAST variable varies fastest:

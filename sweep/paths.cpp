@@ -4,8 +4,8 @@
 #include <vector>
 
 #include "arm/arm_yaml.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "kernel/model_io.hpp"
 
 namespace ff {

@@ -12,10 +12,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/model_io.hpp"
-#include "kernel/yaml_reader.hpp"
-#include "kernel/random.hpp"
+#include "common/yaml_reader.hpp"
+#include "common/random.hpp"
 
 namespace ff {
 

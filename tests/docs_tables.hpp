@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "description/field_table.hpp"
+#include "common/field_table.hpp"
 
 namespace ff::test {
 

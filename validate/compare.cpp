@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "plotting/plot.hpp"
 
 namespace ff {

@@ -11,8 +11,8 @@
 #include <stdexcept>
 
 #include "kernel/batch.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "sweep/design.hpp"
 #include "validate/residuals.hpp"
 

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "kernel/errors.hpp"
-#include "kernel/files.hpp"
+#include "common/errors.hpp"
+#include "common/files.hpp"
 
 namespace ff {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 #include "kernel/sensors.hpp"
 #include "kernel/simulate.hpp"
 #include "validate/residuals.hpp"

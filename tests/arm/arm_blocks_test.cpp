@@ -13,10 +13,10 @@
 
 #include "arm/arm_simulate.hpp"
 #include "arm/arm_yaml.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/friction.hpp"
-#include "kernel/random.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/random.hpp"
+#include "common/yaml_reader.hpp"
 
 namespace ff {
 namespace {

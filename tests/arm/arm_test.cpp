@@ -10,8 +10,8 @@
 #include "arm/arm_metrics.hpp"
 #include "arm/arm_simulate.hpp"
 #include "arm/arm_yaml.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "tests/docs_tables.hpp"
 
 namespace ff {

@@ -14,8 +14,8 @@
 
 #include "description/tree_yaml.hpp"
 #include "description/urdf.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/flexible_link.hpp"
 #include "multibody/statics.hpp"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "multibody/tree.hpp"
 
 namespace ff::test {

@@ -13,8 +13,8 @@
 #include <string>
 
 #include "description/urdf.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "tests/description/test_support.hpp"
 #include "tests/temp_dir.hpp"
 

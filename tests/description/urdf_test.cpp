@@ -11,8 +11,8 @@
 #include <string>
 
 #include "description/tree_yaml.hpp"
-#include "kernel/errors.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "multibody/algorithms.hpp"
 #include "tests/description/test_support.hpp"
 #include "tests/temp_dir.hpp"

@@ -8,7 +8,7 @@
 #include "kernel/cvode.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/fixed_step.hpp"
 #include "kernel/model_io.hpp"
 #include "tests/kernel/test_support.hpp"

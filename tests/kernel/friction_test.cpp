@@ -7,7 +7,7 @@
 #include <string>
 
 #include "kernel/dynamics.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/fixed_step.hpp"
 #include "tests/kernel/test_support.hpp"
 

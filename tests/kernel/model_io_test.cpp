@@ -1,4 +1,4 @@
-// Tests of model YAML parsing (kernel/model_io.hpp, kernel/yaml_reader.hpp, validate() in kernel/model.cpp):
+// Tests of model YAML parsing (kernel/model_io.hpp, common/yaml_reader.hpp, validate() in kernel/model.cpp):
 // every bad document is configs/fbtb.yaml with one line changed, and must be rejected with one
 // ConfigError naming the file, the exact line and the full dotted key, saying what is wrong.
 #include "kernel/model_io.hpp"
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "tests/temp_dir.hpp"
 
 namespace {

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/model_io.hpp"
 #include "tests/kernel/test_support.hpp"
 

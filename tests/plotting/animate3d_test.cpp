@@ -6,7 +6,7 @@
 
 #include "arm/arm_simulate.hpp"
 #include "arm/arm_yaml.hpp"
-#include "kernel/yaml_reader.hpp"
+#include "common/yaml_reader.hpp"
 #include "multibody/algorithms.hpp"
 #include "tests/plotting/test_support.hpp"
 

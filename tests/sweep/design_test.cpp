@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 
 namespace {
 

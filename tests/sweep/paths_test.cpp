@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "kernel/drive.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "kernel/model_io.hpp"
 
 namespace {

@@ -10,7 +10,7 @@
 #include <numbers>
 #include <string>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "arm/arm_simulate.hpp"
 #include "tests/temp_dir.hpp"
 

@@ -22,7 +22,7 @@
 #include <map>
 #include <string>
 
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 #include "validate/diagnose.hpp"
 #include "validate/residuals.hpp"
 #include "validate/synthetic.hpp"

@@ -9,7 +9,7 @@
 #include <cmath>
 
 #include "kernel/model_io.hpp"
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 #include "kernel/simulate.hpp"
 #include "validate/compare.hpp"
 #include "validate/observer.hpp"

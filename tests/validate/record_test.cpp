@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "validate/record.hpp"
 
 namespace ff {

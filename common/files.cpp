@@ -1,4 +1,4 @@
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>

@@ -1,11 +1,11 @@
-#include "kernel/yaml_reader.hpp"
+#include "common/yaml_reader.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 
 namespace ff {
 

@@ -1,5 +1,5 @@
 // Counter-based random numbers and the normal CDF / quantile (see random.hpp).
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 
 #include <cmath>
 #include <limits>

@@ -1,13 +1,13 @@
-// Tests of the checks every loaded YAML document passes (kernel/yaml_reader.hpp, load_yaml_text and
+// Tests of the checks every loaded YAML document passes (common/yaml_reader.hpp, load_yaml_text and
 // check_unique_keys): keys written twice, keys that are not plain names, aliases that make a cycle or
 // expand without end. Each input is the smallest one that showed the fault.
-#include "kernel/yaml_reader.hpp"
+#include "common/yaml_reader.hpp"
 
 #include <gtest/gtest.h>
 
 #include <string>
 
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 
 namespace {
 

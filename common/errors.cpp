@@ -1,4 +1,4 @@
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 
 #include <sstream>
 

@@ -1,7 +1,7 @@
-// Tests of the study's random numbers (kernel/random.hpp): SplitMix64 and Philox4x32-10 against their
+// Tests of the study's random numbers (common/random.hpp): SplitMix64 and Philox4x32-10 against their
 // published known answers, the counter-based stream's purity, the uniform and normal transforms' moments,
 // and the normal CDF / quantile against reference values.
-#include "kernel/random.hpp"
+#include "common/random.hpp"
 
 #include <gtest/gtest.h>
 

@@ -10,10 +10,12 @@
 #include <variant>
 #include <vector>
 
-#include "kernel/yaml_reader.hpp"
-#include "multibody/spatial.hpp"
+#include "common/yaml_reader.hpp"
+#include <Eigen/Core>
 
 namespace ff {
+
+using Vec3 = Eigen::Vector3d;  // as multibody/spatial.hpp's
 
 // One key of a format as docs/formats.md lists it.
 struct KeyDoc {

@@ -1,5 +1,5 @@
-// Tests of kernel/files.hpp: whole-or-nothing writes, file names made from input names, the lock.
-#include "kernel/files.hpp"
+// Tests of common/files.hpp: whole-or-nothing writes, file names made from input names, the lock.
+#include "common/files.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
