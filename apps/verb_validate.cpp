@@ -34,6 +34,14 @@ constexpr const char* kRefitHelp =
     "friction.coulomb, joints.stiffness, joints.damping, hub.torque_offset where nonzero, never one the effect fits), "
     "or paths, comma separated, e.g. hub.inertia,friction.viscous";
 
+// diagnose and calibrate work on the rig's models only so far.
+void refuse_arm_model(const std::string& verb, const std::string& model) {
+  if (is_arm_model_file(model))
+    throw ExitError(model + ": an arm model: " + verb +
+                        " works on the reference rig's models only so far (an arm model's record: `flexfarm compare`)",
+                    2);
+}
+
 ReplayMode mode_of(const std::string& name) {
   try {
     return parse_replay_mode(name);
@@ -66,6 +74,7 @@ void add_diagnose_verb(CLI::App& app) {
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect (its leading start's)")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
+    refuse_arm_model("diagnose", a->model);
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.only = split_list(a->effects);
@@ -103,6 +112,7 @@ void add_calibrate_verb(CLI::App& app) {
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
+    refuse_arm_model("calibrate", a->model);
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.max_iterations = a->iterations;

@@ -222,6 +222,15 @@ TEST_F(ArmCli, ARecordMissingAJointColumnOrNamingAnUnknownJointIsOneErrorAndWrit
   EXPECT_EQ(f.exit_code, 2) << f.output;
   expect_one_error_line(f, "--noise-angle: only for an arm model");
   EXPECT_FALSE(fs::exists(work / "x.csv"));
+  // diagnose and calibrate: the rig's models only, so far.
+  const auto g = run("diagnose --model configs/arm.yaml --data rec.csv --json d.json");
+  EXPECT_EQ(g.exit_code, 2) << g.output;
+  expect_one_error_line(g, "configs/arm.yaml: an arm model: diagnose works on the reference rig's models only so far");
+  const auto h = run("calibrate --model configs/arm.yaml --data rec.csv --add payload --out m/model.yaml");
+  EXPECT_EQ(h.exit_code, 2) << h.output;
+  expect_one_error_line(h, "configs/arm.yaml: an arm model: calibrate works on the reference rig's models only so far");
+  EXPECT_FALSE(fs::exists(work / "d.json"));
+  EXPECT_FALSE(fs::exists(work / "m"));
 }
 
 }  // namespace

@@ -173,6 +173,23 @@ TEST(ArmCompare, ARecordAtAnotherRateIsResampledToTheControllerRate) {
   }
 }
 
+TEST(ArmCompare, TheReplayStartsAtTheRecordsFirstReferencesAndTheSagThere) {
+  // Recorded from another start pose (shoulder 0.4 rad, elbow -0.3 rad, the same waypoint) and at
+  // another clock (the record's t from 10 s): the model with the default start, replayed, starts where
+  // the record does, the links at their static sag there, and fits the record to the statics' tolerance.
+  const test::TempDir dir("ff_arm_record");
+  const ArmModel moved = two_link({"trajectory.start={shoulder: 0.4, elbow: -0.3}"});
+  Record r = make_arm_record(moved, {}, 1);
+  for (double& t : r.t) t += 10.0;
+  r = written_and_read(r, moved, dir);
+  const ArmCompareResult c = compare_arm_record(two_link(), r);
+  EXPECT_FALSE(c.resampled);
+  for (const auto& ch : c.channels) {
+    RecordProperty(ch.name + "_fit", std::to_string(ch.fit_free.percent));
+    EXPECT_GT(ch.fit_free.percent, 99.9) << ch.name;
+  }
+}
+
 TEST(ArmRecordCheck, AMissingOrUnknownJointColumnIsNamedWithTheFileLineOneAndTheColumn) {
   const ArmModel m = two_link();
   Record r = make_arm_record(m, {}, 1);
