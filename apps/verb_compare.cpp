@@ -4,9 +4,12 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 #include "apps/verbs.hpp"
+#include "validate/arm_compare.hpp"
+#include "validate/arm_record.hpp"
 #include "validate/compare.hpp"
 #include "validate/observer.hpp"
 #include "validate/record.hpp"
@@ -20,13 +23,14 @@ namespace fs = std::filesystem;
 
 // Writes the report into a sibling staging directory, then moves it into place: a fresh DIR
 // appears whole; into an existing DIR each file is renamed over its old version.
-std::vector<std::string> write_report_into(const CompareResult& result, const std::string& out) {
+std::vector<std::string> write_report_into(const std::function<std::vector<std::string>(const std::string&)>& write,
+                                           const std::string& out) {
   const fs::path target = fs::path(out).lexically_normal();
   const fs::path stage = target.parent_path() / (target.filename().string() + ".partial-" + std::to_string(::getpid()));
   std::error_code ec;
   fs::remove_all(stage, ec);
   try {
-    const auto files = write_compare_report(result, stage.string());
+    const auto files = write(stage.string());
     if (!fs::exists(target)) {
       fs::rename(stage, target);
     } else {
@@ -38,6 +42,22 @@ std::vector<std::string> write_report_into(const CompareResult& result, const st
     fs::remove_all(stage, ec);
     throw;
   }
+}
+
+// An arm model (arm/): the free run on the record's references, every channel scored.
+void compare_arm(const std::string& model, const std::vector<std::string>& sets, const std::string& data,
+                 const std::string& out) {
+  const ArmModel m = load_arm_with(model, sets);
+  const Record r = read_record_csv(data, {});
+  check_arm_record(r, m);
+  std::fprintf(stderr, "comparing %s with %s: %zu samples, free run on the record's references\n", model.c_str(),
+               data.c_str(), r.size());
+  const ArmCompareResult result = compare_arm_record(m, r);
+  const auto files =
+      write_report_into([&](const std::string& dir) { return write_arm_compare_report(result, dir); }, out);
+  std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_arm_fit_table(result).c_str(), out.c_str(),
+              files.size() - 2);
+  if (!result.ok) std::printf("the replay failed numerically: see %s/report.md\n", out.c_str());
 }
 
 }  // namespace
@@ -60,17 +80,24 @@ void add_compare_verb(CLI::App& app) {
                                         "open-loop (record's hub_torque drives the plant), inverse-dynamics")
       ->check(CLI::IsMember({"closed-loop", "open-loop", "inverse-dynamics"}))
       ->capture_default_str();
-  cmd->add_option("--k", args->k, "k-step prediction horizon, controller samples")
+  auto* k_opt = cmd->add_option("--k", args->k, "k-step prediction horizon, controller samples")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--process-noise", args->process_noise,
+  auto* noise_opt = cmd->add_option("--process-noise", args->process_noise,
                   "the k-step observer's process noise: white acceleration on every joint, rad/s^2 "
                   "(larger: the estimate follows the measurements more, the model less)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--out", args->out, "output directory (created)")->required();
-  cmd->callback([args] {
+  cmd->callback([args, k_opt, noise_opt] {
+    if (is_arm_model_file(args->model)) {
+      if (args->mode != "closed-loop") throw ExitError("--mode: an arm model is compared in closed loop only", 2);
+      if (k_opt->count() > 0 || noise_opt->count() > 0)
+        throw ExitError(std::string(k_opt->count() > 0 ? "--k" : "--process-noise") +
+                            ": an arm model has no k-step prediction yet (free run only)", 2);
+      return compare_arm(args->model, args->sets, args->data, args->out);
+    }
     // Every input is checked before anything is written.
     const ReplayMode mode = parse_replay_mode(args->mode);
     const Model m = load_model_with(args->model, args->sets);
@@ -80,7 +107,8 @@ void add_compare_verb(CLI::App& app) {
     ObserverOptions observer;
     observer.process_noise = args->process_noise;
     const CompareResult result = compare_record(m, r, mode, args->k, {}, observer);
-    const auto files = write_report_into(result, args->out);
+    const auto files =
+        write_report_into([&](const std::string& dir) { return write_compare_report(result, dir); }, args->out);
     std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_fit_table(result).c_str(),
                 args->out.c_str(), files.size() - 2);
     if (!result.free_ok || !result.k_ok)

@@ -6,6 +6,7 @@
 #include "apps/verbs.hpp"
 #include "common/files.hpp"
 #include "kernel/model_io.hpp"
+#include "validate/arm_record.hpp"
 #include "validate/diagnose.hpp"
 #include "validate/ledger.hpp"
 #include "validate/synthetic.hpp"
@@ -32,6 +33,14 @@ constexpr const char* kRefitHelp =
     "the residual is most sensitive to, among hub.inertia, payload.mass, payload.inertia, friction.viscous, "
     "friction.coulomb, joints.stiffness, joints.damping, hub.torque_offset where nonzero, never one the effect fits), "
     "or paths, comma separated, e.g. hub.inertia,friction.viscous";
+
+// diagnose and calibrate work on the rig's models only so far.
+void refuse_arm_model(const std::string& verb, const std::string& model) {
+  if (is_arm_model_file(model))
+    throw ExitError(model + ": an arm model: " + verb +
+                        " works on the reference rig's models only so far (an arm model's record: `flexfarm compare`)",
+                    2);
+}
 
 ReplayMode mode_of(const std::string& name) {
   try {
@@ -65,6 +74,7 @@ void add_diagnose_verb(CLI::App& app) {
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect (its leading start's)")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
+    refuse_arm_model("diagnose", a->model);
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.only = split_list(a->effects);
@@ -102,6 +112,7 @@ void add_calibrate_verb(CLI::App& app) {
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
+    refuse_arm_model("calibrate", a->model);
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.max_iterations = a->iterations;
@@ -132,23 +143,48 @@ void add_calibrate_verb(CLI::App& app) {
 
 void add_record_verb(CLI::App& app) {
   auto* cmd = app.add_subcommand("record", "Make a measurement record from a model (a truth model, e.g. with an "
-                                           "effect hidden by --set): its closed-loop run with noise on every channel");
+                                           "effect hidden by --set): its closed-loop run with noise on every channel "
+                                           "(an arm model: the arm record form, noise by --noise-angle ...)");
   struct Args {
     std::string model, out;
     std::vector<std::string> sets;
     double noise = 0.01;
     std::uint64_t seed = 1;
     int decimate = 1;
+    ArmRecordNoise arm;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", a->out, "record CSV to write")->required();
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
-  cmd->add_option("--noise", a->noise, "noise standard deviation per channel, as a fraction of the channel's")
+  auto* noise = cmd->add_option("--noise", a->noise, "noise standard deviation per channel, as a fraction of the channel's")
       ->capture_default_str();
   cmd->add_option("--seed", a->seed, "noise seed")->capture_default_str();
-  cmd->add_option("--decimate", a->decimate, "keep every n-th controller sample")->capture_default_str();
-  cmd->callback([a] {
+  auto* decimate = cmd->add_option("--decimate", a->decimate, "keep every n-th controller sample")->capture_default_str();
+  // An arm model's record: absolute noise per kind of channel.
+  CLI::Option* arm_noise[] = {
+      cmd->add_option("--noise-angle", a->arm.angle, "arm models: noise standard deviation on every <joint>.angle, rad (m)")
+          ->check(CLI::NonNegativeNumber)->capture_default_str(),
+      cmd->add_option("--noise-rate", a->arm.rate, "arm models: on every <joint>.rate, rad/s (m/s)")
+          ->check(CLI::NonNegativeNumber)->capture_default_str(),
+      cmd->add_option("--noise-torque", a->arm.torque, "arm models: on every <joint>.torque, N m (N)")
+          ->check(CLI::NonNegativeNumber)->capture_default_str(),
+      cmd->add_option("--noise-position", a->arm.position, "arm models: on tool.x/y/z and the link deflections, m")
+          ->check(CLI::NonNegativeNumber)->capture_default_str()};
+  cmd->callback([a, noise, decimate, arm_noise] {
+    if (is_arm_model_file(a->model)) {
+      if (noise->count() > 0 || decimate->count() > 0)
+        throw ExitError(std::string(noise->count() > 0 ? "--noise" : "--decimate") +
+                            ": not for an arm model (its noise: --noise-angle, --noise-rate, --noise-torque, --noise-position)",
+                        2);
+      const ArmModel m = load_arm_with(a->model, a->sets);
+      const Record r = make_arm_record(m, a->arm, a->seed);
+      write_record_csv(r, arm_record_columns(m), a->out, 17);
+      std::printf("wrote %s: %zu samples\n", a->out.c_str(), r.size());
+      return;
+    }
+    for (CLI::Option* o : arm_noise)
+      if (o->count() > 0) throw ExitError(o->get_name() + ": only for an arm model", 2);
     const Model m = load_model_with(a->model, a->sets);
     const Record r = make_synthetic_record(m, a->noise, a->seed, a->decimate);
     write_record_csv(r, {"ref", "hub_torque", "hub_angle", "hub_rate", "tip_deflection"}, a->out);

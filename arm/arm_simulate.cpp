@@ -81,6 +81,20 @@ void record_kinematics(const ArmModel& m, const Eigen::VectorXd& q, const Eigen:
   out[3] = ref.x(), out[4] = ref.y(), out[5] = ref.z();
 }
 
+// ---- The replay hook (ArmRunOptions::reference) ----
+// The reference of every actuated joint at controller sample k from the samples, with central differences.
+void eval_replay_reference(const std::vector<std::vector<double>>& ref, long k, double T, double* r, double* rd,
+                           double* rdd) {
+  for (std::size_t j = 0; j < ref.size(); ++j) {
+    const std::vector<double>& x = ref[j];
+    const long n = static_cast<long>(x.size());
+    auto at = [&](long i) { return x[static_cast<std::size_t>(std::clamp(i, 0L, n - 1))]; };
+    r[j] = at(k);
+    rd[j] = (at(k + 1) - at(k - 1)) / (2.0 * T);
+    rdd[j] = (at(k + 1) - 2.0 * at(k) + at(k - 1)) / (T * T);
+  }
+}
+
 }  // namespace
 
 ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options) {
@@ -91,6 +105,11 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       throw std::invalid_argument("simulate_arms: lane " + std::to_string(l) + ": " + why);
   const int W = static_cast<int>(lanes.size());
   const int na = static_cast<int>(m0.actuated.size());
+  if (options.reference) {  // the replay hook
+    bool ok = options.reference->size() == static_cast<std::size_t>(na);
+    for (const std::vector<double>& x : *options.reference) ok &= !x.empty();
+    if (!ok) throw std::invalid_argument("simulate_arms: the reference needs one non-empty sample vector per actuated joint");
+  }
   const int nv = m0.tree.nv();
   std::vector<Tree> trees;
   for (const ArmModel& m : lanes) trees.push_back(m.tree);
@@ -148,8 +167,12 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   std::vector<double> r(static_cast<std::size_t>(na * W)), rd(r.size()), rdd(r.size()), scratch(3 * static_cast<std::size_t>(na));
   std::vector<double> tau_id(static_cast<std::size_t>(na)), tau_g(static_cast<std::size_t>(na));
   for (int l = 0; l < W; ++l) {
-    eval_arm_reference(lanes[l], 0.0, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
-                       &rdd[static_cast<std::size_t>(l * na)], scratch.data());
+    if (options.reference)  // the replay hook
+      eval_replay_reference(*options.reference, 0, T, &r[static_cast<std::size_t>(l * na)],
+                            &rd[static_cast<std::size_t>(l * na)], &rdd[static_cast<std::size_t>(l * na)]);
+    else
+      eval_arm_reference(lanes[l], 0.0, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
+                         &rdd[static_cast<std::size_t>(l * na)], scratch.data());
   }
   for (int j = 0; j < na; ++j) {
     const int ns = static_cast<int>(m0.actuated[static_cast<std::size_t>(j)].notch.size());
@@ -196,9 +219,14 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       }
     }
     // The reference of every lane (its own trajectory and shapers).
-    for (int l = 0; l < W; ++l)
-      eval_arm_reference(lanes[l], t, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
-                         &rdd[static_cast<std::size_t>(l * na)], scratch.data());
+    for (int l = 0; l < W; ++l) {
+      if (options.reference)  // the replay hook
+        eval_replay_reference(*options.reference, k, T, &r[static_cast<std::size_t>(l * na)],
+                              &rd[static_cast<std::size_t>(l * na)], &rdd[static_cast<std::size_t>(l * na)]);
+      else
+        eval_arm_reference(lanes[l], t, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
+                           &rdd[static_cast<std::size_t>(l * na)], scratch.data());
+    }
     // The notch on each joint's reference or feedback, all lanes at once.
     for (int j = 0; j < na; ++j) {
       const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];

@@ -39,6 +39,13 @@ struct ArmRun {
 
 struct ArmRunOptions {
   bool keep_q = false;               // fill ArmRun::q (for drawing the arm: plotting/animate3d.hpp)
+  // Replay of a measurement record (validate/arm_record.hpp). When set, the reference of actuated joint j
+  // (m.actuated's order) at controller sample k (t = k T) is (*reference)[j][k], the last value held past
+  // the end, in every lane, in place of the trajectory and its shapers; the feed-forward's r' and r'' are
+  // its central differences (r[k+1] - r[k-1]) / 2T and (r[k+1] - 2 r[k] + r[k-1]) / T^2, indices clamped
+  // to the samples (at rest before the first and after the last). Its size must be the actuated joints',
+  // each non-empty (std::invalid_argument otherwise). Unlike keep_q, it changes the results.
+  const std::vector<std::vector<double>>* reference = nullptr;
 };
 
 // Why arms a and b cannot share a batch ("" when they can): their trees differ in topology, or their
@@ -50,8 +57,8 @@ std::vector<std::string> arm_trace_names(const ArmModel& m);
 
 // Runs every lane to its duration. Throws std::invalid_argument when the lanes' shapes differ.
 // A lane whose state stops being finite is frozen with the status kNonfinite (its trace NaN from then).
-// The options change only what is kept, never the results (ArmRun::q is stored into memory reserved
-// before the first step).
+// keep_q changes only what is kept, never the results (ArmRun::q is stored into memory reserved
+// before the first step); `reference` replaces the reference (above).
 ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options = {});
 
 // Writes a trace as CSV (a header of its names, one row per sample), atomically; reads it back.

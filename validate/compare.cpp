@@ -59,7 +59,9 @@ std::string jstr(const std::string& s) {
   return o + "\"";
 }
 
-std::string json_failure(const ResidualAnalysis& a, const ResidualOptions& o) {
+}  // namespace
+
+std::string format_failure_json(const ResidualAnalysis& a, const ResidualOptions& o) {
   if (!a.valid) return "null";
   const FailureReport& f = a.failure;
   std::string s = "{\"rms\": " + jnum(f.rms) + ", \"worst_windows\": [";
@@ -87,11 +89,15 @@ std::string json_failure(const ResidualAnalysis& a, const ResidualOptions& o) {
   return s + "]}";
 }
 
+namespace {
+
 // ---------------------------------------------------------------- plots
 
 std::vector<double> lags_of(const Correlation& c) { return {c.lag.begin(), c.lag.end()}; }
 
-void plot_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path) {
+}  // namespace
+
+void plot_residual_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path) {
   LinePlot p;
   p.title = (cross ? "residual-input cross-correlation: " + c.name + " with " + input
                    : "residual autocorrelation: " + c.name);
@@ -109,11 +115,11 @@ void plot_correlation(const ChannelCompare& c, bool cross, const std::string& in
   render_line_plot(p, path);
 }
 
-void plot_spectrum(const ChannelCompare& c, const std::string& path) {
+void plot_residual_spectrum(const ChannelCompare& c, const std::string& path) {
   LinePlot p;
   p.title = "residual amplitude spectrum: " + c.name;
   p.x_label = "frequency (Hz)";
-  p.y_label = std::string("amplitude (") + channel_unit(c.name) + ")";
+  p.y_label = "amplitude (" + c.unit + ")";
   // Up to 50 Hz, further if a reported peak lies beyond.
   double fmax = 50.0;
   for (const auto* a : {&c.free_analysis, &c.k_analysis})
@@ -133,6 +139,8 @@ void plot_spectrum(const ChannelCompare& c, const std::string& path) {
   render_line_plot(p, path);
 }
 
+namespace {
+
 void plot_binned(const ChannelCompare& c, std::size_t state, const std::string& path) {
   const auto& ref = c.free_analysis.valid ? c.free_analysis : c.k_analysis;
   const std::string& name = ref.binned[state].state;
@@ -144,7 +152,7 @@ void plot_binned(const ChannelCompare& c, std::size_t state, const std::string& 
   LinePlot p;
   p.title = "mean " + c.name + " residual binned against " + name;
   p.x_label = name + (unit.empty() ? "" : " (" + unit + ")");
-  p.y_label = std::string("mean residual (") + channel_unit(c.name) + ")";
+  p.y_label = "mean residual (" + c.unit + ")";
   const std::pair<const ResidualAnalysis*, const char*> runs[] = {{&c.free_analysis, "free run"},
                                                                   {&c.k_analysis, "k-step"}};
   for (const auto& [a, label] : runs)
@@ -343,8 +351,8 @@ std::string format_compare_json(const CompareResult& r) {
     return "{\"free_run\": " + jnum(c.fit_free.rmse) + ", \"k_step\": " + jnum(c.fit_k.rmse) + "}";
   });
   per_channel("failure", [&](const ChannelCompare& c) {
-    return "{\"free_run\": " + json_failure(c.free_analysis, r.options) +
-           ",\n      \"k_step\": " + json_failure(c.k_analysis, r.options) + "}";
+    return "{\"free_run\": " + format_failure_json(c.free_analysis, r.options) +
+           ",\n      \"k_step\": " + format_failure_json(c.k_analysis, r.options) + "}";
   });
   return s + "\n}\n";
 }
@@ -362,9 +370,9 @@ std::vector<std::string> write_compare_report(const CompareResult& r, const std:
     const std::string ch = make_file_stem(c.name);
     plot_overlay(r, c, put("overlay_" + ch + ".png"));
     if (!c.free_analysis.valid && !c.k_analysis.valid) continue;
-    plot_correlation(c, false, r.input, put("acf_" + ch + ".png"));
-    plot_correlation(c, true, r.input, put("ccf_" + ch + ".png"));
-    plot_spectrum(c, put("spectrum_" + ch + ".png"));
+    plot_residual_correlation(c, false, r.input, put("acf_" + ch + ".png"));
+    plot_residual_correlation(c, true, r.input, put("ccf_" + ch + ".png"));
+    plot_residual_spectrum(c, put("spectrum_" + ch + ".png"));
     const auto& a = c.free_analysis.valid ? c.free_analysis : c.k_analysis;
     for (std::size_t i = 0; i < a.binned.size(); ++i)
       plot_binned(c, i, put("binned_" + ch + "_" + make_file_stem(a.binned[i].state) + ".png"));

@@ -60,6 +60,13 @@ std::string format_compare_report(const CompareResult& r);
 // compare.json (docs/formats.md, "compare.json").
 std::string format_compare_json(const CompareResult& r);
 
+// Pieces of the report for other comparisons (validate/arm_compare.hpp): a residual analysis as
+// compare.json's "failure" entry ("null" when not valid); the residual's autocorrelation (cross: its
+// cross-correlation with `input`) and amplitude spectrum plots, free run and k-step where valid.
+std::string format_failure_json(const ResidualAnalysis& a, const ResidualOptions& o);
+void plot_residual_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path);
+void plot_residual_spectrum(const ChannelCompare& c, const std::string& path);
+
 // Writes DIR/report.md, DIR/compare.json and the plots (docs/cli.md) into `dir` (created); each file
 // atomically. Returns the file names written.
 std::vector<std::string> write_compare_report(const CompareResult& r, const std::string& dir);

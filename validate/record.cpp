@@ -122,16 +122,17 @@ Record read_record_csv(const std::string& path, const std::vector<std::string>& 
   return r;
 }
 
-void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path) {
+void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path, int digits) {
   std::string text = "t";
   for (const auto& c : order) text += "," + c;
   text += "\n";
   char buf[64];
   for (std::size_t k = 0; k < r.t.size(); ++k) {
-    std::snprintf(buf, sizeof buf, "%.6f", r.t[k]);
+    if (digits > 0) std::snprintf(buf, sizeof buf, "%.*g", digits, r.t[k]);
+    else std::snprintf(buf, sizeof buf, "%.6f", r.t[k]);
     text += buf;
     for (const auto& c : order) {
-      std::snprintf(buf, sizeof buf, ",%.10g", r.at(c)[k]);
+      std::snprintf(buf, sizeof buf, ",%.*g", digits > 0 ? digits : 10, r.at(c)[k]);
       text += buf;
     }
     text += "\n";

@@ -28,8 +28,9 @@ inline constexpr std::size_t kMinRecordSamples = 20;
 // the file, the line and the column, with one clear message.
 Record read_record_csv(const std::string& path, const std::vector<std::string>& required);
 
-// Writes a record (columns in the order given, %.10g), atomically.
-void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path);
+// Writes a record (columns in the order given), atomically: with digits 0, t as %.6f and the others
+// %.10g (the rig's records); else every cell with `digits` significant digits (17: every double exactly).
+void write_record_csv(const Record& r, const std::vector<std::string>& order, const std::string& path, int digits = 0);
 
 // Central differences of y(t), one-sided at the ends (units of y per s).
 std::vector<double> time_derivative(const std::vector<double>& t, const std::vector<double>& y);

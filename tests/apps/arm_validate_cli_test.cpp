@@ -1,0 +1,236 @@
+// End-to-end tests of `flexfarm record` and `flexfarm compare` on arm models (validate/arm_record.hpp,
+// validate/arm_compare.hpp): the two-link flexible arm's record compared with the arm itself (exactly,
+// and with noise), with a heavier payload, and bad records refused with one line, exit 2, nothing written.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSource = FLEXFARM_SOURCE_DIR;
+const std::string kBinary = FLEXFARM_BINARY;
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+  std::vector<std::string> lines() const { return split_lines(output); }
+};
+
+// The Cli fixture of cli_test.cpp, with the two-link flexible arm in work/configs.
+class ArmCli : public ::testing::Test {
+ protected:
+  fs::path base, work;
+
+  void SetUp() override {
+    base = fs::temp_directory_path() / ("ff_armcli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(base);
+    work = base / "work";
+    fs::create_directories(work / "configs");
+    fs::copy_file(kSource + "/configs/two_link_flexible.yaml", work / "configs" / "arm.yaml");
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(base, ec);
+  }
+  Result run(const std::string& args) const {
+    const fs::path log = base / "output.txt";
+    const std::string cmd = "cd " + quote(work.string()) + " && " + quote(kBinary) + " " + args + " > " +
+                            quote(log.string()) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.output = read_text(log);
+    return r;
+  }
+  void write(const std::string& name, const std::string& text) const { std::ofstream(work / name) << text; }
+  static void expect_one_error_line(const Result& r, const std::string& prefix) {
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    const auto lines = r.lines();
+    ASSERT_EQ(lines.size(), 1u) << r.output;
+    EXPECT_EQ(lines[0].rfind("flexfarm: error: " + prefix, 0), 0u) << r.output;
+  }
+  static std::vector<std::string> tree(const fs::path& dir) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) out.push_back(fs::relative(e.path(), dir).string());
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  static void expect_png(const fs::path& p) {
+    ASSERT_TRUE(fs::exists(p)) << p;
+    const std::string bytes = read_text(p);
+    ASSERT_GT(bytes.size(), 8u) << p;
+    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
+  }
+};
+
+// 3 s of the arm: its 1.5 s move and half the settling.
+const std::string kShort = " --set simulation.duration=3.0";
+
+// compare.json's "fit_percent" of a channel (NaN when absent).
+double json_fit(const std::string& json, const std::string& channel) {
+  const auto block = json.find("\"fit_percent\": {");
+  if (block == std::string::npos) return NAN;
+  const auto at = json.find("\"" + channel + "\": ", block);
+  if (at == std::string::npos) return NAN;
+  return std::strtod(json.c_str() + at + channel.size() + 4, nullptr);
+}
+
+TEST_F(ArmCli, RecordWritesTheArmFormAndCompareWithTheSameArmFitsExactly) {
+  const auto rec = run("record configs/arm.yaml --out rec.csv" + kShort);
+  ASSERT_EQ(rec.exit_code, 0) << rec.output;
+  const auto lines = split_lines(read_text(work / "rec.csv"));
+  ASSERT_EQ(lines.size(), 1502u);  // the header and 1501 samples at 500 Hz
+  EXPECT_EQ(lines[0],
+            "t,shoulder.ref,shoulder.angle,shoulder.rate,shoulder.torque,elbow.ref,elbow.angle,elbow.rate,elbow.torque,"
+            "tool.x,tool.y,tool.z,upper_arm.deflection_y,upper_arm.deflection_z,forearm.deflection_y,forearm.deflection_z");
+  const auto r = run("compare --model configs/arm.yaml --data rec.csv --out cmp" + kShort);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("| shoulder.angle | rad | 100.00 | 0 |"), std::string::npos) << r.output;
+  const std::string json = read_text(work / "cmp" / "compare.json");
+  for (const char* c : {"shoulder.angle", "elbow.angle", "shoulder.torque", "elbow.torque", "tool.x", "tool.y",
+                        "upper_arm.deflection_y", "forearm.deflection_y"})
+    EXPECT_EQ(json_fit(json, c), 100.0) << c << "\n" << json;
+  EXPECT_NE(json.find("\"not_scored\": [\"tool.z\", \"upper_arm.deflection_z\", \"forearm.deflection_z\"]"),
+            std::string::npos) << json;
+  EXPECT_NE(read_text(work / "cmp" / "report.md").find("| elbow.torque | N m | 100.00 | 0 |"), std::string::npos);
+  for (const char* p : {"overlay_shoulder_angle.png", "overlay_elbow_torque.png", "residual_tool_x.png",
+                        "acf_elbow_angle.png", "ccf_forearm_deflection_y.png", "spectrum_shoulder_torque.png"})
+    expect_png(work / "cmp" / p);
+  for (const auto& f : tree(work)) EXPECT_EQ(f.find(".partial"), std::string::npos) << f;
+}
+
+TEST_F(ArmCli, NoiseOnTheMeasuredChannelsLowersTheFitOnlyAsMuchAsTheNoise) {
+  // 1 mrad on angles (about 1/400 of each joint's swing), 5 mN m on torques (about 1/100 of each's).
+  ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 1e-3 --noise-torque 0.005 --seed 5" + kShort).exit_code, 0);
+  const auto r = run("compare --model configs/arm.yaml --data rec.csv --out cmp" + kShort);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string json = read_text(work / "cmp" / "compare.json");
+  for (const char* c : {"shoulder.angle", "elbow.angle"}) {
+    RecordProperty(std::string(c) + "_fit", std::to_string(json_fit(json, c)));
+    EXPECT_GT(json_fit(json, c), 99.0) << c << "\n" << json;
+    EXPECT_LT(json_fit(json, c), 100.0) << c;
+  }
+  for (const char* c : {"shoulder.torque", "elbow.torque"}) {
+    RecordProperty(std::string(c) + "_fit", std::to_string(json_fit(json, c)));
+    EXPECT_GT(json_fit(json, c), 98.0) << c << "\n" << json;
+  }
+  EXPECT_EQ(json_fit(json, "tool.x"), 100.0);  // no --noise-position
+  // The same seed, the same record; another seed, another.
+  ASSERT_EQ(run("record configs/arm.yaml --out again.csv --noise-angle 1e-3 --noise-torque 0.005 --seed 5" + kShort).exit_code, 0);
+  EXPECT_EQ(read_text(work / "again.csv"), read_text(work / "rec.csv"));
+  ASSERT_EQ(run("record configs/arm.yaml --out other.csv --noise-angle 1e-3 --noise-torque 0.005 --seed 6" + kShort).exit_code, 0);
+  EXPECT_NE(read_text(work / "other.csv"), read_text(work / "rec.csv"));
+}
+
+TEST_F(ArmCli, AHeavierPayloadInTheRecordLowersTheTorqueFits) {
+  // Recorded with the forearm's tip payload 25 % heavier (0.25 kg); compared with the nominal arm and with the heavy one.
+  const std::string heavy = " --set 'bodies[forearm].flexible.payload.mass=0.25'";
+  ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 1e-4 --noise-torque 1e-3" + kShort + heavy).exit_code, 0);
+  ASSERT_EQ(run("compare --model configs/arm.yaml --data rec.csv --out nominal" + kShort).exit_code, 0);
+  ASSERT_EQ(run("compare --model configs/arm.yaml --data rec.csv --out heavy" + kShort + heavy).exit_code, 0);
+  const std::string nominal = read_text(work / "nominal" / "compare.json"), same = read_text(work / "heavy" / "compare.json");
+  for (const char* c : {"shoulder.torque", "elbow.torque"}) {
+    RecordProperty(std::string(c) + "_fit_nominal", std::to_string(json_fit(nominal, c)));
+    RecordProperty(std::string(c) + "_fit_heavy", std::to_string(json_fit(same, c)));
+    EXPECT_GT(json_fit(same, c), 99.0) << c;
+    EXPECT_LT(json_fit(nominal, c), 85.0) << c;
+  }
+}
+
+TEST_F(ArmCli, ARecordMissingAJointColumnOrNamingAnUnknownJointIsOneErrorAndWritesNothing) {
+  ASSERT_EQ(run("record configs/arm.yaml --out rec.csv" + kShort).exit_code, 0);
+  const auto lines = split_lines(read_text(work / "rec.csv"));
+  // Without elbow.angle (column 7), and with it renamed wrist.angle.
+  auto drop = [](const std::string& line, int col) {
+    std::vector<std::string> cells;
+    std::stringstream in(line);
+    for (std::string c; std::getline(in, c, ',');) cells.push_back(c);
+    std::string out;
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      if (static_cast<int>(i) != col) out += (out.empty() ? "" : ",") + cells[i];
+    return out;
+  };
+  std::string missing, unknown = "t,shoulder.ref,shoulder.angle,shoulder.rate,shoulder.torque,elbow.ref,wrist.angle" +
+                                 lines[0].substr(lines[0].find(",elbow.rate")) + "\n";
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    missing += drop(lines[k], 6) + "\n";
+    if (k > 0) unknown += lines[k] + "\n";
+  }
+  write("missing.csv", missing);
+  write("unknown.csv", unknown);
+  const auto before = tree(work);
+  const auto a = run("compare --model configs/arm.yaml --data missing.csv --out out");
+  EXPECT_EQ(a.exit_code, 2) << a.output;
+  expect_one_error_line(a, "missing.csv:1: elbow.angle: missing column 'elbow.angle', needed for an arm model");
+  const auto b = run("compare --model configs/arm.yaml --data unknown.csv --out out");
+  EXPECT_EQ(b.exit_code, 2) << b.output;
+  expect_one_error_line(b, "unknown.csv:1: wrist.angle: 'wrist' is not an actuated joint of the model (its actuated "
+                           "joints: shoulder, elbow)");
+  // The rig's record form with an arm model, and the rig's options the arm compare has not.
+  write("rig.csv", "t,ref,hub_angle\n" + [] {
+    std::string s;
+    for (int k = 0; k < 30; ++k) s += std::to_string(0.002 * k) + ",0.1,0.0\n";
+    return s;
+  }());
+  const auto c = run("compare --model configs/arm.yaml --data rig.csv --out out");
+  EXPECT_EQ(c.exit_code, 2) << c.output;
+  expect_one_error_line(c, "rig.csv:1: shoulder.ref: missing column 'shoulder.ref', needed for an arm model (this record "
+                           "is in the reference rig's form");
+  const auto d = run("compare --model configs/arm.yaml --data rec.csv --k 5 --out out");
+  EXPECT_EQ(d.exit_code, 2) << d.output;
+  expect_one_error_line(d, "--k: an arm model has no k-step prediction yet");
+  auto after = tree(work);
+  after.erase(std::remove(after.begin(), after.end(), "rig.csv"), after.end());
+  EXPECT_EQ(after, before) << "compare writes nothing";
+  // record: the rig's noise option with an arm model, and the arm's with the rig's model.
+  const auto e = run("record configs/arm.yaml --out x.csv --noise 0.1");
+  EXPECT_EQ(e.exit_code, 2) << e.output;
+  expect_one_error_line(e, "--noise: not for an arm model");
+  fs::copy_file(kSource + "/configs/fbtb.yaml", work / "configs" / "fbtb.yaml");
+  const auto f = run("record configs/fbtb.yaml --out x.csv --noise-angle 0.1");
+  EXPECT_EQ(f.exit_code, 2) << f.output;
+  expect_one_error_line(f, "--noise-angle: only for an arm model");
+  EXPECT_FALSE(fs::exists(work / "x.csv"));
+  // diagnose and calibrate: the rig's models only, so far.
+  const auto g = run("diagnose --model configs/arm.yaml --data rec.csv --json d.json");
+  EXPECT_EQ(g.exit_code, 2) << g.output;
+  expect_one_error_line(g, "configs/arm.yaml: an arm model: diagnose works on the reference rig's models only so far");
+  const auto h = run("calibrate --model configs/arm.yaml --data rec.csv --add payload --out m/model.yaml");
+  EXPECT_EQ(h.exit_code, 2) << h.output;
+  expect_one_error_line(h, "configs/arm.yaml: an arm model: calibrate works on the reference rig's models only so far");
+  EXPECT_FALSE(fs::exists(work / "d.json"));
+  EXPECT_FALSE(fs::exists(work / "m"));
+}
+
+}  // namespace

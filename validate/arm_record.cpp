@@ -1,0 +1,209 @@
+#include "validate/arm_record.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "kernel/errors.hpp"
+#include "kernel/random.hpp"
+
+namespace ff {
+
+namespace {
+
+const char* const kJointSuffixes[] = {".ref", ".angle", ".rate", ".torque"};
+const char* const kLinkSuffixes[] = {".deflection_y", ".deflection_z"};
+
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() > tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+const ActuatedJoint* find_actuated(const ArmModel& m, const std::string& name) {
+  for (const ActuatedJoint& a : m.actuated)
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
+bool is_prismatic(const ArmModel& m, int dof) {
+  for (int i = 0; i < m.tree.num_bodies(); ++i)
+    if (m.tree.body(i).dof == dof) return m.tree.body(i).joint == JointType::kPrismatic;
+  return false;
+}
+
+std::string joint_list(const ArmModel& m) {
+  std::string s;
+  for (std::size_t j = 0; j < m.actuated.size(); ++j) s += (j ? ", " : "") + m.actuated[j].name;
+  return s;
+}
+
+std::string link_list(const ArmModel& m) {
+  std::string s;
+  for (std::size_t j = 0; j < m.links.size(); ++j) s += (j ? ", " : "") + m.links[j].name;
+  return s.empty() ? "none" : s;
+}
+
+}  // namespace
+
+bool is_arm_record(const Record& r) {
+  for (const auto& [name, values] : r.columns)
+    if (ends_with(name, ".ref") || ends_with(name, ".angle")) return true;
+  return false;
+}
+
+std::vector<std::string> arm_record_columns(const ArmModel& m) {
+  std::vector<std::string> c;
+  for (const ActuatedJoint& a : m.actuated)
+    for (const char* s : kJointSuffixes) c.push_back(a.name + s);
+  for (const char* s : {"tool.x", "tool.y", "tool.z"}) c.push_back(s);
+  for (const LinkTip& l : m.links)
+    for (const char* s : kLinkSuffixes) c.push_back(l.name + s);
+  return c;
+}
+
+std::string arm_record_unit(const ArmModel& m, const std::string& column) {
+  for (const ActuatedJoint& a : m.actuated) {
+    const bool p = is_prismatic(m, a.dof);
+    if (column == a.name + ".ref" || column == a.name + ".angle") return p ? "m" : "rad";
+    if (column == a.name + ".rate") return p ? "m/s" : "rad/s";
+    if (column == a.name + ".torque") return p ? "N" : "N m";
+  }
+  for (const std::string& c : arm_record_columns(m))
+    if (c == column) return "m";  // the tool and the deflections
+  return "";
+}
+
+void check_arm_record(const Record& r, const ArmModel& m) {
+  // Unknown names first: a misspelt joint is then named as such, not as its missing column.
+  for (const auto& [name, values] : r.columns) {
+    for (const char* s : kJointSuffixes)
+      if (ends_with(name, s)) {
+        const std::string joint = name.substr(0, name.size() - std::string(s).size());
+        if (!find_actuated(m, joint))
+          throw ConfigError(r.source, 1, name,
+                            "'" + joint + "' is not an actuated joint of the model (its actuated joints: " +
+                                joint_list(m) + ")");
+      }
+    for (const char* s : kLinkSuffixes)
+      if (ends_with(name, s)) {
+        const std::string link = name.substr(0, name.size() - std::string(s).size());
+        bool known = false;
+        for (const LinkTip& l : m.links) known |= l.name == link;
+        if (!known)
+          throw ConfigError(r.source, 1, name,
+                            "'" + link + "' is not a flexible link of the model (its flexible links: " + link_list(m) + ")");
+      }
+    if (name.rfind("tool.", 0) == 0 && name != "tool.x" && name != "tool.y" && name != "tool.z")
+      throw ConfigError(r.source, 1, name, "unknown tool column (tool.x, tool.y, tool.z: the tool point, base frame, m)");
+  }
+  const bool arm_form = is_arm_record(r);
+  for (const ActuatedJoint& a : m.actuated)
+    for (const char* s : {".ref", ".angle"})
+      if (!r.has(a.name + s))
+        throw ConfigError(r.source, 1, a.name + s,
+                          "missing column '" + a.name + s + "', needed for an arm model" +
+                              (arm_form ? "" : " (this record is in the reference rig's form: ref, hub_angle, ...)"));
+}
+
+std::vector<std::vector<double>> sample_arm_reference(const ArmModel& m) {
+  const std::size_t na = m.actuated.size();
+  const long samples = static_cast<long>(std::floor(m.duration / m.control_period + 1e-9)) + 1;
+  std::vector<std::vector<double>> ref(na, std::vector<double>(static_cast<std::size_t>(samples)));
+  std::vector<double> r(na), rd(na), rdd(na), scratch(3 * na);
+  for (long k = 0; k < samples; ++k) {
+    eval_arm_reference(m, static_cast<double>(k) * m.control_period, r.data(), rd.data(), rdd.data(), scratch.data());
+    for (std::size_t j = 0; j < na; ++j) ref[j][static_cast<std::size_t>(k)] = r[j];
+  }
+  return ref;
+}
+
+namespace {
+
+// The record column's value in a trace (the trace's name for it).
+std::string trace_name(const std::string& column) {
+  if (ends_with(column, ".angle")) return column.substr(0, column.size() - 6) + ".q";
+  if (ends_with(column, ".rate")) return column.substr(0, column.size() - 5) + ".qd";
+  return column;
+}
+
+}  // namespace
+
+Record make_arm_record(const ArmModel& m, const ArmRecordNoise& noise, std::uint64_t seed) {
+  const std::vector<std::vector<double>> ref = sample_arm_reference(m);
+  ArmRunOptions o;
+  o.reference = &ref;
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1), o);
+  if (run.status[0] != LaneStatus::kOk) throw std::runtime_error("the model's run failed numerically: no record");
+  const ArmTrace& tr = run.traces[0];
+  Record r;
+  r.source = "<record>";
+  r.t = tr.t();
+  const std::vector<std::string> cols = arm_record_columns(m);
+  for (std::size_t c = 0; c < cols.size(); ++c) {
+    std::vector<double> y = tr.column(trace_name(cols[c]));
+    const std::string& n = cols[c];
+    const double sd = ends_with(n, ".angle") ? noise.angle
+                      : ends_with(n, ".rate") ? noise.rate
+                      : ends_with(n, ".torque") ? noise.torque
+                      : ends_with(n, ".ref") ? 0.0
+                                             : noise.position;
+    if (sd > 0.0) {
+      CounterRng rng(calc_variant_seed(seed, c + 1));
+      for (double& x : y) x += sd * rng.normal();
+    }
+    r.columns[n] = std::move(y);
+  }
+  return r;
+}
+
+ArmReplay replay_arm_record(const ArmModel& model, const Record& r) {
+  ArmReplay out;
+  const double T = model.control_period;
+  out.control_period = T;
+  const std::size_t n = r.size();
+  const double t0 = r.t.front();
+  for (std::size_t k = 0; k < n && !out.resampled; ++k)
+    out.resampled = std::abs(r.t[k] - t0 - static_cast<double>(k) * T) > 1e-3 * T;
+  const long samples = out.resampled ? static_cast<long>(std::floor((r.t.back() - t0) / T + 1e-9)) + 1
+                                     : static_cast<long>(n);
+  std::vector<std::vector<double>> ref;
+  for (const ActuatedJoint& a : model.actuated) {
+    const std::vector<double>& x = r.at(a.name + ".ref");
+    if (!out.resampled) {
+      ref.push_back(x);
+      continue;
+    }
+    std::vector<double> y(static_cast<std::size_t>(samples));
+    for (long k = 0; k < samples; ++k) y[static_cast<std::size_t>(k)] = interpolate(r.t, x, t0 + static_cast<double>(k) * T);
+    ref.push_back(std::move(y));
+  }
+  ArmModel m = model;
+  m.duration = static_cast<double>(samples - 1) * T;
+  // The start: the model's, unless the record's first references say otherwise.
+  bool moved = false;
+  Eigen::VectorXd pose = m.q0;
+  for (std::size_t j = 0; j < m.actuated.size(); ++j) {
+    const int d = m.actuated[j].dof;
+    moved |= std::abs(ref[j][0] - pose[d]) > 1e-9;
+    pose[d] = ref[j][0];
+  }
+  if (moved) m.q0 = calc_arm_sag(m, pose).q;
+  ArmRunOptions o;
+  o.reference = &ref;
+  ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1), o);
+  out.ok = run.status[0] == LaneStatus::kOk;
+  out.trace = std::move(run.traces[0]);
+  const std::vector<double>& tm = out.trace.t();
+  for (const std::string& c : arm_record_columns(m)) {
+    const std::vector<double>& y = out.trace.column(trace_name(c));
+    if (!out.resampled) {
+      out.at_record[c] = y;
+      continue;
+    }
+    std::vector<double> v(n);
+    for (std::size_t k = 0; k < n; ++k) v[k] = interpolate(tm, y, r.t[k] - t0);
+    out.at_record[c] = std::move(v);
+  }
+  return out;
+}
+
+}  // namespace ff
