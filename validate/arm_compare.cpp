@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "kernel/files.hpp"
+#include "common/files.hpp"
 #include "plotting/plot.hpp"
 #include "validate/arm_record.hpp"
 #include "validate/replay.hpp"  // calc_fit

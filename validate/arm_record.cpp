@@ -4,8 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "kernel/errors.hpp"
-#include "kernel/random.hpp"
+#include "common/errors.hpp"
+#include "common/random.hpp"
 
 namespace ff {
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "arm/arm_simulate.hpp"
-#include "kernel/errors.hpp"
+#include "common/errors.hpp"
 #include "sweep/paths.hpp"
 #include "tests/temp_dir.hpp"
 #include "validate/arm_compare.hpp"
