@@ -133,8 +133,7 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
   const Tree& tree = arm.tree;
   const int nv = tree.nv();
   Eigen::VectorXd start = arm.q0;
-  for (const LinkTip& l : arm.links)
-    for (int j : l.elastic_dofs) start[j] = 0.0;
+  for (int j : arm.compliant_dofs) start[j] = 0.0;
   const StaticEquilibriumResult sag = calc_arm_sag(arm, parse_pose(d, start, o.at));
   if (!sag.converged()) std::printf("static sag not found (%s): linearised at the straight links\n", sag.message.c_str());
   const Eigen::VectorXd& q0 = sag.q;
@@ -169,8 +168,7 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
   std::vector<Pose> poses(static_cast<std::size_t>(tree.num_bodies())), rigid(poses.size());
   calc_body_poses(tree, q0, poses);
   Eigen::VectorXd straight = q0;
-  for (const LinkTip& l : arm.links)
-    for (int j : l.elastic_dofs) straight[j] = 0.0;
+  for (int j : arm.compliant_dofs) straight[j] = 0.0;
   calc_body_poses(tree, straight, rigid);
   std::printf("static deflection under gravity (%s):\n  %-16s %12s %12s %12s\n",
               sag.converged() ? "converged" : "not converged", "", "dx (mm)", "dy (mm)", "dz (mm)");

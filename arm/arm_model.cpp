@@ -165,6 +165,9 @@ ArmModel make_arm(const ArmSpec& spec) {
     t.elastic_dofs = f.dofs;
     m.links.push_back(std::move(t));
   }
+  for (const LinkTip& l : m.links) m.compliant_dofs.insert(m.compliant_dofs.end(), l.elastic_dofs.begin(), l.elastic_dofs.end());
+  for (const JointControlSpec& c : spec.joints)
+    if (c.drive) m.compliant_dofs.push_back(spec.tree.dof_index.at(c.joint + ".twist"));
   m.tool_body = m.tree.num_bodies() - 1;
   m.tool_point = spec.tool_point;
   bool at_link_tip = false;
@@ -319,8 +322,7 @@ ArmModel make_arm(const ArmSpec& spec) {
 StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose) {
   StaticEquilibriumOptions held;
   std::vector<char> elastic(static_cast<std::size_t>(m.tree.nv()), 0);
-  for (const LinkTip& l : m.links)
-    for (int d : l.elastic_dofs) elastic[static_cast<std::size_t>(d)] = 1;
+  for (int d : m.compliant_dofs) elastic[static_cast<std::size_t>(d)] = 1;
   for (int j = 0; j < m.tree.nv(); ++j)
     if (!elastic[static_cast<std::size_t>(j)]) held.locked_dofs.push_back(j);
   StaticEquilibriumResult r = solve_static_equilibrium(m.tree, pose, Eigen::VectorXd::Zero(m.tree.nv()), held);

@@ -46,6 +46,8 @@ struct JointControlSpec {
                                // tau - torque_offset (the rig's hub_torque_offset)
   ChannelSpec angle_sensor;    // what the controller measures of q (sensors.angle), rad (m)
   ChannelSpec rate_sensor;     // and of qd (sensors.rate), rad/s (m/s)
+  bool drive = false;          // a compliant drive train (`drive:`): the tree holds the joint's rotor and
+                               // its twist "<joint>.twist" (insert_drive_train); the joint is the rotor's
 };
 
 // Where a waypoint goes: joint values by name (the others keep the previous waypoint's), or a tool
@@ -112,6 +114,7 @@ struct ArmModel {
   Tree tree;
   std::vector<ActuatedJoint> actuated;  // in dof order
   std::vector<int> passive_dofs;     // every other moving joint (cells, unactuated joints)
+  std::vector<int> compliant_dofs;   // the flexible links' cells and the drive trains' twists: what sags
   int tool_body = -1;
   Vec3 tool_point = Vec3::Zero();    // in tool_body's frame, m
   std::vector<LinkTip> links;        // the flexible links
@@ -132,7 +135,8 @@ struct ArmModel {
 // out of time order, an unreachable tool target (the IK's failure), a notch or shaper it cannot design.
 ArmModel make_arm(const ArmSpec& spec);
 
-// The static equilibrium of the flexible links under gravity at `pose` (nv), every other joint held
+// The static equilibrium of the compliant dofs (flexible links, drive twists) under gravity at `pose`
+// (nv), every other joint held
 // there (statics.hpp with the non-elastic dofs locked). When it does not converge (a link buckling),
 // q is `pose` and the result says why.
 StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose);

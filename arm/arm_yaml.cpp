@@ -94,6 +94,14 @@ const std::array<Field<ChannelSpec>, 4> kRateSensorFields{{
      .fallback = "0: controller.rate"},
 }};
 
+// A drive train on the joint (description/tree_description.hpp, DriveTrain), output-side units.
+const std::array<Field<DriveTrain>, 4> kDriveFields{{
+    {.key = "rotor_inertia", .member = &DriveTrain::rotor_inertia, .unit = "kg·m² (kg)", .bound = Bound::kNonNegative},
+    {.key = "ratio", .member = &DriveTrain::ratio, .bound = Bound::kPositive},
+    {.key = "stiffness", .member = &DriveTrain::stiffness, .unit = "N·m/rad (N/m)", .bound = Bound::kPositive},
+    {.key = "damping", .member = &DriveTrain::damping, .unit = "N·m·s/rad (N·s/m)", .bound = Bound::kNonNegative},
+}};
+
 struct TrajectoryBlock {
   std::string shape = "quintic";
 };
@@ -228,6 +236,10 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       read_present(rate, kRateSensorFields, c.rate_sensor);
       rate.finish();
       sensors.finish();
+      YamlReader drive = one.child("drive");
+      DriveTrain train;
+      read_present(drive, kDriveFields, train);
+      drive.finish();
       one.finish();
       if (!s.tree.dof_index.count(name)) {
         std::string known;
@@ -235,7 +247,11 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
           if (n.find(".cell") == std::string::npos) known += (known.empty() ? "" : ", ") + n;
         jr.fail(name, "no moving joint of that name (joints: " + known + ")");
       }
+      c.drive = one.has("drive");
       s.joints.push_back(c);
+      // A compliant drive: the joint's rotor and the twist to its link (insert_drive_train).
+      if (one.has("drive"))
+        if (const std::string fault = insert_drive_train(s.tree, name, train); !fault.empty()) one.fail("drive", fault);
     }
     jr.finish();
   }
@@ -338,6 +354,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   add_keys(out, "joints.NAME.friction.", kFrictionFields);
   add_keys(out, "joints.NAME.sensors.angle.", kAngleSensorFields);
   add_keys(out, "joints.NAME.sensors.rate.", kRateSensorFields);
+  add_keys(out, "joints.NAME.drive.", kDriveFields);
   add_keys(out, "trajectory.", kTrajectoryFields);
   out.push_back({"trajectory.start", "rad (m)", "no", "every joint at 0"});
   add_keys(out, "trajectory.waypoints[i].", kWaypointFields);

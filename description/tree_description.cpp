@@ -1,5 +1,7 @@
 #include "description/tree_description.hpp"
 
+#include <cmath>
+
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -112,6 +114,52 @@ std::string make_flexible(TreeDescription& d, int body, FlexibleLinkSpec link) {
   d.flexible_links.insert(at, std::move(info));
   d.spec = std::move(spec);
   d.joints = std::move(joints);
+  return "";
+}
+
+std::string insert_drive_train(TreeDescription& d, const std::string& joint, const DriveTrain& drive) {
+  const auto dof = d.dof_index.find(joint);
+  if (dof == d.dof_index.end()) return "no moving joint named '" + joint + "'";
+  if (!(drive.rotor_inertia >= 0.0) || !(drive.ratio > 0.0) || !(drive.stiffness > 0.0) || !(drive.damping >= 0.0) ||
+      !std::isfinite(drive.rotor_inertia + drive.ratio + drive.stiffness + drive.damping))
+    return "a drive needs rotor_inertia >= 0, ratio > 0, stiffness > 0 and damping >= 0, all finite";
+  int body = -1;
+  for (std::size_t i = 0; i < d.joints.size(); ++i)
+    if (d.joints[i].name == joint) body = static_cast<int>(i);
+  const BodySpec link = d.spec.bodies[static_cast<std::size_t>(body)];
+  const std::string rotor_name = link.name + ".rotor", twist_name = joint + ".twist";
+  if (d.body_index.count(rotor_name) || d.dof_index.count(twist_name))
+    return "the drive's names '" + rotor_name + "' and '" + twist_name + "' must be free";
+  TreeDescription out = d;
+  // The rotor: the joint as it was, massless, with the rotor's reflected inertia on its axis.
+  BodySpec rotor = link;
+  rotor.name = rotor_name;
+  rotor.mass = 0.0;
+  rotor.com = Vec3::Zero();
+  rotor.inertia = Mat3::Zero();
+  rotor.armature = link.armature + drive.ratio * drive.ratio * drive.rotor_inertia;
+  // The link: turned by the twist about the same axis, from the rotor's frame.
+  BodySpec twisted = link;
+  twisted.parent = body;
+  twisted.position = Vec3::Zero();
+  twisted.rotation = Mat3::Identity();
+  twisted.armature = 0.0;
+  twisted.stiffness = drive.stiffness;
+  twisted.damping = drive.damping;
+  twisted.spring_reference = 0.0;
+  JointInfo twist_info;
+  twist_info.name = twist_name;
+  out.spec.bodies[static_cast<std::size_t>(body)] = twisted;
+  out.spec.bodies.insert(out.spec.bodies.begin() + body, rotor);
+  out.joints.insert(out.joints.begin() + body + 1, twist_info);
+  for (std::size_t i = static_cast<std::size_t>(body) + 2; i < out.spec.bodies.size(); ++i)
+    if (out.spec.bodies[i].parent >= body) ++out.spec.bodies[i].parent;
+  for (FlexibleLinkInfo& f : out.flexible_links) {
+    if (f.root_body >= body) ++f.root_body;
+    if (f.tip_body >= body) ++f.tip_body;
+  }
+  if (const std::string fault = finish_description(out); !fault.empty()) return fault;
+  d = std::move(out);
   return "";
 }
 

@@ -51,6 +51,24 @@ struct TreeDescription {
 // R = Rz(yaw) Ry(pitch) Rx(roll) (roll about x first, then pitch about the fixed y, then yaw about z).
 Mat3 rpy_rotation(double roll, double pitch, double yaw);
 
+// A compliant drive train on a moving joint (the reference rig's drive, docs/reference-rig.md, on any
+// joint; output-side units): the actuator's rotor, of inertia ratio^2 x rotor_inertia about the joint
+// axis, turns on the joint's own axis and placement, and the link follows it through a spring-damper.
+struct DriveTrain {
+  double rotor_inertia = 5.0;  // J_a, actuator-side inertia (rotor, pinion, gears) on the motor shaft, kg·m² (kg)
+  double ratio = 1.0;          // n = motor angle / output angle
+  double stiffness = 2.0e7;    // k, the drive's torsional (axial) stiffness at the output, N·m/rad (N/m)
+  double damping = 2.0e3;      // c, N·m·s/rad (N·s/m)
+};
+
+// Splits the moving joint `joint` into the drive's two: a massless rotor body "<body>.rotor" inserted
+// between the parent and the body, carrying the joint (its name, type, axis, placement, limits and
+// passive spring) with the armature n^2 J_a plus the joint's own, and the body's new joint
+// "<joint>.twist" on the same axis at the rotor's origin, with the drive's stiffness and damping:
+// the body turns by q_joint + q_twist. Later bodies' indices (the flexible links' too) move up by one.
+// Returns "" or why not (no such moving joint, a name taken, bad values), leaving `d` unchanged then.
+std::string insert_drive_train(TreeDescription& d, const std::string& joint, const DriveTrain& drive);
+
 // For the readers: why make_tree would reject a body, "" when it would not, in make_tree's words
 // without its "tree: body N" prefix. inertia_fault looks at the mass, centre of mass and inertia
 // alone; joint_fault at everything else of the body (its parent and place in the tree not included).

@@ -15,6 +15,7 @@
 #include "arm/arm_yaml.hpp"
 #include "common/errors.hpp"
 #include "kernel/friction.hpp"
+#include "multibody/modes.hpp"
 #include "common/random.hpp"
 #include "common/yaml_reader.hpp"
 
@@ -313,6 +314,64 @@ TEST(ArmYaml, TheJointBlocksAreListedAndTheirErrorsNamedAtTheirLines) {
   EXPECT_NE(neg.find("arm.yaml:11: joints.arm.sensors.rate.noise"), std::string::npos) << neg;
   const std::string seed = arm_error(rotor("{controller: {}}", "{duration: 1, seed: 1.5}"));
   EXPECT_NE(seed.find("simulation.seed"), std::string::npos) << seed;
+}
+
+}  // namespace
+}  // namespace ff
+
+namespace ff {
+namespace {
+
+// A joint with a compliant drive (insert_drive_train): a 2 kg bob 0.5 m out on a hinge about y, its
+// rotor of 0.01 kg·m² through a 100:1 gear (reflected 100 kg·m²) and a drive stiffness k = 2e4 N·m/rad.
+std::string drive_arm(const std::string& extra = "") {
+  return "gravity: [0, 0, -9.81]\n"
+         "bodies:\n"
+         "  - name: arm\n"
+         "    parent: base\n"
+         "    mass: 2.0\n"
+         "    com: [0.5, 0, 0]\n"
+         "    inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01}\n"
+         "    joint: {axis: [0, 1, 0]}\n"
+         "joints:\n"
+         "  arm:\n"
+         "    controller: {kp: 4.0e4, kd: 2.0e3, gravity_compensation: 1}\n"
+         "    drive: {rotor_inertia: 0.01, ratio: 100, stiffness: 2.0e4, damping: 0}\n" +
+         extra + "simulation: {duration: 0.5}\n";
+}
+
+TEST(ArmDrive, TheDrivesTwoMassModeIsAtSqrtOfKOverTheReducedInertiaAndTheLinkSagsByTheLoadOverK) {
+  const ArmModel m = parse_arm(load_yaml_text(drive_arm(), "arm.yaml"), "arm.yaml");
+  ASSERT_EQ(m.tree.nv(), 2);
+  const int rotor = m.spec.tree.dof_index.at("arm"), twist = m.spec.tree.dof_index.at("arm.twist");
+  EXPECT_EQ(m.actuated.at(0).dof, rotor);
+  EXPECT_EQ(m.tree.body(0).armature, 100.0 * 100.0 * 0.01);
+  // Free-free (no controller, no gravity stiffness at q = 0): w^2 = k (1/J_r + 1/J_l).
+  const double Jr = 100.0, Jl = 2.0 * 0.25 + 0.01, k = 2.0e4;
+  const std::vector<TreeMode> modes = calc_tree_modes(m.tree, Eigen::VectorXd::Zero(2));
+  double w = 0.0;
+  for (const TreeMode& md : modes) w = std::max(w, md.omega_n);
+  EXPECT_NEAR(w, std::sqrt(k * (1.0 / Jr + 1.0 / Jl)), 1e-9 * w);
+  // The start: the rotor held at 0, the link twisted by its weight's moment over k (small angles:
+  // k q = m g l cos q, q > 0 about +y is down).
+  const double q = m.q0[twist];
+  EXPECT_NEAR(k * q, 2.0 * 9.81 * 0.5 * std::cos(q), 1e-8);
+  EXPECT_EQ(m.q0[rotor], 0.0);
+  // The controller's gravity compensation (the rigid arm's) holds the rotor; the link stays twisted.
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1));
+  ASSERT_EQ(run.status[0], LaneStatus::kOk);
+  EXPECT_NEAR(run.traces[0].column("arm.q").back(), 0.0, 1e-6);
+}
+
+TEST(ArmDrive, ABadDriveIsNamedAtItsKey) {
+  std::string text = drive_arm();
+  text.replace(text.find("ratio: 100"), 10, "ratio: 0");
+  try {
+    parse_arm(load_yaml_text(text, "arm.yaml"), "arm.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("arm.yaml:12: joints.arm.drive.ratio: must be > 0", 0), 0u) << e.what();
+  }
 }
 
 }  // namespace
