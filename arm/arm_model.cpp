@@ -142,6 +142,8 @@ ArmModel make_arm(const ArmSpec& spec) {
     const JointInfo& info = joint_info(spec, m.tree, dof);
     a.torque_limit = c->torque_limit > 0.0 ? c->torque_limit : (std::isfinite(info.effort) ? info.effort : 0.0);
     a.notch_on_feedback = c->notch.placement == "feedback";
+    for (int i = 0; i < m.tree.num_bodies(); ++i)
+      if (m.tree.body(i).dof == dof) a.body = i;
     const std::uint64_t i = m.actuated.size();
     a.angle_hold = calc_sensor_hold(c->angle_sensor, spec.rate);
     a.rate_hold = calc_sensor_hold(c->rate_sensor, spec.rate);
@@ -372,7 +374,11 @@ void calc_arm_feedforward(const ArmModel& m, const double* r, const double* rd, 
     ff.qdd[d] = rdd[j];
   }
   calc_inverse_dynamics(m.tree, ff.q, ff.qd, ff.qdd, ff.tau, ff.ws);
-  for (std::size_t j = 0; j < na; ++j) tau_id[j] = ff.tau[m.actuated[j].dof];
+  // The joint's own passive spring and damper (BodySpec) are part of what its drive must supply.
+  for (std::size_t j = 0; j < na; ++j) {
+    const Body& b = m.tree.body(m.actuated[j].body);
+    tau_id[j] = ff.tau[m.actuated[j].dof] + b.stiffness * (r[j] - b.spring_reference) + b.damping * rd[j];
+  }
   calc_bias_forces(m.tree, ff.q, ff.zero, ff.tau, ff.ws);
   for (std::size_t j = 0; j < na; ++j) tau_g[j] = ff.tau[m.actuated[j].dof];
 }

@@ -9,7 +9,7 @@
 // with q_j and qd_j as the joint's sensors give them (quantised, noisy, held, delayed: sensors.angle,
 // sensors.rate; exact by default), the joint getting tau_j - torque_offset_j and its friction, and r
 // the shaped joint reference, ID the rigid arm's inverse dynamics (RNEA, flexible links held
-// straight) and G(r) its gravity torques, f_i and f_g the feed-forward gains, the integral frozen
+// straight, the joint's own passive spring and damper added) and G(r) its gravity torques, f_i and f_g the feed-forward gains, the integral frozen
 // while the torque saturates in the direction of the error (clamping anti-windup).
 #pragma once
 
@@ -97,6 +97,7 @@ struct LinkTip {
 struct ActuatedJoint {
   std::string name;
   int dof = -1;
+  int body = -1;                     // the body its joint moves
   JointControlSpec control;
   double torque_limit = 0.0;         // in use (0 = unlimited)
   std::vector<Biquad> notch;         // sections; empty when off

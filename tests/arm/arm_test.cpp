@@ -254,3 +254,30 @@ TEST(ArmYaml, DocsListEveryKeyWithTheReadersUnitRequirementAndDefault) {
 
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+
+TEST(ArmUrdf, TheWorkedExampleFromUrdfReachesItsToolTargetAndHoldsTheRigidArmExactly) {
+  // configs/arm6.yaml: the UR5-like URDF with its sidecar, a tool waypoint (IK) at 2 s, back at 4 s.
+  // Rigid links, gravity and the joint springs fed forward exactly: at rest the tool is where the
+  // reference puts it, and at 2 s the reference puts it on the target.
+  const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/arm6.yaml";
+  const ArmModel m = parse_arm(load_yaml_file(path), path);
+  EXPECT_EQ(m.actuated.size(), 6u);
+  const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1));
+  ASSERT_EQ(run.status[0], LaneStatus::kOk);
+  const ArmTrace& tr = run.traces[0];
+  const std::size_t at2 = static_cast<std::size_t>(std::lround(2.0 / m.control_period));
+  EXPECT_NEAR(tr.column("tool.ref_x")[at2], 0.35, 1e-8);
+  EXPECT_NEAR(tr.column("tool.ref_y")[at2], 0.25, 1e-8);
+  EXPECT_NEAR(tr.column("tool.ref_z")[at2], 0.45, 1e-8);
+  const std::vector<double> v = calc_arm_metrics(m, tr, run.status[0]);
+  const std::vector<std::string> c = arm_metric_columns(m);
+  const double final_error = v[static_cast<std::size_t>(std::find(c.begin(), c.end(), "tool_final_error_m") - c.begin())];
+  RecordProperty("tool_final_error_m", std::to_string(final_error));
+  EXPECT_LT(final_error, 1e-9);
+}
+
+}  // namespace
+}  // namespace ff
