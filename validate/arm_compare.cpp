@@ -7,34 +7,13 @@
 #include "plotting/plot.hpp"
 #include "validate/arm_record.hpp"
 #include "validate/replay.hpp"  // calc_fit
+#include "validate/report_text.hpp"
 
 namespace ff {
 
+using namespace report_text;
+
 namespace {
-
-std::string fmt(const char* f, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, x);
-  return buf;
-}
-std::string fit_cell(double x) { return std::isfinite(x) ? fmt("%.2f", x) : "failed"; }
-std::string num_cell(double x) { return std::isfinite(x) ? fmt("%.4g", x) : "failed"; }
-std::string jnum(double x) { return std::isfinite(x) ? fmt("%.10g", x) : "null"; }
-std::string jstr(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\', o += c;
-    else if (static_cast<unsigned char>(c) < 0x20) o += fmt("\\u%04x", static_cast<unsigned char>(c));
-    else o += c;
-  }
-  return o + "\"";
-}
-
-bool all_finite(const std::vector<double>& x) {
-  for (double v : x)
-    if (!std::isfinite(v)) return false;
-  return true;
-}
 
 bool is_constant(const std::vector<double>& x) {
   for (double v : x)
@@ -50,8 +29,6 @@ void add_joint_states(const Record& r, const std::string& joint, bool torque,
   s.emplace_back(joint + ".angle", r.at(joint + ".angle"));
   if (torque && r.has(joint + ".torque")) s.emplace_back(joint + ".torque", r.at(joint + ".torque"));
 }
-
-std::string plot_stem(const std::string& channel) { return make_file_stem(channel); }
 
 }  // namespace
 
@@ -143,7 +120,7 @@ std::string format_arm_compare_report(const ArmCompareResult& r) {
   }
   s += "\n## Plots\n\n";
   for (const auto& c : r.channels) {
-    const std::string ch = plot_stem(c.name);
+    const std::string ch = make_file_stem(c.name);
     s += "- " + c.name + ": `overlay_" + ch + ".png`, `residual_" + ch + ".png`, `acf_" + ch + ".png`, `ccf_" + ch +
          ".png`, `spectrum_" + ch + ".png`\n";
   }
@@ -182,19 +159,15 @@ std::vector<std::string> write_arm_compare_report(const ArmCompareResult& r, con
   };
   write_file_atomic(put("report.md"), format_arm_compare_report(r));
   write_file_atomic(put("compare.json"), format_arm_compare_json(r));
-  auto finite = [](std::vector<double> y) {
-    for (double& v : y) v = std::isfinite(v) ? v : NAN;
-    return y;
-  };
   for (std::size_t i = 0; i < r.channels.size(); ++i) {
     const ChannelCompare& c = r.channels[i];
-    const std::string ch = plot_stem(c.name);
+    const std::string ch = make_file_stem(c.name);
     LinePlot p;
     p.title = c.name + ": measured and model (free run on the record's references)";
     p.x_label = "time (s)";
     p.y_label = c.name + " (" + c.unit + ")";
     p.series.push_back({"measured", r.t, c.measured});
-    p.series.push_back({"model", r.t, finite(c.free_run)});
+    p.series.push_back({"model", r.t, break_at_nonfinite(c.free_run)});
     if (c.name.size() > 6 && c.name.compare(c.name.size() - 6, 6, ".angle") == 0)
       p.series.push_back({"reference (" + r.inputs[i] + ")", r.t, r.refs[i], -1, 1.5, true});
     render_line_plot(p, put("overlay_" + ch + ".png"));
@@ -204,7 +177,7 @@ std::vector<std::string> write_arm_compare_report(const ArmCompareResult& r, con
     e.y_label = "residual (" + c.unit + ")";
     std::vector<double> res(c.measured.size());
     for (std::size_t k = 0; k < res.size(); ++k) res[k] = c.measured[k] - c.free_run[k];
-    e.series.push_back({"free run", r.t, finite(res)});
+    e.series.push_back({"free run", r.t, break_at_nonfinite(res)});
     e.hlines.push_back({0.0, "", false});
     render_line_plot(e, put("residual_" + ch + ".png"));
     if (!c.free_analysis.valid) continue;

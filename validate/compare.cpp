@@ -7,8 +7,11 @@
 
 #include "common/files.hpp"
 #include "plotting/plot.hpp"
+#include "validate/report_text.hpp"
 
 namespace ff {
+
+using namespace report_text;
 
 namespace {
 
@@ -29,35 +32,6 @@ const char* input_column(ReplayMode m) {
   return "ref";
 }
 
-bool all_finite(const std::vector<double>& x) {
-  for (double v : x)
-    if (!std::isfinite(v)) return false;
-  return true;
-}
-
-std::string fmt(const char* f, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, x);
-  return buf;
-}
-
-// Fit % for a table: "-" when the prediction failed.
-std::string fit_cell(double x) { return std::isfinite(x) ? fmt("%.2f", x) : "failed"; }
-std::string num_cell(double x) { return std::isfinite(x) ? fmt("%.4g", x) : "failed"; }
-
-// ---------------------------------------------------------------- JSON
-
-std::string jnum(double x) { return std::isfinite(x) ? fmt("%.10g", x) : "null"; }
-std::string jbool(bool b) { return b ? "true" : "false"; }
-std::string jstr(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\', o += c;
-    else if (static_cast<unsigned char>(c) < 0x20) o += fmt("\\u%04x", static_cast<unsigned char>(c));
-    else o += c;
-  }
-  return o + "\"";
-}
 
 }  // namespace
 
@@ -166,18 +140,18 @@ void plot_overlay(const CompareResult& r, const ChannelCompare& c, const std::st
   p.title = c.name + ": measured and predicted (" + replay_mode_name(r.mode) + ")";
   p.x_label = "time (s)";
   p.y_label = c.name + " (" + channel_unit(c.name) + ")";
-  // A failed prediction's non-finite values break its line (NaN) instead of stretching the axes.
-  auto finite = [](std::vector<double> y) {
-    for (double& v : y) v = std::isfinite(v) ? v : NAN;
-    return y;
-  };
   p.series.push_back({"measured", r.t, c.measured});
-  p.series.push_back({"free run", r.t, finite(c.free_run)});
-  p.series.push_back({"k-step (k = " + std::to_string(r.k_ahead) + ")", r.t, finite(c.k_step), -1, 2.0, true});
+  p.series.push_back({"free run", r.t, break_at_nonfinite(c.free_run)});
+  p.series.push_back({"k-step (k = " + std::to_string(r.k_ahead) + ")", r.t, break_at_nonfinite(c.k_step), -1, 2.0, true});
   render_line_plot(p, path);
 }
 
 }  // namespace
+
+std::vector<double> break_at_nonfinite(std::vector<double> y) {
+  for (double& v : y) v = std::isfinite(v) ? v : NAN;
+  return y;
+}
 
 std::vector<std::pair<std::string, std::vector<double>>> record_states(const Record& r) {
   std::vector<std::pair<std::string, std::vector<double>>> s;

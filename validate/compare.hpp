@@ -66,6 +66,9 @@ std::string format_compare_json(const CompareResult& r);
 std::string format_failure_json(const ResidualAnalysis& a, const ResidualOptions& o);
 void plot_residual_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path);
 void plot_residual_spectrum(const ChannelCompare& c, const std::string& path);
+// A series for a plot: non-finite values (a failed prediction's) as NaN, which break its line
+// instead of stretching the axes.
+std::vector<double> break_at_nonfinite(std::vector<double> y);
 
 // Writes DIR/report.md, DIR/compare.json and the plots (docs/cli.md) into `dir` (created); each file
 // atomically. Returns the file names written.

@@ -2,8 +2,8 @@
 // validate/arm_compare.hpp): the two-link flexible arm's record compared with the arm itself (exactly,
 // and with noise), with a heavier payload, and bad records refused with one line, exit 2, nothing written.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
+
+#include "tests/apps/cli_fixture.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,81 +17,12 @@
 
 namespace {
 
-namespace fs = std::filesystem;
+using namespace ff::test;
 
-const std::string kSource = FLEXFARM_SOURCE_DIR;
-const std::string kBinary = FLEXFARM_BINARY;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-std::vector<std::string> split_lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Result {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-  std::vector<std::string> lines() const { return split_lines(output); }
-};
-
-// The Cli fixture of cli_test.cpp, with the two-link flexible arm in work/configs.
-class ArmCli : public ::testing::Test {
+// The command line's fixture with the two-link flexible arm in work/configs.
+class ArmCli : public CliFixture {
  protected:
-  fs::path base, work;
-
-  void SetUp() override {
-    base = fs::temp_directory_path() / ("ff_armcli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(base);
-    work = base / "work";
-    fs::create_directories(work / "configs");
-    fs::copy_file(kSource + "/configs/two_link_flexible.yaml", work / "configs" / "arm.yaml");
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(base, ec);
-  }
-  Result run(const std::string& args) const {
-    const fs::path log = base / "output.txt";
-    const std::string cmd = "cd " + quote(work.string()) + " && " + quote(kBinary) + " " + args + " > " +
-                            quote(log.string()) + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.output = read_text(log);
-    return r;
-  }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(work / name) << text; }
-  static void expect_one_error_line(const Result& r, const std::string& prefix) {
-    EXPECT_NE(r.exit_code, 0) << r.output;
-    const auto lines = r.lines();
-    ASSERT_EQ(lines.size(), 1u) << r.output;
-    EXPECT_EQ(lines[0].rfind("flexfarm: error: " + prefix, 0), 0u) << r.output;
-  }
-  static std::vector<std::string> tree(const fs::path& dir) {
-    std::vector<std::string> out;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) out.push_back(fs::relative(e.path(), dir).string());
-    std::sort(out.begin(), out.end());
-    return out;
-  }
-  static void expect_png(const fs::path& p) {
-    ASSERT_TRUE(fs::exists(p)) << p;
-    const std::string bytes = read_text(p);
-    ASSERT_GT(bytes.size(), 8u) << p;
-    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
-  }
+  ArmCli() : CliFixture("ff_armcli_", {{"configs/two_link_flexible.yaml", "configs/arm.yaml"}}) {}
 };
 
 // 3 s of the arm: its 1.5 s move and half the settling.

@@ -2,8 +2,8 @@
 // studies and `--set` values rejected with one clear line and nothing written, and a short
 // `simulate` / `run` writing complete outputs (no leftover temporary files).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
+
+#include "tests/apps/cli_fixture.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -17,65 +17,12 @@
 
 namespace {
 
-namespace fs = std::filesystem;
+using namespace ff::test;
 
-const std::string kSource = FLEXFARM_SOURCE_DIR;
-const std::string kBinary = FLEXFARM_BINARY;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-std::vector<std::string> split_lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
-
-// Single-quoted for /bin/sh.
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Result {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-  std::vector<std::string> lines() const { return split_lines(output); }
-};
-
-// Each test runs the binary in its own fresh working directory, `work`, inside `base`.
-class Cli : public ::testing::Test {
+// Each test runs the binary in its own fresh working directory, with the reference rig's model.
+class Cli : public CliFixture {
  protected:
-  fs::path base, work;
-
-  void SetUp() override {
-    base = fs::temp_directory_path() / ("ff_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(base);
-    work = base / "work";
-    fs::create_directories(work / "configs");
-    fs::copy_file(kSource + "/configs/fbtb.yaml", work / "configs" / "fbtb.yaml");
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(base, ec);
-  }
-
-  // Runs `flexfarm ARGS` (ARGS already quoted as needed) in `work`.
-  Result run(const std::string& args) const {
-    const fs::path log = base / "output.txt";
-    const std::string cmd = "cd " + quote(work.string()) + " && " + quote(kBinary) + " " + args + " > " +
-                            quote(log.string()) + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.output = read_text(log);
-    return r;
-  }
+  Cli() : CliFixture("ff_cli_", {{"configs/fbtb.yaml", "configs/fbtb.yaml"}}) {}
 
   // The reference model with line `n` (1-based) replaced, written to work/NAME.
   void write_model(const std::string& name, int n, const std::string& line) const {
@@ -83,32 +30,6 @@ class Cli : public ::testing::Test {
     lines.at(n - 1) = line;
     std::ofstream out(work / name);
     for (const auto& l : lines) out << l << "\n";
-  }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(work / name) << text; }
-
-  // A rejected command: non-zero exit, exactly one line "flexfarm: error: <prefix>...".
-  static void expect_one_error_line(const Result& r, const std::string& prefix) {
-    EXPECT_NE(r.exit_code, 0) << r.output;
-    const auto lines = r.lines();
-    ASSERT_EQ(lines.size(), 1u) << r.output;
-    EXPECT_EQ(lines[0].rfind("flexfarm: error: " + prefix, 0), 0u) << r.output;
-  }
-
-  // Everything under `dir`, relative paths.
-  static std::vector<std::string> tree(const fs::path& dir) {
-    std::vector<std::string> out;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) out.push_back(fs::relative(e.path(), dir).string());
-    return out;
-  }
-  static void expect_no_tmp_files(const fs::path& dir) {
-    for (const auto& e : fs::recursive_directory_iterator(dir))
-      EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
-  }
-  static void expect_png(const fs::path& p) {
-    ASSERT_TRUE(fs::exists(p)) << p;
-    const std::string bytes = read_text(p);
-    ASSERT_GT(bytes.size(), 8u) << p;
-    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
   }
 };
 

@@ -18,20 +18,13 @@
 #include "multibody/modes.hpp"
 #include "common/random.hpp"
 #include "common/yaml_reader.hpp"
+#include "tests/arm/test_support.hpp"
 
 namespace ff {
 namespace {
 
-ArmModel arm_from(const std::string& text) { return parse_arm(load_yaml_text(text, "arm.yaml"), "arm.yaml"); }
-
-std::string arm_error(const std::string& text) {
-  try {
-    arm_from(text);
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using test::arm_error;
+using test::arm_from;
 
 // A rotor about the vertical z (gravity along the axis: no load): 1 kg at 0.5 m, izz 0.05 about its
 // centre, armature 0.1, so J = 0.05 + 1 * 0.5^2 + 0.1 = 0.4 kg·m².
@@ -341,7 +334,7 @@ std::string drive_arm(const std::string& extra = "") {
 }
 
 TEST(ArmDrive, TheDrivesTwoMassModeIsAtSqrtOfKOverTheReducedInertiaAndTheLinkSagsByTheLoadOverK) {
-  const ArmModel m = parse_arm(load_yaml_text(drive_arm(), "arm.yaml"), "arm.yaml");
+  const ArmModel m = test::arm_from(drive_arm());
   ASSERT_EQ(m.tree.nv(), 2);
   const int rotor = m.spec.tree.dof_index.at("arm"), twist = m.spec.tree.dof_index.at("arm.twist");
   EXPECT_EQ(m.actuated.at(0).dof, rotor);
@@ -366,12 +359,8 @@ TEST(ArmDrive, TheDrivesTwoMassModeIsAtSqrtOfKOverTheReducedInertiaAndTheLinkSag
 TEST(ArmDrive, ABadDriveIsNamedAtItsKey) {
   std::string text = drive_arm();
   text.replace(text.find("ratio: 100"), 10, "ratio: 0");
-  try {
-    parse_arm(load_yaml_text(text, "arm.yaml"), "arm.yaml");
-    ADD_FAILURE() << "no error";
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("arm.yaml:12: joints.arm.drive.ratio: must be > 0", 0), 0u) << e.what();
-  }
+  const std::string error = test::arm_error(text);
+  EXPECT_EQ(error.rfind("arm.yaml:12: joints.arm.drive.ratio: must be > 0", 0), 0u) << error;
 }
 
 }  // namespace

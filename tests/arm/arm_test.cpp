@@ -12,21 +12,14 @@
 #include "arm/arm_yaml.hpp"
 #include "common/errors.hpp"
 #include "common/yaml_reader.hpp"
+#include "tests/arm/test_support.hpp"
 #include "tests/docs_tables.hpp"
 
 namespace ff {
 namespace {
 
-ArmModel arm_from(const std::string& text) { return parse_arm(load_yaml_text(text, "arm.yaml"), "arm.yaml"); }
-
-std::string arm_error(const std::string& text) {
-  try {
-    arm_from(text);
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using test::arm_error;
+using test::arm_from;
 
 // A 2 kg bob 0.5 m out on a hinge about y (gravity -z: at q = 0 the arm is horizontal), rotor 0.05.
 std::string pendulum(const std::string& controller, const std::string& waypoints = "") {
