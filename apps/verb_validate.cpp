@@ -1,11 +1,13 @@
 // flexfarm diagnose / calibrate / record: find the physical effect a model lacks, add it, and make
 // records with a hidden effect to test that this works (docs/validation.md).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
 #include "apps/verbs.hpp"
 #include "common/files.hpp"
 #include "kernel/model_io.hpp"
+#include "validate/arm_diagnose.hpp"
 #include "validate/arm_record.hpp"
 #include "validate/diagnose.hpp"
 #include "validate/ledger.hpp"
@@ -32,15 +34,8 @@ constexpr const char* kRefitHelp =
     "existing parameters re-fitted with the baseline and with every effect: none, auto (for each effect the at most two "
     "the residual is most sensitive to, among hub.inertia, payload.mass, payload.inertia, friction.viscous, "
     "friction.coulomb, joints.stiffness, joints.damping, hub.torque_offset where nonzero, never one the effect fits), "
-    "or paths, comma separated, e.g. hub.inertia,friction.viscous";
-
-// diagnose and calibrate work on the rig's models only so far.
-void refuse_arm_model(const std::string& verb, const std::string& model) {
-  if (is_arm_model_file(model))
-    throw ExitError(model + ": an arm model: " + verb +
-                        " works on the reference rig's models only so far (an arm model's record: `flexfarm compare`)",
-                    2);
-}
+    "or paths, comma separated, e.g. hub.inertia,friction.viscous (an arm model: auto among each joint's friction, "
+    "torque offset and armature and each link's damping_time; paths such as joints.elbow.friction.viscous)";
 
 ReplayMode mode_of(const std::string& name) {
   try {
@@ -74,18 +69,19 @@ void add_diagnose_verb(CLI::App& app) {
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations per effect (its leading start's)")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
-    refuse_arm_model("diagnose", a->model);
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.only = split_list(a->effects);
     opt.refit = split_list(a->refit);
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
-    const ModelSource src = load_model_source(a->model, a->sets);
-    const Record r = read_record_csv(a->data, replay_inputs(opt.mode));
+    const bool arm = is_arm_model_file(a->model);
+    if (arm && opt.mode != ReplayMode::kClosedLoop) throw ExitError("--mode: an arm model is diagnosed in closed loop only", 2);
+    const ModelSource src = arm ? load_arm_source(a->model, a->sets) : load_model_source(a->model, a->sets);
+    const Record r = read_record_csv(a->data, arm ? std::vector<std::string>{} : replay_inputs(opt.mode));
     std::fprintf(stderr, "diagnosing %s against %s (%s, %zu samples)...\n", a->model.c_str(), a->data.c_str(),
                  a->mode.c_str(), r.size());
-    const Diagnosis d = diagnose(src, r, opt);
+    const Diagnosis d = arm ? diagnose_arm(src, r, opt) : diagnose(src, r, opt);
     write_file_atomic(a->json, format_diagnosis_json(d));
     std::printf("%swrote %s\n", format_diagnosis_text(d).c_str(), a->json.c_str());
   });
@@ -112,27 +108,40 @@ void add_calibrate_verb(CLI::App& app) {
   cmd->add_option("--iterations", a->iterations, "Levenberg-Marquardt iterations")->capture_default_str();
   cmd->add_option("--samples", a->samples, "at most this many samples per channel are scored")->capture_default_str();
   cmd->callback([a] {
-    refuse_arm_model("calibrate", a->model);
     DiagnoseOptions opt;
     opt.mode = mode_of(a->mode);
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
     opt.refit = split_list(a->refit);
-    bool known = false;
-    for (const auto& n : effect_names()) known |= n == a->add;
-    if (!known) throw ExitError("--add: unknown effect '" + a->add + "'", 2);
-    const ModelSource src = load_model_source(a->model, a->sets);
-    const Record r = read_record_csv(a->data, replay_inputs(opt.mode));
-    const EffectFit f = fit_effect(src, r, opt, a->add);
+    const bool arm = is_arm_model_file(a->model);
+    if (arm && opt.mode != ReplayMode::kClosedLoop) throw ExitError("--mode: an arm model is calibrated in closed loop only", 2);
+    const ModelSource src = arm ? load_arm_source(a->model, a->sets) : load_model_source(a->model, a->sets);
+    const Record r = read_record_csv(a->data, arm ? std::vector<std::string>{} : replay_inputs(opt.mode));
+    if (arm) {
+      const ArmModel base = build_arm(src);
+      check_arm_record(r, base);
+      const auto offered = make_arm_candidate_effects(base, apply_overrides(src), r);
+      if (std::none_of(offered.begin(), offered.end(), [&](const Effect& e) { return e.name == a->add; })) {
+        std::string names;
+        for (const auto& e : offered) names += (names.empty() ? "" : ", ") + e.name;
+        throw ExitError("--add: unknown effect '" + a->add + "' (this model offers: " + names + ")", 2);
+      }
+    } else {
+      const auto names = effect_names();
+      if (std::find(names.begin(), names.end(), a->add) == names.end())
+        throw ExitError("--add: unknown effect '" + a->add + "'", 2);
+    }
+    const EffectFit f = arm ? fit_arm_effect(src, r, opt, a->add) : fit_effect(src, r, opt, a->add);
     if (!f.ok) throw ExitError("the fit of " + a->add + " failed: " + f.note, 3);
-    const std::string yaml = format_calibrated_model(src, f, a->data);
+    const std::string yaml = arm ? format_calibrated_arm(src, f, a->data, a->out) : format_calibrated_model(src, f, a->data);
     const std::string ledger = a->ledger.empty()
                                    ? (std::filesystem::path(a->out).parent_path() / "ledger.sqlite").string()
                                    : a->ledger;
     const auto dir = std::filesystem::path(a->out).parent_path();
     if (!dir.empty()) std::filesystem::create_directories(dir);
     write_file_atomic(a->out, yaml);
-    const Model before = build_model(src), after = load_model(a->out);
+    const auto before = arm ? calc_arm_record_fits(build_arm(src), r) : calc_record_fits(build_model(src), r, opt.mode);
+    const auto after = arm ? calc_arm_record_fits(load_arm_with(a->out, {}), r) : calc_record_fits(load_model(a->out), r, opt.mode);
     const auto versions = record_calibration(ledger, a->model, before, a->out, after, f, r, opt.mode);
     std::printf("added %s to %s -> %s (delta BIC %.1f)\n", a->add.c_str(), a->model.c_str(), a->out.c_str(),
                 f.delta_bic);

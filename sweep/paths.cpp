@@ -195,6 +195,19 @@ ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& 
   return make_arm_with(load_yaml_file(path), path, parse_assignments(sets));
 }
 
+ModelSource load_arm_source(const std::string& path, const std::vector<std::string>& sets) {
+  YAML::Node doc = load_yaml_file(path);
+  ModelSource src{YAML::Clone(doc), path, parse_assignments(sets)};
+  make_arm_with(doc, path, src.set);  // on the document as read, so that an error names its line
+  return src;
+}
+
+ArmModel build_arm(const ModelSource& src, const std::vector<Assignment>& extra) {
+  std::vector<Assignment> all = src.set;
+  all.insert(all.end(), extra.begin(), extra.end());
+  return make_arm_with(YAML::Clone(src.doc), src.path, all);
+}
+
 bool is_arm_model_file(const std::string& path) {
   try {
     return is_arm_document(load_yaml_file(path));

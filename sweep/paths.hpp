@@ -56,6 +56,10 @@ Model build_model(const ModelSource& src, const std::vector<Assignment>& extra =
 // assigned value named where it was assigned.
 ArmModel make_arm_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set);
 ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets);
+// An arm model's source, checked once as load_model_source checks a rig's, and its model with `extra`
+// assignments after its own overrides.
+ModelSource load_arm_source(const std::string& path, const std::vector<std::string>& sets);
+ArmModel build_arm(const ModelSource& src, const std::vector<Assignment>& extra = {});
 // Whether a model file is an arm model (a YAML document with `bodies` or `urdf`) rather than the
 // reference rig's; false for a file that cannot be read or parsed (the loader then says why).
 bool is_arm_model_file(const std::string& path);

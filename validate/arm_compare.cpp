@@ -13,25 +13,6 @@ namespace ff {
 
 using namespace report_text;
 
-namespace {
-
-bool is_constant(const std::vector<double>& x) {
-  for (double v : x)
-    if (v != x.front()) return false;
-  return true;
-}
-
-// A joint's states from the record: velocity (rate, else differences of the angle), angle, torque.
-void add_joint_states(const Record& r, const std::string& joint, bool torque,
-                      std::vector<std::pair<std::string, std::vector<double>>>& s) {
-  s.emplace_back(joint + ".velocity", r.has(joint + ".rate") ? r.at(joint + ".rate")
-                                                             : time_derivative(r.t, r.at(joint + ".angle")));
-  s.emplace_back(joint + ".angle", r.at(joint + ".angle"));
-  if (torque && r.has(joint + ".torque")) s.emplace_back(joint + ".torque", r.at(joint + ".torque"));
-}
-
-}  // namespace
-
 ArmCompareResult compare_arm_record(const ArmModel& m, const Record& r, const ResidualOptions& options) {
   ArmCompareResult out;
   out.record_source = r.source;
@@ -41,17 +22,12 @@ ArmCompareResult compare_arm_record(const ArmModel& m, const Record& r, const Re
   out.ok = replay.ok;
   out.resampled = replay.resampled;
   out.control_period = replay.control_period;
-  // The channels, in order: angles, torques, the tool, the links.
-  std::vector<std::pair<std::string, std::string>> names;  // (channel, its joint or "")
-  for (const ActuatedJoint& a : m.actuated) names.emplace_back(a.name + ".angle", a.name);
-  for (const ActuatedJoint& a : m.actuated) names.emplace_back(a.name + ".torque", a.name);
-  for (const std::string& c : arm_record_columns(m))
-    if (c.rfind("tool.", 0) == 0 || c.find(".deflection_") != std::string::npos) names.emplace_back(c, "");
+  const auto names = arm_scored_columns(m);
   std::vector<std::pair<std::string, std::vector<double>>> all_states;
-  for (const ActuatedJoint& a : m.actuated) add_joint_states(r, a.name, false, all_states);
+  for (const ActuatedJoint& a : m.actuated) add_arm_joint_states(r, a.name, false, all_states);
   for (const auto& [name, joint] : names) {
     if (!r.has(name)) continue;
-    if (is_constant(r.at(name))) {
+    if (is_constant_column(r.at(name))) {
       out.constant.push_back(name);
       continue;
     }
@@ -69,7 +45,7 @@ ArmCompareResult compare_arm_record(const ArmModel& m, const Record& r, const Re
       for (std::size_t k = 0; k < e.size(); ++k) e[k] = c.measured[k] - c.free_run[k];
       std::vector<std::pair<std::string, std::vector<double>>> states;
       if (joint.empty()) states = all_states;
-      else add_joint_states(r, joint, true, states);
+      else add_arm_joint_states(r, joint, true, states);
       c.free_analysis = analyse_residual(r.t, e, r.at(input), states, options);
     } else {
       c.fit_free.percent = -INFINITY;

@@ -104,6 +104,29 @@ void check_arm_record(const Record& r, const ArmModel& m) {
                               (arm_form ? "" : " (this record is in the reference rig's form: ref, hub_angle, ...)"));
 }
 
+std::vector<std::pair<std::string, std::string>> arm_scored_columns(const ArmModel& m) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const ActuatedJoint& a : m.actuated) out.emplace_back(a.name + ".angle", a.name);
+  for (const ActuatedJoint& a : m.actuated) out.emplace_back(a.name + ".torque", a.name);
+  for (const std::string& c : arm_record_columns(m))
+    if (c.rfind("tool.", 0) == 0 || c.find(".deflection_") != std::string::npos) out.emplace_back(c, "");
+  return out;
+}
+
+void add_arm_joint_states(const Record& r, const std::string& joint, bool torque,
+                          std::vector<std::pair<std::string, std::vector<double>>>& s) {
+  s.emplace_back(joint + ".velocity", r.has(joint + ".rate") ? r.at(joint + ".rate")
+                                                             : time_derivative(r.t, r.at(joint + ".angle")));
+  s.emplace_back(joint + ".angle", r.at(joint + ".angle"));
+  if (torque && r.has(joint + ".torque")) s.emplace_back(joint + ".torque", r.at(joint + ".torque"));
+}
+
+bool is_constant_column(const std::vector<double>& x) {
+  for (double v : x)
+    if (v != x.front()) return false;
+  return true;
+}
+
 std::vector<std::vector<double>> sample_arm_reference(const ArmModel& m) {
   const std::size_t na = m.actuated.size();
   const long samples = static_cast<long>(std::floor(m.duration / m.control_period + 1e-9)) + 1;
@@ -155,20 +178,20 @@ Record make_arm_record(const ArmModel& m, const ArmRecordNoise& noise, std::uint
   return r;
 }
 
-ArmReplay replay_arm_record(const ArmModel& model, const Record& r) {
-  ArmReplay out;
+std::vector<ArmReplay> replay_arm_records(std::span<const ArmModel> models, const Record& r) {
+  const ArmModel& model = models.front();
   const double T = model.control_period;
-  out.control_period = T;
   const std::size_t n = r.size();
   const double t0 = r.t.front();
-  for (std::size_t k = 0; k < n && !out.resampled; ++k)
-    out.resampled = std::abs(r.t[k] - t0 - static_cast<double>(k) * T) > 1e-3 * T;
-  const long samples = out.resampled ? static_cast<long>(std::floor((r.t.back() - t0) / T + 1e-9)) + 1
-                                     : static_cast<long>(n);
+  bool resampled = false;
+  for (std::size_t k = 0; k < n && !resampled; ++k)
+    resampled = std::abs(r.t[k] - t0 - static_cast<double>(k) * T) > 1e-3 * T;
+  const long samples = resampled ? static_cast<long>(std::floor((r.t.back() - t0) / T + 1e-9)) + 1
+                                 : static_cast<long>(n);
   std::vector<std::vector<double>> ref;
   for (const ActuatedJoint& a : model.actuated) {
     const std::vector<double>& x = r.at(a.name + ".ref");
-    if (!out.resampled) {
+    if (!resampled) {
       ref.push_back(x);
       continue;
     }
@@ -176,34 +199,46 @@ ArmReplay replay_arm_record(const ArmModel& model, const Record& r) {
     for (long k = 0; k < samples; ++k) y[static_cast<std::size_t>(k)] = interpolate(r.t, x, t0 + static_cast<double>(k) * T);
     ref.push_back(std::move(y));
   }
-  ArmModel m = model;
-  m.duration = static_cast<double>(samples - 1) * T;
-  // The start: the model's, unless the record's first references say otherwise.
-  bool moved = false;
-  Eigen::VectorXd pose = m.q0;
-  for (std::size_t j = 0; j < m.actuated.size(); ++j) {
-    const int d = m.actuated[j].dof;
-    moved |= std::abs(ref[j][0] - pose[d]) > 1e-9;
-    pose[d] = ref[j][0];
+  std::vector<ArmModel> lanes(models.begin(), models.end());
+  for (ArmModel& m : lanes) {
+    m.duration = static_cast<double>(samples - 1) * T;
+    // The start: the model's, unless the record's first references say otherwise.
+    bool moved = false;
+    Eigen::VectorXd pose = m.q0;
+    for (std::size_t j = 0; j < m.actuated.size(); ++j) {
+      const int d = m.actuated[j].dof;
+      moved |= std::abs(ref[j][0] - pose[d]) > 1e-9;
+      pose[d] = ref[j][0];
+    }
+    if (moved) m.q0 = calc_arm_sag(m, pose).q;
   }
-  if (moved) m.q0 = calc_arm_sag(m, pose).q;
   ArmRunOptions o;
   o.reference = &ref;
-  ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1), o);
-  out.ok = run.status[0] == LaneStatus::kOk;
-  out.trace = std::move(run.traces[0]);
-  const std::vector<double>& tm = out.trace.t();
-  for (const std::string& c : arm_record_columns(m)) {
-    const std::vector<double>& y = out.trace.column(trace_name(c));
-    if (!out.resampled) {
-      out.at_record[c] = y;
-      continue;
+  ArmRun run = simulate_arms(lanes, o);
+  std::vector<ArmReplay> out(lanes.size());
+  for (std::size_t l = 0; l < lanes.size(); ++l) {
+    ArmReplay& rp = out[l];
+    rp.control_period = T;
+    rp.resampled = resampled;
+    rp.ok = run.status[l] == LaneStatus::kOk;
+    rp.trace = std::move(run.traces[l]);
+    const std::vector<double>& tm = rp.trace.t();
+    for (const std::string& c : arm_record_columns(lanes[l])) {
+      const std::vector<double>& y = rp.trace.column(trace_name(c));
+      if (!resampled) {
+        rp.at_record[c] = y;
+        continue;
+      }
+      std::vector<double> v(n);
+      for (std::size_t k = 0; k < n; ++k) v[k] = interpolate(tm, y, r.t[k] - t0);
+      rp.at_record[c] = std::move(v);
     }
-    std::vector<double> v(n);
-    for (std::size_t k = 0; k < n; ++k) v[k] = interpolate(tm, y, r.t[k] - t0);
-    out.at_record[c] = std::move(v);
   }
   return out;
+}
+
+ArmReplay replay_arm_record(const ArmModel& model, const Record& r) {
+  return std::move(replay_arm_records(std::span<const ArmModel>(&model, 1), r).front());
 }
 
 }  // namespace ff

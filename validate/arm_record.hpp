@@ -16,6 +16,8 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,19 @@ bool is_arm_record(const Record& r);
 // An arm record's columns for `m` (after t), in the order `record` writes them: per actuated joint
 // .ref, .angle, .rate, .torque; tool.x, tool.y, tool.z; per flexible link .deflection_y, .deflection_z.
 std::vector<std::string> arm_record_columns(const ArmModel& m);
+
+// The columns compare and diagnose score, in order: every actuated joint's .angle, every one's .torque,
+// tool.x/y/z, the links' deflections; each with its joint ("" for the tool and the links).
+std::vector<std::pair<std::string, std::string>> arm_scored_columns(const ArmModel& m);
+
+// A joint's states from the record, what residuals are binned against, appended to `states`:
+// `<joint>.velocity` (its .rate, else central differences of its .angle), `<joint>.angle` and, with
+// `torque`, `<joint>.torque` when recorded.
+void add_arm_joint_states(const Record& r, const std::string& joint, bool torque,
+                          std::vector<std::pair<std::string, std::vector<double>>>& states);
+
+// Whether a column holds one value throughout (nothing to fit).
+bool is_constant_column(const std::vector<double>& x);
 
 // The unit of an arm record's column ("rad", "m", "N m", ...; "" for an unknown column).
 std::string arm_record_unit(const ArmModel& m, const std::string& column);
@@ -80,5 +95,8 @@ struct ArmReplay {
 // references are linearly interpolated at t_0 + k T and the model's outputs linearly interpolated back
 // at the record's times (`resampled`).
 ArmReplay replay_arm_record(const ArmModel& m, const Record& r);
+// The same for arms of one shape (explain_arm_shape_mismatch) as lanes of one run: one replay each.
+// Throws std::invalid_argument when their shapes differ.
+std::vector<ArmReplay> replay_arm_records(std::span<const ArmModel> models, const Record& r);
 
 }  // namespace ff

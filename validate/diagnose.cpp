@@ -105,14 +105,14 @@ std::vector<double> calc_log_band_power(const std::vector<double>& y, std::size_
 // noise differs (a torque that rattles in a drive's free play against a tip sensor at 3 %): one
 // channel's misfit counts by its signal-to-noise ratio, not by its share of the record's variance.
 struct Scorer {
-  const ModelSource* src = nullptr;
+  const FitFamily* family = nullptr;
   const Record* rec = nullptr;
-  ReplayMode mode = ReplayMode::kClosedLoop;
   std::vector<std::string> channels;
   std::vector<std::size_t> index;  // decimated sample indices
   std::vector<double> scale;       // 1 / sigma_c per channel: the residual's weight
   std::vector<double> noise;       // the record's noise floor per channel, as a fraction of sd(y) (reports)
-  std::vector<double> input;       // the loop's external input at the decimated samples (for the CCF)
+  std::vector<std::vector<double>> input;  // per channel the loop's external input at the decimated samples (CCF)
+  std::vector<std::pair<std::string, std::vector<double>>> states;  // at the decimated samples (misfit binning)
   struct BandPower {               // kPowerChannel, scored after the samples (closed loop, with a torque)
     bool on = false;
     std::size_t window = 0;        // record samples per window
@@ -144,30 +144,14 @@ struct Scorer {
   std::size_t samples() const { return channels.size() * index.size(); }
   int size() const { return static_cast<int>(samples() + (power.on ? power.measured.size() : 0)); }
 
-  // What each model predicts for the record: one batch of the models that share a shape (groups of
-  // equal substeps, one at a time when they differ in more: segments, the drive's parts).
-  std::vector<Prediction> predict(const std::vector<Model>& models) const {
-    std::vector<Prediction> p(models.size());
-    std::map<int, std::vector<std::size_t>> groups;
-    for (std::size_t i = 0; i < models.size(); ++i) groups[models[i].substeps].push_back(i);
-    for (const auto& [substeps, members] : groups) {
-      std::vector<Model> group;
-      for (std::size_t i : members) group.push_back(models[i]);
-      try {
-        const auto q = replay(group, *rec, mode);
-        for (std::size_t j = 0; j < members.size(); ++j) p[members[j]] = q[j];
-      } catch (const std::invalid_argument&) {
-        for (std::size_t i : members) p[i] = replay(std::span<const Model>(&models[i], 1), *rec, mode)[0];
-      }
-    }
-    return p;
-  }
+  // What each model (the source with an assignment set) predicts for the record.
+  std::vector<Prediction> predict(const std::vector<std::vector<Assignment>>& sets) const { return family->predict(sets); }
 
-  // Residuals of each model (empty vector for a failed lane).
-  std::vector<std::vector<double>> residuals(const std::vector<Model>& models) const {
-    const std::vector<Prediction> p = predict(models);
-    std::vector<std::vector<double>> out(models.size());
-    for (std::size_t i = 0; i < models.size(); ++i) {
+  // Residuals of each model (empty vector for one that failed to build or run).
+  std::vector<std::vector<double>> residuals(const std::vector<std::vector<Assignment>>& sets) const {
+    const std::vector<Prediction> p = predict(sets);
+    std::vector<std::vector<double>> out(sets.size());
+    for (std::size_t i = 0; i < sets.size(); ++i) {
       if (!p[i].ok) continue;
       auto& r = out[i];
       for (std::size_t c = 0; c < channels.size(); ++c) {
@@ -206,7 +190,7 @@ struct Scorer {
       t.noise = band ? 1.0 / power.scale : noise[c];               // as a fraction of sd(y); ln P_w's own sd
       t.rms = std::sqrt(sum_squares(e) / e.size()) * t.noise;
       const Correlation acf = calc_autocorrelation(e, kTestLags);
-      const Correlation ccf = calc_cross_correlation(e, band ? power.input : input, kTestLags);
+      const Correlation ccf = calc_cross_correlation(e, band ? power.input : input[c], kTestLags);
       t.acf_outside = acf.fraction_outside;
       t.ccf_outside = ccf.fraction_outside;
       t.white = t.acf_outside <= kTestFraction;
@@ -227,9 +211,9 @@ struct Scorer {
   // The residual sum of squares of noise alone (each channel's weighted noise has unit variance).
   double floor_rss() const { return static_cast<double>(size()); }
 
-  std::map<std::string, double> fit_percent(const Model& m) const {
+  std::map<std::string, double> fit_percent(const std::vector<Assignment>& set) const {
     std::map<std::string, double> out;
-    const auto p = predict({m})[0];
+    const auto p = predict({set})[0];
     for (std::size_t c = 0; c < channels.size(); ++c)
       out[channels[c]] = p.ok ? calc_fit(measured(c), predicted(p, c)).percent : -INFINITY;
     if (power.on)
@@ -285,33 +269,22 @@ std::vector<Assignment> effect_assignments(const Effect& e, const double* theta,
   return a;
 }
 
-// The trial models of coordinate sets (a failed build, or one too stiff, leaves its slot empty).
-std::vector<std::optional<Model>> build_trials(const Scorer& sc, const Effect& e,
-                                               const std::vector<std::vector<double>>& thetas, double grid_value) {
-  std::vector<std::optional<Model>> out(thetas.size());
-  for (std::size_t i = 0; i < thetas.size(); ++i) try {
-      Model m = build_model(*sc.src, effect_assignments(e, thetas[i].data(), grid_value));
-      if (m.substeps <= kMaxFitSubsteps) out[i] = std::move(m);
-    } catch (const std::exception&) {  // outside the model's valid range
-    }
+// The trial models of coordinate sets, as assignments on the source.
+std::vector<std::vector<Assignment>> make_trials(const Effect& e, const std::vector<std::vector<double>>& thetas,
+                                                 double grid_value) {
+  std::vector<std::vector<Assignment>> out;
+  for (const auto& theta : thetas) out.push_back(effect_assignments(e, theta.data(), grid_value));
   return out;
 }
 
-// Sums of squares of trial models (INFINITY where the model or its run failed).
-std::vector<double> trial_rss(const Scorer& sc, const std::vector<std::optional<Model>>& trials) {
-  std::vector<Model> models;
-  std::vector<std::size_t> slot;
-  for (std::size_t i = 0; i < trials.size(); ++i)
-    if (trials[i]) {
-      models.push_back(*trials[i]);
-      slot.push_back(i);
-    }
+// Sums of squares of trial models (INFINITY where the model failed to build or run), kMaxLanes at a time.
+std::vector<double> trial_rss(const Scorer& sc, const std::vector<std::vector<Assignment>>& trials) {
   std::vector<double> out(trials.size(), INFINITY);
-  for (std::size_t lo = 0; lo < models.size(); lo += kMaxLanes) {
-    const std::size_t hi = std::min(models.size(), lo + kMaxLanes);
-    const auto r = sc.residuals(std::vector<Model>(models.begin() + lo, models.begin() + hi));
+  for (std::size_t lo = 0; lo < trials.size(); lo += kMaxLanes) {
+    const std::size_t hi = std::min(trials.size(), lo + kMaxLanes);
+    const auto r = sc.residuals(std::vector<std::vector<Assignment>>(trials.begin() + lo, trials.begin() + hi));
     for (std::size_t j = 0; j < r.size(); ++j)
-      if (!r[j].empty()) out[slot[lo + j]] = sum_squares(r[j]);
+      if (!r[j].empty()) out[lo + j] = sum_squares(r[j]);
   }
   return out;
 }
@@ -334,15 +307,9 @@ class ReplayCost : public ceres::CostFunction {
         points.push_back(theta);
         points.back()[j] += step;
       }
-    const auto trials = build_trials(sc_, e_, points, grid_);
-    std::vector<Model> models;
-    for (const auto& t : trials) {
-      if (!t) return false;  // outside the model's valid range: Ceres shortens the step
-      models.push_back(*t);
-    }
-    const auto r = sc_.residuals(models);
+    const auto r = sc_.residuals(make_trials(e_, points, grid_));
     for (const auto& ri : r)
-      if (ri.empty()) return false;
+      if (ri.empty()) return false;  // outside the model's valid range (or its run failed): Ceres shortens the step
     std::copy(r[0].begin(), r[0].end(), residuals);
     if (jacobians && jacobians[0]) {
       const int n = num_residuals();
@@ -363,8 +330,8 @@ class ReplayCost : public ceres::CostFunction {
 double search_grid(const Scorer& sc, const Effect& e, const std::vector<double>& theta, double* best_rss) {
   std::map<double, double> seen;  // value -> rss
   auto evaluate = [&](const std::vector<double>& values) {
-    std::vector<std::optional<Model>> trials;
-    for (double g : values) trials.push_back(build_trials(sc, e, {theta}, g)[0]);
+    std::vector<std::vector<Assignment>> trials;
+    for (double g : values) trials.push_back(effect_assignments(e, theta.data(), g));
     const auto rss = trial_rss(sc, trials);
     for (std::size_t i = 0; i < values.size(); ++i) seen[values[i]] = rss[i];
   };
@@ -487,7 +454,7 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
     if (p > 0) {
       // Global scan (lanes of one batch), then Ceres from the best distinct starts; the best end wins.
       const auto points = scan_points(e, theta);
-      const auto rss = trial_rss(sc, build_trials(sc, e, points, grid_value));
+      const auto rss = trial_rss(sc, make_trials(e, points, grid_value));
       std::vector<std::size_t> order(points.size());
       for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
       std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rss[a] < rss[b]; });
@@ -551,7 +518,7 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
     f.delta_bic = calc_delta_bic(f.tests, base.tests, f.k);
     const double floor = sc.floor_rss();
     f.explains = base.rss > floor ? std::clamp((base.rss - f.rss) / (base.rss - floor), 0.0, 1.0) : 0.0;
-    f.fit_percent = sc.fit_percent(build_model(*sc.src, f.assignments()));
+    f.fit_percent = sc.fit_percent(f.assignments());
     double gain = -INFINITY;
     for (const auto& [c, v] : f.fit_percent) gain = std::max(gain, v - base.fit.at(c));
     f.significant = f.delta_bic < kSignificantDeltaBic && gain >= kMinFitGain;
@@ -563,57 +530,57 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
   return f;
 }
 
-Scorer make_scorer(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
+// The record as scored: its channels decimated to at most opt.max_samples, each weighted by its noise
+// floor, with the loop inputs and the states of the problem at the decimated samples.
+Scorer make_scorer(const DiagnoseProblem& p, const DiagnoseOptions& opt) {
+  const Record& r = *p.record;
   Scorer sc;
-  sc.src = &src;
+  sc.family = p.family;
   sc.rec = &r;
-  sc.mode = opt.mode;
-  sc.channels = scored_channels(opt.mode, r);
+  sc.channels = p.channels;
   const std::size_t stride = std::max<std::size_t>(1, r.size() / std::max(1, opt.max_samples));
   for (std::size_t k = 0; k < r.size(); k += stride) sc.index.push_back(k);
-  std::vector<double> floor;  // per channel, in its unit (unclamped)
   for (const auto& c : sc.channels) {
     const auto& y = r.at(c);
     const double sd = calc_standard_deviation(y);
     const double unit = sd > 0 ? sd : 1.0;
-    floor.push_back(calc_noise_floor(y));
-    sc.noise.push_back(std::max(floor.back() / unit, kRelevantError));
+    sc.noise.push_back(std::max(calc_noise_floor(y) / unit, kRelevantError));
     sc.scale.push_back(1.0 / (sc.noise.back() * unit));
   }
-  // The loop's external input: the reference in closed loop, the torque in open loop, the hub angle
-  // in inverse dynamics.
-  const auto& u = r.at(opt.mode == ReplayMode::kClosedLoop ? "ref" : opt.mode == ReplayMode::kOpenLoop ? "hub_torque" : "hub_angle");
-  for (std::size_t k : sc.index) sc.input.push_back(u[k]);
+  auto decimate = [&](const std::vector<double>& x) {
+    std::vector<double> out;
+    for (std::size_t k : sc.index) out.push_back(x[k]);
+    return out;
+  };
+  for (const auto& u : p.inputs) sc.input.push_back(decimate(u));
+  for (const auto& [name, x] : p.states) sc.states.emplace_back(name, decimate(x));
+  return sc;
+}
+
+// The rig's hub torque scored by its band power too (kPowerChannel), with `u` the loop's input.
+void add_band_power(Scorer& sc, const std::vector<double>& u) {
+  const Record& r = *sc.rec;
   const auto torque = std::find(sc.channels.begin(), sc.channels.end(), "hub_torque");
   const double dt = r.size() > 1 ? r.t[1] - r.t[0] : 0.0;
-  if (opt.mode == ReplayMode::kClosedLoop && torque != sc.channels.end() && dt > 0) {
-    auto& bp = sc.power;
-    bp.window = std::max<std::size_t>(16, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
-    sc.low_pass = std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
-    const std::size_t c = static_cast<std::size_t>(torque - sc.channels.begin());
-    const double sf = 1.0 / sc.scale[c], s = floor[c];  // N m
-    bp.offset = 2.0 * sf * sf;
-    bp.noise_power = 2.0 * s * s;
-    bp.scale = std::sqrt(bp.window / 0.75);
-    bp.measured = calc_log_band_power(r.at("hub_torque"), bp.window, bp.offset);
-    for (std::size_t k0 = 1; k0 + bp.window <= r.size(); k0 += bp.window) bp.input.push_back(u[k0]);
-    bp.on = bp.measured.size() >= 8;
-  }
-  return sc;
+  if (torque == sc.channels.end() || dt <= 0) return;
+  auto& bp = sc.power;
+  bp.window = std::max<std::size_t>(16, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
+  sc.low_pass = std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(kPowerWindow / dt)));
+  const std::size_t c = static_cast<std::size_t>(torque - sc.channels.begin());
+  const double sf = 1.0 / sc.scale[c], s = calc_noise_floor(r.at("hub_torque"));  // N m
+  bp.offset = 2.0 * sf * sf;
+  bp.noise_power = 2.0 * s * s;
+  bp.scale = std::sqrt(bp.window / 0.75);
+  bp.measured = calc_log_band_power(r.at("hub_torque"), bp.window, bp.offset);
+  for (std::size_t k0 = 1; k0 + bp.window <= r.size(); k0 += bp.window) bp.input.push_back(u[k0]);
+  bp.on = bp.measured.size() >= 8;
 }
 
 // Where the baseline's residual misfits, channel by channel.
 std::vector<Misfit> locate_misfit(const Scorer& sc, const std::vector<double>& r0, const std::map<std::string, ChannelTest>& tests,
                                   const std::map<std::string, double>& fit) {
-  const Record& rec = *sc.rec;
-  std::vector<double> t, w, th;
-  const auto& angle = rec.at("hub_angle");
-  const auto omega = rec.has("hub_rate") ? rec.at("hub_rate") : time_derivative(rec.t, angle);
-  for (std::size_t k : sc.index) {
-    t.push_back(rec.t[k]);
-    w.push_back(omega[k]);
-    th.push_back(angle[k]);
-  }
+  std::vector<double> t;
+  for (std::size_t k : sc.index) t.push_back(sc.rec->t[k]);
   std::vector<Misfit> out;
   for (std::size_t c = 0; c < sc.channels.size(); ++c) {
     Misfit m;
@@ -621,7 +588,7 @@ std::vector<Misfit> locate_misfit(const Scorer& sc, const std::vector<double>& r
     m.fit_percent = fit.at(m.channel);
     m.test = tests.at(m.channel);
     const auto e = sc.channel_of(r0, c);
-    const ResidualAnalysis a = analyse_residual(t, e, sc.input, {{"hub_velocity", w}, {"hub_angle", th}});
+    const ResidualAnalysis a = analyse_residual(t, e, sc.input[c], sc.states);
     if (a.valid) {
       if (!a.failure.worst_windows.empty() && a.failure.rms > 0) {
         m.worst_t0 = a.failure.worst_windows[0].t0;
@@ -644,40 +611,26 @@ EffectScales make_scales(const Model& base, const Record& r, ReplayMode mode) {
   const auto p = replay(std::span<const Model>(&base, 1), r, mode)[0];
   const auto& tau = mode == ReplayMode::kClosedLoop || !r.has("hub_torque") ? p.channels.at("hub_torque") : r.at("hub_torque");
   const auto& w = p.channels.count("hub_rate") ? p.channels.at("hub_rate") : std::vector<double>{1.0};
-  auto rms = [](const std::vector<double>& x) {
-    double s2 = 0.0;
-    for (double v : x) s2 += v * v;
-    return std::sqrt(s2 / x.size());
-  };
-  s.torque_rms = rms(tau);
-  s.rate_rms = r.has("hub_rate") ? rms(r.at("hub_rate")) : rms(w);
+  s.torque_rms = calc_rms(tau);
+  s.rate_rms = r.has("hub_rate") ? calc_rms(r.at("hub_rate")) : calc_rms(w);
   for (double x : tau) s.torque_max = std::max(s.torque_max, std::abs(x));
   return s;
 }
 
-// `--refit auto`: the model's existing parameters that are plausible calibration targets (nonzero),
+// `--refit auto`: of the candidates (path, value), those that are plausible calibration targets (nonzero),
 // most sensitive first: those whose 1 % change moves the normalised residual by more than a tenth of
-// what the most sensitive one's does. One batch of lanes.
-std::vector<std::string> rank_sensitive(const Scorer& sc, const ModelSource& src, const Model& base) {
-  const auto& s = base.spec;
-  const bool beam = base.nseg > 1;
-  const std::pair<const char*, double> targets[] = {
-      {"hub.inertia", s.hub_inertia},           {"payload.mass", s.payload_mass},
-      {"payload.inertia", s.payload_inertia},   {"friction.viscous", s.friction.viscous},
-      {"friction.coulomb", s.friction.coulomb}, {"joints.stiffness", beam ? s.joints.stiffness : 0.0},
-      {"joints.damping", beam ? s.joints.damping : 0.0}, {"hub.torque_offset", s.hub_torque_offset}};
+// what the most sensitive one's does. One batch of lanes; a target whose change does not build (e.g.
+// stiction below a raised Coulomb level) is none.
+std::vector<std::string> rank_sensitive(const Scorer& sc, const std::vector<std::pair<std::string, double>>& targets) {
   std::vector<std::string> paths, out;
-  std::vector<Model> models = {base};
+  std::vector<std::vector<Assignment>> sets = {{}};
   for (const auto& [p, x] : targets) {
     if (x == 0.0) continue;
-    try {
-      models.push_back(build_model(src, {assign(p, YAML::Node(1.01 * x))}));
-      paths.push_back(p);
-    } catch (const std::exception&) {  // e.g. stiction below a raised Coulomb level: not a target
-    }
+    sets.push_back({assign(p, YAML::Node(1.01 * x))});
+    paths.push_back(p);
   }
   if (paths.empty()) return out;
-  const auto r = sc.residuals(models);
+  const auto r = sc.residuals(sets);
   std::vector<std::pair<double, std::string>> sens;
   for (std::size_t j = 0; j < paths.size(); ++j) {
     if (r[j + 1].empty() || r[0].empty()) continue;
@@ -697,71 +650,30 @@ bool fits_path(const Effect& e, const std::string& path) {
   return std::find(paths.begin(), paths.end(), path) != paths.end();
 }
 
-}  // namespace
-
-std::vector<Assignment> EffectFit::assignments() const {
-  std::vector<Assignment> a;
-  for (const auto& [path, value] : switches) a.push_back(assign(path, YAML::Load(value)));
-  for (const auto& [path, value] : params) a.push_back(assign(path, number_node(path, value)));
-  return a;
-}
-
-EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& name) {
-  DiagnoseOptions o = opt;
-  o.only = {name};
-  const Diagnosis d = diagnose(src, r, o);
-  if (d.ranking.empty()) throw std::invalid_argument("effect '" + name + "' does not apply in " + replay_mode_name(opt.mode) + " mode");
-  return d.ranking[0];
-}
-
-Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
-  // Ceres reports failed steps through glog; they are results here, not news.
+// Ceres reports failed steps through glog; they are results here, not news.
+void quiet_ceres() {
   static const bool quiet = [] {
     FLAGS_minloglevel = google::GLOG_FATAL;
     return true;
   }();
   (void)quiet;
-  for (const auto& c : replay_inputs(opt.mode))
-    if (!r.has(c)) throw ConfigError(r.source, 1, c, std::string("missing column '") + c + "', needed in " + replay_mode_name(opt.mode) + " mode");
-  // The fits integrate an explicit (RK4) model with the linearly implicit midpoint rule: one
-  // articulated-body pass per step and the drive's states implicit, half the cost or less, within
-  // 1e-4 of the RK4 response on the reference rig (docs/validation.md). The written model keeps its own.
-  const ModelSource fit_src = [&] {
-    ModelSource f = src;
-    if (build_model(src).spec.simulation.integrator == Integrator::kRk4)
-      f.set.push_back(assign("simulation.integrator", YAML::Node("midpoint")));
-    return f;
-  }();
-  const Model base = build_model(fit_src);
+}
+
+// The diagnosis of a scored record whose base residual is r0: every candidate of p fitted and ranked.
+Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const DiagnoseProblem& p,
+                          const DiagnoseOptions& opt) {
   Diagnosis d;
-  d.mode = opt.mode;
-  Scorer scorer = make_scorer(fit_src, r, opt);
-  auto r0 = scorer.residuals({base});
-  if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
-  // The torque's samples are scored low-passed, its high band by its power, when the base lacks that
-  // band (kPowerMisfit) or when its own loop chatters on a quantised hub angle (an encoder's limit cycle,
-  // whose phase no replay follows either).
-  if (scorer.power.on) {
-    const ChannelTest t = scorer.tests(r0[0], nullptr).at(kPowerChannel);
-    if (t.rms >= kPowerMisfit * t.noise || base.spec.sensors.hub_angle.resolution > 0) {
-      scorer.split = true;
-      scorer.torque_low = calc_low_pass(r.at("hub_torque"), scorer.low_pass);
-      r0 = scorer.residuals({base});
-    }
-  }
-  const Scorer& sc = scorer;
+  d.mode = p.mode;
   d.channels = sc.channels;
   d.n = sc.size();
   d.torque_cutoff_hz = sc.cutoff_hz();
-  d.base_rss = sum_squares(r0[0]);
-  d.base_fit = sc.fit_percent(base);
-  const EffectScales scales = make_scales(base, r, opt.mode);
-  auto effects = make_candidate_effects(base, opt.mode, scales, sc.channels);
-  for (const auto& name : opt.only) {
-    bool known = false;
-    for (const auto& n : effect_names()) known |= n == name;
-    if (!known) throw std::invalid_argument("unknown effect '" + name + "'");
-  }
+  d.base_rss = sum_squares(r0);
+  d.base_fit = sc.fit_percent({});
+  const EffectScales& scales = p.scales;
+  auto effects = p.effects;
+  for (const auto& name : opt.only)
+    if (std::find(p.names.begin(), p.names.end(), name) == p.names.end())
+      throw std::invalid_argument("unknown effect '" + name + "'");
   if (!opt.only.empty())
     effects.erase(std::remove_if(effects.begin(), effects.end(),
                                  [&](const Effect& e) {
@@ -774,8 +686,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   // with the same ones. "none" (or nothing): no re-fit.
   const bool automatic = opt.refit == std::vector<std::string>{"auto"};
   const bool named = !automatic && !opt.refit.empty() && opt.refit != std::vector<std::string>{"none"};
-  YAML::Node doc = YAML::Clone(src.doc);
-  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+  const YAML::Node& doc = p.doc;
   auto refit_param = [&](const std::string& path) {
     const YAML::Node v = get_path(doc, path);
     if (!v) throw std::invalid_argument("--refit: the model does not set '" + path + "'");
@@ -785,7 +696,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
       throw std::invalid_argument("--refit: '" + path + "' is not a number in the model");
     }
   };
-  const std::vector<std::string> pool = automatic ? rank_sensitive(sc, fit_src, base) : named ? opt.refit : std::vector<std::string>{};
+  const std::vector<std::string> pool = automatic ? rank_sensitive(sc, p.sensitive) : named ? opt.refit : std::vector<std::string>{};
   auto refit_of = [&](const Effect& e) {
     std::vector<std::string> out;
     for (const auto& p : pool)
@@ -811,7 +722,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   for (const auto& [set, fit] : baselines) sets.push_back(set);
   std::vector<EffectFit> fitted(sets.size());
   double r0_n_eff = NAN;
-  const auto r0_tests = sc.tests(r0[0], &r0_n_eff);  // the base model's, once: every re-fit is against it
+  const auto r0_tests = sc.tests(r0, &r0_n_eff);  // the base model's, once: every re-fit is against it
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::size_t i = 0; i < sets.size(); ++i) {
     if (sets[i].empty()) {
@@ -846,7 +757,7 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   d.base_tests = reported.tests;
   d.base_explained = reported.explained;
   d.base_n_eff = reported.n_eff;
-  d.misfit = locate_misfit(sc, r0[0], d.base_tests, d.base_fit);
+  d.misfit = locate_misfit(sc, r0, d.base_tests, d.base_fit);
   // Each effect: its own parameters, then its re-fitted ones starting where its baseline put them.
   std::vector<std::vector<std::string>> refits;
   for (auto& e : effects) refits.push_back(refit_of(e));
@@ -887,6 +798,130 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   const bool found = !d.ranking.empty() && d.ranking[0].ok && d.ranking[0].significant && d.ranking[0].explained;
   d.verdict = found ? d.ranking[0].effect : d.base_explained ? "none" : "unexplained";
   return d;
+}
+
+// The reference rig's models as diagnose fits them: each assignment set built on the source (one needing
+// more than kMaxFitSubsteps fixed steps per control period refused as too stiff, except the base), then
+// replayed as lanes of one batch per group of equal substeps (one at a time when they differ in more:
+// segments, the drive's parts).
+class RigFamily : public FitFamily {
+ public:
+  RigFamily(const ModelSource& src, const Record& r, ReplayMode mode) : src_(src), rec_(r), mode_(mode) {}
+  std::vector<Prediction> predict(const std::vector<std::vector<Assignment>>& sets) const override {
+    std::vector<Prediction> p(sets.size());
+    std::vector<std::optional<Model>> models(sets.size());
+    std::map<int, std::vector<std::size_t>> groups;
+    for (std::size_t i = 0; i < sets.size(); ++i) {
+      try {
+        Model m = build_model(src_, sets[i]);
+        if (sets[i].empty() || m.substeps <= kMaxFitSubsteps) models[i] = std::move(m);
+      } catch (const std::exception&) {  // outside the model's valid range
+      }
+      if (models[i]) groups[models[i]->substeps].push_back(i);
+      else p[i].ok = false;
+    }
+    for (const auto& [substeps, members] : groups) {
+      std::vector<Model> group;
+      for (std::size_t i : members) group.push_back(*models[i]);
+      try {
+        const auto q = replay(group, rec_, mode_);
+        for (std::size_t j = 0; j < members.size(); ++j) p[members[j]] = q[j];
+      } catch (const std::invalid_argument&) {
+        for (std::size_t i : members) p[i] = replay(std::span<const Model>(&*models[i], 1), rec_, mode_)[0];
+      }
+    }
+    return p;
+  }
+
+ private:
+  const ModelSource& src_;
+  const Record& rec_;
+  ReplayMode mode_;
+};
+
+}  // namespace
+
+std::vector<Assignment> EffectFit::assignments() const {
+  std::vector<Assignment> a;
+  for (const auto& [path, value] : switches) a.push_back(assign(path, YAML::Load(value)));
+  for (const auto& [path, value] : params) a.push_back(assign(path, number_node(path, value)));
+  return a;
+}
+
+YAML::Node apply_overrides(const ModelSource& src) {
+  YAML::Node doc = YAML::Clone(src.doc);
+  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+  return doc;
+}
+
+EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& name) {
+  DiagnoseOptions o = opt;
+  o.only = {name};
+  const Diagnosis d = diagnose(src, r, o);
+  if (d.ranking.empty()) throw std::invalid_argument("effect '" + name + "' does not apply in " + replay_mode_name(opt.mode) + " mode");
+  return d.ranking[0];
+}
+
+Diagnosis diagnose_problem(const DiagnoseProblem& p, const DiagnoseOptions& opt) {
+  quiet_ceres();
+  const Scorer sc = make_scorer(p, opt);
+  const auto r0 = sc.residuals({{}});
+  if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
+  return diagnose_scored(sc, r0[0], p, opt);
+}
+
+Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOptions& opt) {
+  quiet_ceres();
+  for (const auto& c : replay_inputs(opt.mode))
+    if (!r.has(c)) throw ConfigError(r.source, 1, c, std::string("missing column '") + c + "', needed in " + replay_mode_name(opt.mode) + " mode");
+  // The fits integrate an explicit (RK4) model with the linearly implicit midpoint rule: one
+  // articulated-body pass per step and the drive's states implicit, half the cost or less, within
+  // 1e-4 of the RK4 response on the reference rig (docs/validation.md). The written model keeps its own.
+  const ModelSource fit_src = [&] {
+    ModelSource f = src;
+    if (build_model(src).spec.simulation.integrator == Integrator::kRk4)
+      f.set.push_back(assign("simulation.integrator", YAML::Node("midpoint")));
+    return f;
+  }();
+  const Model base = build_model(fit_src);
+  const RigFamily family(fit_src, r, opt.mode);
+  DiagnoseProblem p;
+  p.family = &family;
+  p.record = &r;
+  p.mode = opt.mode;
+  p.channels = scored_channels(opt.mode, r);
+  // The loop's external input: the reference in closed loop, the torque in open loop, the hub angle
+  // in inverse dynamics. Residuals are binned against the hub's velocity and angle.
+  const auto& u = r.at(opt.mode == ReplayMode::kClosedLoop ? "ref" : opt.mode == ReplayMode::kOpenLoop ? "hub_torque" : "hub_angle");
+  p.inputs.assign(p.channels.size(), u);
+  const auto& angle = r.at("hub_angle");
+  p.states = {{"hub_velocity", r.has("hub_rate") ? r.at("hub_rate") : time_derivative(r.t, angle)}, {"hub_angle", angle}};
+  Scorer scorer = make_scorer(p, opt);
+  if (opt.mode == ReplayMode::kClosedLoop) add_band_power(scorer, u);
+  auto r0 = scorer.residuals({{}});
+  if (r0[0].empty()) throw std::runtime_error("the base model fails to run on the record");
+  // The torque's samples are scored low-passed, its high band by its power, when the base lacks that
+  // band (kPowerMisfit) or when its own loop chatters on a quantised hub angle (an encoder's limit cycle,
+  // whose phase no replay follows either).
+  if (scorer.power.on) {
+    const ChannelTest t = scorer.tests(r0[0], nullptr).at(kPowerChannel);
+    if (t.rms >= kPowerMisfit * t.noise || base.spec.sensors.hub_angle.resolution > 0) {
+      scorer.split = true;
+      scorer.torque_low = calc_low_pass(r.at("hub_torque"), scorer.low_pass);
+      r0 = scorer.residuals({{}});
+    }
+  }
+  p.doc = apply_overrides(src);
+  p.scales = make_scales(base, r, opt.mode);
+  p.effects = make_candidate_effects(base, opt.mode, p.scales, scorer.channels);
+  p.names = effect_names();
+  const auto& s = base.spec;
+  const bool beam = base.nseg > 1;
+  p.sensitive = {{"hub.inertia", s.hub_inertia},           {"payload.mass", s.payload_mass},
+                 {"payload.inertia", s.payload_inertia},   {"friction.viscous", s.friction.viscous},
+                 {"friction.coulomb", s.friction.coulomb}, {"joints.stiffness", beam ? s.joints.stiffness : 0.0},
+                 {"joints.damping", beam ? s.joints.damping : 0.0}, {"hub.torque_offset", s.hub_torque_offset}};
+  return diagnose_scored(scorer, r0[0], p, opt);
 }
 
 }  // namespace ff

@@ -121,7 +121,38 @@ struct DiagnoseOptions {
   int max_samples = 1500;                      // per channel: the record is decimated to at most this
 };
 
+// The reference rig's model (src, its --set applied) against a rig record.
 Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOptions& opt);
+
+// What diagnose fits, whatever the model family: the predictions of the record's channels by the model
+// source with each set of path assignments added (an effect's switches and trial values). A set that does
+// not build (outside the model's valid range), or whose run fails, predicts ok = false; the empty set is
+// the base model. Called from several threads at once.
+class FitFamily {
+ public:
+  virtual ~FitFamily() = default;
+  virtual std::vector<Prediction> predict(const std::vector<std::vector<Assignment>>& sets) const = 0;
+};
+
+// A diagnosis of any model family (the rig's diagnose builds one; validate/arm_diagnose.hpp another).
+struct DiagnoseProblem {
+  const FitFamily* family = nullptr;
+  const Record* record = nullptr;
+  ReplayMode mode = ReplayMode::kClosedLoop;
+  std::vector<std::string> channels;             // scored: record columns the family predicts
+  std::vector<std::vector<double>> inputs;       // per channel, the loop input its residual is correlated with
+                                                 // (at the record's samples)
+  std::vector<std::pair<std::string, std::vector<double>>> states;  // what misfits are binned against
+  YAML::Node doc;                                // the model document, overrides applied: re-fitted values
+  std::vector<Effect> effects;                   // the candidates that apply
+  std::vector<std::string> names;                // every effect the family knows (`only` is checked against it)
+  std::vector<std::pair<std::string, double>> sensitive;  // `--refit auto`'s targets: (path, value)
+  EffectScales scales;                           // ranges of re-fitted parameters
+};
+Diagnosis diagnose_problem(const DiagnoseProblem& p, const DiagnoseOptions& opt);
+
+// The source's document with its --set overrides applied.
+YAML::Node apply_overrides(const ModelSource& src);
 
 // One effect fitted alone (what `calibrate --add` uses).
 EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& effect);

@@ -24,7 +24,7 @@ std::vector<std::string> effect_paths(const Effect& e) {
 }
 
 EffectParam make_effect_param(const std::string& path, double value, const EffectScales& sc) {
-  if (path == "hub.torque_offset") {
+  if (path == "hub.torque_offset" || (path.size() > 14 && path.ends_with(".torque_offset"))) {
     const double b = 2.0 * std::max({std::abs(value), sc.torque_rms, 1e-6});
     return {path, value, -b, b, ParamScale::kLinear};
   }
@@ -32,23 +32,23 @@ EffectParam make_effect_param(const std::string& path, double value, const Effec
   return {path, v, v / 1e3, v * 1e3, ParamScale::kLog};
 }
 
-namespace {
-
-// A positive parameter searched over [lo, hi], starting at `current` when the model has it (clamped), else at `fallback`.
-EffectParam positive(const std::string& path, double current, double fallback, double lo, double hi) {
+EffectParam make_positive_param(const std::string& path, double current, double fallback, double lo, double hi) {
   const double start = std::clamp(current > 0 ? current : fallback, lo, hi);
   return {path, start, lo, hi, ParamScale::kLog};
 }
 
-// Whole numbers from 1 to `last`, spaced by about a factor 4/3 (every one up to 5).
-std::vector<double> delay_grid(int last) {
+std::vector<double> make_delay_grid(int last) {
   std::vector<double> g;
   for (double x = 1.0; std::lround(x) <= last; x = std::max(x + 1.0, x * 4.0 / 3.0)) g.push_back(std::lround(x));
   if (g.back() != last) g.push_back(last);
   return g;
 }
 
-}  // namespace
+std::vector<double> make_encoder_quanta() {
+  std::vector<double> quanta;
+  for (int b = 9; b <= 22; ++b) quanta.push_back(2.0 * M_PI / std::ldexp(1.0, b));
+  return quanta;
+}
 
 std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, const EffectScales& sc,
                                            const std::vector<std::string>& scored) {
@@ -60,17 +60,17 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
 
   // Hub friction: levels from a thousandth of the torque RMS to twice it; the tanh smoothing from 1e-4 to 1e-2 of
   // the rate RMS (wider, a smooth Coulomb term imitates viscous friction: on EMPS the loop then ends at 7.8 %, not 6.2 %).
-  const EffectParam coulomb = positive("friction.coulomb", s.friction.coulomb, 0.05 * tau, 1e-3 * tau, 2.0 * tau);
-  const EffectParam smoothing = positive("friction.smoothing", s.friction.smoothing, 1e-3, 1e-4 * w, 1e-2 * w);
+  const EffectParam coulomb = make_positive_param("friction.coulomb", s.friction.coulomb, 0.05 * tau, 1e-3 * tau, 2.0 * tau);
+  const EffectParam smoothing = make_positive_param("friction.smoothing", s.friction.smoothing, 1e-3, 1e-4 * w, 1e-2 * w);
   out.push_back({"coulomb_friction", "Coulomb friction at the hub", {}, {coulomb, smoothing}, "", {}, false, ""});
   out.push_back({"viscous_friction", "viscous friction at the hub", {},
-                 {positive("friction.viscous", s.friction.viscous, 0.05 * tau / w, 1e-4 * tau / w, 10.0 * tau / w)}, "",
+                 {make_positive_param("friction.viscous", s.friction.viscous, 0.05 * tau / w, 1e-4 * tau / w, 10.0 * tau / w)}, "",
                  {}, false, ""});
   out.push_back({"stribeck_friction", "Coulomb friction with a Stribeck (stiction) peak", {},
                  {coulomb,
-                  positive("friction.stiction", s.friction.stiction, std::max(0.1 * tau, 2.0 * s.friction.coulomb),
+                  make_positive_param("friction.stiction", s.friction.stiction, std::max(0.1 * tau, 2.0 * s.friction.coulomb),
                            2e-3 * tau, 4.0 * tau),
-                  positive("friction.stribeck_velocity", s.friction.stribeck_velocity, 0.05 * w, 1e-3 * w, w), smoothing},
+                  make_positive_param("friction.stribeck_velocity", s.friction.stribeck_velocity, 0.05 * w, 1e-3 * w, w), smoothing},
                  "", {}, false, "coulomb_friction"});
   out.push_back({"torque_offset", "a constant load torque on the hub (cable drag, an unbalanced axis, amplifier bias)",
                  {}, {make_effect_param("hub.torque_offset", s.hub_torque_offset, sc)}, "", {}, false, ""});
@@ -82,39 +82,39 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
     const double share0 = s.drive.enabled ? s.drive.inertia * n2 / total : 0.1;
     const EffectParam share{"drive.inertia", std::clamp(share0, 0.01, 0.9), 0.01, 0.9, ParamScale::kShare,
                             "hub.inertia", total, n2};
-    const EffectParam stiffness = positive("drive.stiffness", s.drive.enabled ? s.drive.stiffness : 0.0, 200.0 * kp,
+    const EffectParam stiffness = make_positive_param("drive.stiffness", s.drive.enabled ? s.drive.stiffness : 0.0, 200.0 * kp,
                                            kp, 1e3 * kp);
-    const EffectParam damping = positive("drive.damping", s.drive.enabled ? s.drive.damping : 0.0, 2e3, 1.0, 1e5);
+    const EffectParam damping = make_positive_param("drive.damping", s.drive.enabled ? s.drive.damping : 0.0, 2e3, 1.0, 1e5);
     out.push_back({"drive_compliance", "a compliant drive train between actuator and hub", {{"drive.enabled", "true"}},
                    {stiffness, damping, share}, "", {}, false, ""});
     out.push_back({"backlash", "free play in the drive train", {{"drive.enabled", "true"}},
-                   {positive("drive.backlash", s.drive.backlash, 1e-3, 1e-5, 3e-2), stiffness, damping, share}, "", {},
+                   {make_positive_param("drive.backlash", s.drive.backlash, 1e-3, 1e-5, 3e-2), stiffness, damping, share}, "", {},
                    false, "drive_compliance"});
     // The oil spring 4 beta D^2 / V: bulk modulus (entrained air lowers it by decades) and chamber volume.
     const double beta0 = s.hydraulics.enabled ? s.hydraulics.bulk_modulus : 1.4e9;
     const double v0 = s.hydraulics.chamber_volume;
     out.push_back({"hydraulic_compressibility", "oil compressibility of a hydraulic actuator",
                    {{"hydraulics.enabled", "true"}},
-                   {positive("hydraulics.bulk_modulus", 0.5 * beta0, 0.5 * beta0, 1e7, 2e9),
-                    positive("hydraulics.chamber_volume", v0, v0, 0.1 * v0, 10.0 * v0)},
+                   {make_positive_param("hydraulics.bulk_modulus", 0.5 * beta0, 0.5 * beta0, 1e7, 2e9),
+                    make_positive_param("hydraulics.chamber_volume", v0, v0, 0.1 * v0, 10.0 * v0)},
                    "", {}, false, ""});
   }
   if (closed)
     out.push_back({"torque_saturation", "actuator torque saturation", {},
-                   {positive("controller.torque_limit", 0.0, 0.8 * std::max(sc.torque_max, 1e-6),
+                   {make_positive_param("controller.torque_limit", 0.0, 0.8 * std::max(sc.torque_max, 1e-6),
                              0.05 * std::max(sc.torque_max, 1e-6), 1.5 * std::max(sc.torque_max, 1e-6))},
                    "", {}, false, ""});
   if (base.nseg > 1) {
     // Hardening k q + k3 q^3: k3 from a tenth of k (negligible at the rig's joint angles) to 1e5 k.
     const double k = s.joints.stiffness;
     out.push_back({"joint_stiffening", "hardening beam joints (cubic stiffness)", {},
-                   {positive("joints.cubic_stiffness", s.joints.cubic_stiffness, 10.0 * k, 0.1 * k, 1e5 * k)}, "", {},
+                   {make_positive_param("joints.cubic_stiffness", s.joints.cubic_stiffness, 10.0 * k, 0.1 * k, 1e5 * k)}, "", {},
                    false, ""});
   }
   // Delays: from one controller sample to kMaxSearchedDelay. In the loop for the controller's sensors;
   // an output delay (the scored signal shifted only) for every scored output channel.
   const int last = std::max(24, static_cast<int>(std::ceil(kMaxSearchedDelay * s.controller.rate)));
-  const std::vector<double> delays = delay_grid(last);
+  const std::vector<double> delays = make_delay_grid(last);
   if (closed) {
     out.push_back({"sensor_delay.hub_angle", "delay of the hub angle measurement (in the loop)", {}, {},
                    "sensors.hub_angle.delay", delays, true, ""});
@@ -127,10 +127,8 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
                      {}, {}, std::string("sensors.") + c + ".delay", delays, true, ""});
   if (closed) {
     // Binary encoders of 9 to 22 bits a turn (12 to 0.0015 mrad): a count is 2 pi / 2^b rad.
-    std::vector<double> quanta;
-    for (int b = 9; b <= 22; ++b) quanta.push_back(2.0 * M_PI / std::ldexp(1.0, b));
     out.push_back({"sensor_quantization", "quantisation of the hub angle encoder", {}, {},
-                   "sensors.hub_angle.resolution", quanta, false, ""});
+                   "sensors.hub_angle.resolution", make_encoder_quanta(), false, ""});
   }
   if (s.beam.density > 0) {  // a massless arm has no mode to add
     std::vector<double> more;

@@ -55,9 +55,19 @@ struct EffectScales {
 inline constexpr double kMaxSearchedDelay = 0.12;
 
 // An existing parameter at `path` with value `value`, re-fitted: signed (within twice the larger of
-// |value| and the torque RMS) when the path is a signed one (hub.torque_offset), else positive within
+// |value| and the torque RMS) when the path is a signed one (hub.torque_offset, an arm's joints.NAME.torque_offset), else positive within
 // x/÷ 1000 of its value.
 EffectParam make_effect_param(const std::string& path, double value, const EffectScales& scales);
+
+// A positive parameter searched over [lo, hi], starting at `current` when the model has it (> 0), else at
+// `fallback` (clamped to the range).
+EffectParam make_positive_param(const std::string& path, double current, double fallback, double lo, double hi);
+
+// Whole numbers from 1 to `last`, spaced by about a factor 4/3 (every one up to 5): the delays searched.
+std::vector<double> make_delay_grid(int last);
+
+// Binary encoders of 9 to 22 bits a turn (12 to 0.0015 mrad): a count is 2 pi / 2^b rad.
+std::vector<double> make_encoder_quanta();
 
 // The candidates that apply to `mode` on `base` (plant effects everywhere; controller-side effects -
 // sensors in the loop, saturation - only in closed loop; an output delay for every scored output channel).

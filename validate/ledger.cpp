@@ -83,29 +83,30 @@ std::string text_column(sqlite3_stmt* st, int col) {
   return text ? reinterpret_cast<const char*>(text) : "";
 }
 
-std::map<std::string, Fit> fits_of(const Model& m, const Record& r, ReplayMode mode) {
+}  // namespace
+
+std::map<std::string, Fit> calc_record_fits(const Model& m, const Record& r, ReplayMode mode) {
   std::map<std::string, Fit> out;
   const auto p = replay(std::span<const Model>(&m, 1), r, mode)[0];
   for (const auto& c : scored_channels(mode, r)) out[c] = p.ok ? calc_fit(r.at(c), p.channels.at(c)) : Fit{-INFINITY, INFINITY};
   return out;
 }
 
-}  // namespace
-
-std::string record_calibration(const std::string& ledger_path, const std::string& before_path, const Model& before,
-                               const std::string& after_path, const Model& after, const EffectFit& fit,
-                               const Record& r, ReplayMode mode) {
+std::string record_calibration(const std::string& ledger_path, const std::string& before_path,
+                               const std::map<std::string, Fit>& before, const std::string& after_path,
+                               const std::map<std::string, Fit>& after, const EffectFit& fit, const Record& r,
+                               ReplayMode mode) {
   Ledger led(ledger_path);
   led.db.exec("BEGIN");
   long parent = led.find(before_path, r.source, replay_mode_name(mode));
-  if (parent == 0) parent = led.add(before_path, 0, "base", "", r.source, replay_mode_name(mode), fits_of(before, r, mode));
+  if (parent == 0) parent = led.add(before_path, 0, "base", "", r.source, replay_mode_name(mode), before);
   std::string params;
   for (const auto& [p, v] : fit.params) {
     char buf[128];
     std::snprintf(buf, sizeof buf, "%s%s=%.6g", params.empty() ? "" : " ", p.c_str(), v);
     params += buf;
   }
-  led.add(after_path, parent, fit.effect, params, r.source, replay_mode_name(mode), fits_of(after, r, mode));
+  led.add(after_path, parent, fit.effect, params, r.source, replay_mode_name(mode), after);
   led.db.exec("COMMIT");
   return report_ledger(ledger_path, r.source, mode);
 }

@@ -116,6 +116,12 @@ double calc_effective_samples(const std::vector<double>& e, int max_lag) {
   return std::clamp(n / tau, 1.0, n);
 }
 
+double calc_rms(const std::vector<double>& x) {
+  double s = 0.0;
+  for (double v : x) s += v * v;
+  return x.empty() ? 0.0 : std::sqrt(s / x.size());
+}
+
 double calc_standard_deviation(const std::vector<double>& x) {
   const double m = mean_of(x);
   double s = 0.0;

@@ -41,6 +41,9 @@ Correlation calc_cross_correlation(const std::vector<double>& e, const std::vect
 // Monte Carlo"), within [1, n]: n for a white residual, about n / 10 for an AR(1) with rho = 0.82.
 double calc_effective_samples(const std::vector<double>& e, int max_lag = 100);
 
+// The root mean square of x: sqrt(mean(x^2)); 0 when x is empty.
+double calc_rms(const std::vector<double>& x);
+
 // The (population) standard deviation of x: sqrt(mean((x - mean x)^2)); 0 when x is empty.
 double calc_standard_deviation(const std::vector<double>& x);
 

@@ -1,6 +1,8 @@
-// End-to-end tests of `flexfarm record` and `flexfarm compare` on arm models (validate/arm_record.hpp,
-// validate/arm_compare.hpp): the two-link flexible arm's record compared with the arm itself (exactly,
-// and with noise), with a heavier payload, and bad records refused with one line, exit 2, nothing written.
+// End-to-end tests of `flexfarm record`, `compare`, `diagnose` and `calibrate` on arm models
+// (validate/arm_record.hpp, arm_compare.hpp, arm_diagnose.hpp): the two-link flexible arm's record
+// compared with the arm itself (exactly, and with noise), with a heavier payload; friction hidden at the
+// elbow diagnosed there and calibrated in; the URDF arm calibrated into another directory; bad records
+// and options refused with one line, exit 2, nothing written.
 #include <gtest/gtest.h>
 
 #include "tests/apps/cli_fixture.hpp"
@@ -153,15 +155,67 @@ TEST_F(ArmCli, ARecordMissingAJointColumnOrNamingAnUnknownJointIsOneErrorAndWrit
   EXPECT_EQ(f.exit_code, 2) << f.output;
   expect_one_error_line(f, "--noise-angle: only for an arm model");
   EXPECT_FALSE(fs::exists(work / "x.csv"));
-  // diagnose and calibrate: the rig's models only, so far.
-  const auto g = run("diagnose --model configs/arm.yaml --data rec.csv --json d.json");
+  // diagnose and calibrate on an arm: closed loop only; effects carry their joint.
+  const auto g = run("diagnose --model configs/arm.yaml --data rec.csv --json d.json --mode open-loop");
   EXPECT_EQ(g.exit_code, 2) << g.output;
-  expect_one_error_line(g, "configs/arm.yaml: an arm model: diagnose works on the reference rig's models only so far");
+  expect_one_error_line(g, "--mode: an arm model is diagnosed in closed loop only");
   const auto h = run("calibrate --model configs/arm.yaml --data rec.csv --add payload --out m/model.yaml");
   EXPECT_EQ(h.exit_code, 2) << h.output;
-  expect_one_error_line(h, "configs/arm.yaml: an arm model: calibrate works on the reference rig's models only so far");
+  expect_one_error_line(h, "--add: unknown effect 'payload' (this model offers: coulomb_friction@shoulder, "
+                           "viscous_friction@shoulder,");
   EXPECT_FALSE(fs::exists(work / "d.json"));
   EXPECT_FALSE(fs::exists(work / "m"));
+}
+
+// Friction hidden at the elbow: diagnose names it, calibrate adds it with its level, and the ledger
+// shows the error falling on every channel that moved.
+TEST_F(ArmCli, DiagnoseFindsFrictionHiddenAtTheElbowAndCalibrateAddsIt) {
+  const std::string hidden = " --set joints.elbow.friction.coulomb=0.15";
+  ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 2e-4 --noise-torque 0.01 --seed 3" + kShort + hidden)
+                .exit_code, 0);
+  const auto d = run("diagnose --model configs/arm.yaml --data rec.csv --json d.json --iterations 10 --effects "
+                     "coulomb_friction@elbow,coulomb_friction@shoulder,torque_offset@elbow" + kShort);
+  ASSERT_EQ(d.exit_code, 0) << d.output;
+  EXPECT_NE(d.output.find("verdict: coulomb_friction@elbow is missing"), std::string::npos) << d.output;
+  EXPECT_NE(read_text(work / "d.json").find("\"verdict\": \"coulomb_friction@elbow\""), std::string::npos);
+  const auto c = run("calibrate --model configs/arm.yaml --data rec.csv --add coulomb_friction@elbow --out cal/arm.yaml "
+                     "--iterations 10" + kShort);
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  // The calibrated model: the friction at its fitted level, within 3 % of the truth.
+  const std::string yaml = read_text(work / "cal" / "arm.yaml");
+  const auto at = yaml.find("coulomb: ");
+  ASSERT_NE(at, std::string::npos) << yaml;
+  EXPECT_NEAR(std::strtod(yaml.c_str() + at + 9, nullptr), 0.15, 0.0045) << yaml;
+  EXPECT_NE(c.output.find("2  coulomb_friction@elbow"), std::string::npos) << c.output;  // the ledger's version 2
+  EXPECT_TRUE(fs::exists(work / "cal" / "ledger.sqlite.png"));
+  // Compared with the record, the calibrated model fits the elbow's torque far better than the base.
+  ASSERT_EQ(run("compare --model configs/arm.yaml --data rec.csv --out before" + kShort).exit_code, 0);
+  ASSERT_EQ(run("compare --model cal/arm.yaml --data rec.csv --out after").exit_code, 0);
+  const double before = json_fit(read_text(work / "before" / "compare.json"), "elbow.torque");
+  const double after = json_fit(read_text(work / "after" / "compare.json"), "elbow.torque");
+  RecordProperty("elbow_torque_fit_before", std::to_string(before));
+  RecordProperty("elbow_torque_fit_after", std::to_string(after));
+  EXPECT_LT(before, 90.0);
+  EXPECT_GT(after, 95.0);
+}
+
+// The URDF arm calibrated into another directory: the written model's urdf and sidecar still resolve.
+TEST_F(ArmCli, ACalibratedURDFArmWrittenElsewhereStillFindsItsURDF) {
+  fs::create_directories(work / "configs" / "urdf");
+  fs::copy_file(kSource + "/configs/arm6.yaml", work / "configs" / "arm6.yaml");
+  for (const char* f : {"arm6.urdf", "arm6_sidecar.yaml"})
+    fs::copy_file(kSource + "/configs/urdf/" + f, work / "configs" / "urdf" / f);
+  const std::string shortrun = " --set simulation.duration=1.0";
+  ASSERT_EQ(run("record configs/arm6.yaml --out rec.csv --noise-torque 0.01 --set joints.wrist_1.torque_offset=1.5" + shortrun)
+                .exit_code, 0);
+  const auto c = run("calibrate --model configs/arm6.yaml --data rec.csv --add torque_offset@wrist_1 --out "
+                     "elsewhere/deeper/arm6.yaml --iterations 6" + shortrun);
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  const std::string yaml = read_text(work / "elsewhere" / "deeper" / "arm6.yaml");
+  EXPECT_NE(yaml.find("urdf: ../../configs/urdf/arm6.urdf"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("sidecar: ../../configs/urdf/arm6_sidecar.yaml"), std::string::npos) << yaml;
+  const auto s = run("simulate elsewhere/deeper/arm6.yaml --out sim");
+  EXPECT_EQ(s.exit_code, 0) << s.output;
 }
 
 }  // namespace

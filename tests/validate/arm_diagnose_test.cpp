@@ -1,0 +1,136 @@
+// diagnose on arm models (validate/arm_diagnose.hpp): an effect hidden at one joint or link of the
+// two-link flexible arm is found there, not at the other, with its value; an effect hidden in the URDF
+// arm's wrist is found there; nothing hidden is "none" (ArmHiddenEffect, slow); the candidates are named
+// after where they act, and what does not apply is refused (ArmDiagnose).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "sweep/paths.hpp"
+#include "validate/arm_diagnose.hpp"
+#include "validate/arm_record.hpp"
+
+namespace ff {
+namespace {
+
+const std::string kTwoLink = std::string(FLEXFARM_SOURCE_DIR) + "/configs/two_link_flexible.yaml";
+const std::string kArm6 = std::string(FLEXFARM_SOURCE_DIR) + "/configs/arm6.yaml";
+
+// Noise of a good rig: 0.2 mrad encoders, 1 mrad/s rate, 1 % of the elbow's torque, 0.2 mm positions.
+ArmRecordNoise rig_noise() {
+  ArmRecordNoise n;
+  n.angle = 2e-4;
+  n.rate = 1e-3;
+  n.torque = 0.01;
+  n.position = 2e-4;
+  return n;
+}
+
+// The diagnosis, over `effects`, of the model `path` (with `base`) on a record of it with `hidden` set too.
+Diagnosis diagnose_hidden(const std::string& path, const std::vector<std::string>& base,
+                          const std::vector<std::string>& hidden, const std::vector<std::string>& effects,
+                          std::uint64_t seed) {
+  std::vector<std::string> truth = base;
+  truth.insert(truth.end(), hidden.begin(), hidden.end());
+  const Record r = make_arm_record(load_arm_with(path, truth), rig_noise(), seed);
+  DiagnoseOptions opt;
+  opt.max_iterations = 12;
+  opt.only = effects;
+  return diagnose_arm(load_arm_source(path, base), r, opt);
+}
+
+const EffectFit& ranked(const Diagnosis& d, const std::string& effect) {
+  const auto it = std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectFit& f) { return f.effect == effect; });
+  if (it == d.ranking.end()) throw std::runtime_error("not ranked: " + effect);
+  return *it;
+}
+
+// 3 s of the two-link arm: its 1.5 s move and half its settling.
+const std::vector<std::string> kShort = {"simulation.duration=3.0"};
+
+TEST(ArmHiddenEffect, CoulombFrictionHiddenAtTheElbowIsFoundAtTheElbowWithItsLevel) {
+  const Diagnosis d = diagnose_hidden(kTwoLink, kShort, {"joints.elbow.friction.coulomb=0.15"},
+                                      {"coulomb_friction@elbow", "coulomb_friction@shoulder", "viscous_friction@elbow",
+                                       "torque_offset@elbow", "sensor_delay.elbow_angle"},
+                                      11);
+  EXPECT_EQ(d.verdict, "coulomb_friction@elbow") << format_diagnosis_text(d);
+  const EffectFit& f = ranked(d, "coulomb_friction@elbow");
+  EXPECT_NEAR(f.params.at("joints.elbow.friction.coulomb"), 0.15, 0.15 * 0.03) << format_diagnosis_text(d);
+  EXPECT_TRUE(f.explained);
+  // The same friction at the other joint explains a little of it at most.
+  EXPECT_GT(ranked(d, "coulomb_friction@shoulder").delta_bic, 0.1 * f.delta_bic);
+}
+
+TEST(ArmHiddenEffect, ALateShoulderEncoderIsTheShoulderAngleDelayOfItsSamples) {
+  const Diagnosis d = diagnose_hidden(kTwoLink, kShort, {"joints.shoulder.sensors.angle.delay=6"},
+                                      {"sensor_delay.shoulder_angle", "sensor_delay.elbow_angle",
+                                       "viscous_friction@shoulder", "link_damping@upper_arm"},
+                                      12);
+  EXPECT_EQ(d.verdict, "sensor_delay.shoulder_angle") << format_diagnosis_text(d);
+  EXPECT_EQ(ranked(d, "sensor_delay.shoulder_angle").params.at("joints.shoulder.sensors.angle.delay"), 6.0);
+}
+
+TEST(ArmHiddenEffect, AStifferForearmThanModelledIsTheForearmsStiffness) {
+  const Diagnosis d = diagnose_hidden(kTwoLink, kShort, {"bodies[forearm].flexible.stiffness_factor=1.6"},
+                                      {"link_stiffness@forearm", "link_stiffness@upper_arm", "armature@elbow",
+                                       "payload@forearm"},
+                                      13);
+  EXPECT_EQ(d.verdict, "link_stiffness@forearm") << format_diagnosis_text(d);
+  EXPECT_NEAR(ranked(d, "link_stiffness@forearm").params.at("bodies[forearm].flexible.stiffness_factor"), 1.6, 0.05);
+}
+
+TEST(ArmHiddenEffect, NothingHiddenIsNone) {
+  const Diagnosis d = diagnose_hidden(kTwoLink, kShort, {},
+                                      {"coulomb_friction@elbow", "torque_offset@shoulder", "sensor_delay.elbow_angle"}, 14);
+  EXPECT_EQ(d.verdict, "none") << format_diagnosis_text(d);
+  EXPECT_TRUE(d.base_explained);
+  for (const auto& f : d.ranking) EXPECT_FALSE(f.significant) << f.effect;
+}
+
+// The URDF arm (its tree in a URDF file: joint-level effects only) with a load torque on its wrist.
+TEST(ArmHiddenEffect, ALoadTorqueOnTheURDFArmsWristIsItsTorqueOffset) {
+  const std::vector<std::string> base = {"simulation.duration=2.5"};
+  const Diagnosis d = diagnose_hidden(kArm6, base, {"joints.wrist_1.torque_offset=-2.5"},
+                                      {"torque_offset@wrist_1", "torque_offset@wrist_2", "coulomb_friction@wrist_1"},
+                                      15);
+  EXPECT_EQ(d.verdict, "torque_offset@wrist_1") << format_diagnosis_text(d);
+  EXPECT_NEAR(ranked(d, "torque_offset@wrist_1").params.at("joints.wrist_1.torque_offset"), -2.5, 0.05);
+}
+
+TEST(ArmDiagnose, CandidatesAreNamedAfterTheJointOrLinkTheyActAt) {
+  const ModelSource src = load_arm_source(kTwoLink, kShort);
+  const ArmModel m = build_arm(src);
+  const Record r = make_arm_record(m, {}, 1);
+  std::vector<std::string> names;
+  for (const Effect& e : make_arm_candidate_effects(m, apply_overrides(src), r)) names.push_back(e.name);
+  for (const char* n : {"coulomb_friction@shoulder", "viscous_friction@elbow", "stribeck_friction@elbow",
+                        "torque_offset@shoulder", "drive_compliance@elbow", "torque_saturation@shoulder",
+                        "sensor_delay.elbow_angle", "sensor_delay.shoulder_rate", "sensor_quantization@elbow",
+                        "armature@shoulder", "link_stiffness@upper_arm", "link_damping@forearm", "extra_mode@forearm",
+                        "payload@upper_arm", "payload@forearm"})
+    EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+  // The URDF arm: no inline bodies, so no armature or link effects; its joints' effects all there.
+  const ModelSource urdf = load_arm_source(kArm6, {"simulation.settle=0.5"});
+  const ArmModel m6 = build_arm(urdf);
+  names.clear();
+  for (const Effect& e : make_arm_candidate_effects(m6, apply_overrides(urdf), make_arm_record(m6, {}, 1)))
+    names.push_back(e.name);
+  EXPECT_EQ(std::count_if(names.begin(), names.end(), [](const std::string& n) { return n.rfind("armature@", 0) == 0; }), 0);
+  EXPECT_EQ(std::count_if(names.begin(), names.end(), [](const std::string& n) { return n.rfind("coulomb_friction@", 0) == 0; }), 6);
+}
+
+TEST(ArmDiagnose, OtherModesThanClosedLoopAndUnknownEffectsAreRefused) {
+  const ModelSource src = load_arm_source(kTwoLink, kShort);
+  const Record r = make_arm_record(build_arm(src), {}, 1);
+  DiagnoseOptions opt;
+  opt.mode = ReplayMode::kOpenLoop;
+  EXPECT_THROW(diagnose_arm(src, r, opt), std::invalid_argument);
+  opt.mode = ReplayMode::kClosedLoop;
+  opt.only = {"coulomb_friction"};  // the rig's name: an arm's carries its joint
+  EXPECT_THROW(diagnose_arm(src, r, opt), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ff
