@@ -129,6 +129,10 @@ void urdf_modes(const std::string& path, const std::string& sidecar, const Modes
 // gains added); --static prints the sag of each link tip and of the tool.
 void arm_modes(const std::string& path, const std::vector<std::string>& sets, const ModesOptions& o) {
   const ArmModel arm = load_arm_with(path, sets);
+  for (const ActuatedJoint& a : arm.actuated)
+    if (a.control.hydraulics.enabled)
+      throw ExitError(path + ": joint " + a.name + " has a hydraulic actuator, whose states `modes` does not linearise "
+                      "(the arm's closed-loop modes would leave out its valve and oil spring); simulate it instead", 2);
   const TreeDescription& d = arm.spec.tree;
   const Tree& tree = arm.tree;
   const int nv = tree.nv();

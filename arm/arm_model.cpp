@@ -9,6 +9,7 @@
 
 #include "kernel/batch.hpp"  // calc_sensor_hold
 #include "common/errors.hpp"
+#include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "kernel/modes.hpp"
 #include "common/random.hpp"
@@ -39,6 +40,10 @@ std::vector<TreeMode> closed_loop_modes(const ArmModel& m) {
   for (const ActuatedJoint& a : m.actuated) {
     o.extra_stiffness(a.dof, a.dof) = a.control.kp;
     o.extra_damping(a.dof, a.dof) = a.control.kd;
+    // A hydraulic actuator's torque loop below its bandwidth: a torque source in series with a damper
+    // D^2 p_s / (K K_q) (kernel/drive.hpp; the rig's modes take it so, kernel/modes.cpp).
+    const HydraulicSpec& h = a.control.hydraulics;
+    if (h.enabled && h.pressure_gain > 0) o.extra_damping(a.dof, a.dof) += calc_hydraulic_damping(h);
   }
   return calc_tree_modes(m.tree, m.q0, o);
 }
@@ -71,6 +76,13 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
   if (f.model != "static")
     throw ConfigError(src, 0, key + "friction.model", "an arm joint has the static map only, got '" + f.model + "'");
   if (!std::isfinite(c.torque_offset)) throw ConfigError(src, 0, key + "torque_offset", "must be finite");
+  if (c.hydraulics.enabled) {
+    if (c.drive)
+      throw ConfigError(src, 0, key + "hydraulics",
+                        "a joint has either a compliant drive train (drive:) or a hydraulic actuator (hydraulics:), not both");
+    if (const auto [k, why] = explain_hydraulic_fault(c.hydraulics); !k.empty())
+      throw ConfigError(src, 0, key + "hydraulics." + k, why);
+  }
   for (const auto& [ch, name] : {std::pair{&c.angle_sensor, "sensors.angle"}, std::pair{&c.rate_sensor, "sensors.rate"}}) {
     const std::string k(name);
     non_negative(ch->resolution, k + ".resolution");
@@ -90,15 +102,21 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
   }
 }
 
-// The rate (1/s) of the steepest joint friction on its joint's effective inertia 1 / (M^-1)_jj at q,
-// as the integrator must resolve it: the map's slope (b + max(Fc, Fs) / eps) / J_eff is a real
-// eigenvalue; RK4 is stable to h rate = 2.78 (allowed 2.5); the midpoint rule takes the friction
-// backward-Euler implicit and follows at h rate <= 250 (the rig's bound, kernel/drive.cpp); SDIRK2 and
-// CVODE need nothing. 0 without friction.
-double calc_friction_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator integ) {
-  if (integ != Integrator::kRk4 && integ != Integrator::kMidpoint) return 0.0;
+// The fastest rate (1/s) of the joints' own dynamics a fixed step must resolve, on each joint's
+// effective inertia J_eff = 1 / (M^-1)_jj at q (what the joint moves with everything else free: the
+// stiffest case):
+// - friction (RK4 and midpoint only): the map's slope (b + max(Fc, Fs) / eps) / J_eff is a real
+//   eigenvalue; RK4 is stable to h rate = 2.78 (allowed 2.5); the midpoint rule takes the friction
+//   backward-Euler implicit and follows at h rate <= 250 (the rig's bound, kernel/drive.cpp); SDIRK2
+//   and CVODE need nothing;
+// - a hydraulic actuator (every fixed-step method, h rate <= 1, as the rig's hub drive:
+//   calc_hydraulic_rate): spool, torque loop, relief valves, the oil spring on J_eff.
+// 0 without either.
+double calc_joint_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator integ) {
+  const bool friction_counts = integ == Integrator::kRk4 || integ == Integrator::kMidpoint;
   bool any = false;
-  for (const ActuatedJoint& a : m.actuated) any = any || is_friction_on(make_friction_map(a.control.friction));
+  for (const ActuatedJoint& a : m.actuated)
+    any = any || a.control.hydraulics.enabled || (friction_counts && is_friction_on(make_friction_map(a.control.friction)));
   if (!any) return 0.0;
   const int n = m.tree.nv();
   Eigen::MatrixXd M(n, n);
@@ -108,11 +126,37 @@ double calc_friction_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrato
   double rate = 0.0;
   for (const ActuatedJoint& a : m.actuated) {
     const FrictionSpec& f = a.control.friction;
-    if (!is_friction_on(make_friction_map(f))) continue;
-    const double slope = (f.viscous + std::max(f.coulomb, f.stiction) / f.smoothing) * Minv(a.dof, a.dof);
-    rate = std::max(rate, integ == Integrator::kRk4 ? slope / 2.5 : slope / 250.0);
+    if (friction_counts && is_friction_on(make_friction_map(f))) {
+      const double slope = (f.viscous + std::max(f.coulomb, f.stiction) / f.smoothing) * Minv(a.dof, a.dof);
+      rate = std::max(rate, integ == Integrator::kRk4 ? slope / 2.5 : slope / 250.0);
+    }
+    if (a.control.hydraulics.enabled)
+      rate = std::max(rate, calc_hydraulic_rate(make_hydraulic_drive(a.control.hydraulics), 1.0 / Minv(a.dof, a.dof)));
   }
   return rate;
+}
+
+// The torque each hydraulic joint holds at rest at q (nv): its gravity load g(q), its own spring
+// k (q - q_ref) and its torque offset; each actuator's chamber pressures must carry it.
+void set_hold_torques(ArmModel& m, const Eigen::VectorXd& q) {
+  bool any = false;
+  for (const ActuatedJoint& a : m.actuated) any = any || a.control.hydraulics.enabled;
+  if (!any) return;
+  TreeWorkspace ws(m.tree);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(m.tree.nv());
+  Eigen::VectorXd g(m.tree.nv());
+  calc_bias_forces(m.tree, q, zero, g, ws);
+  for (ActuatedJoint& a : m.actuated) {
+    const HydraulicSpec& h = a.control.hydraulics;
+    if (!h.enabled) continue;
+    const Body& b = m.tree.body(a.body);
+    a.hold_torque = g[a.dof] + b.stiffness * (q[a.dof] - b.spring_reference) + a.control.torque_offset;
+    const double stall = calc_displacement(h) * (h.supply_pressure - h.tank_pressure);
+    if (!(std::abs(a.hold_torque) <= stall))
+      throw ConfigError(m.spec.source, 0, joint_key(a, "hydraulics"),
+                        "the actuator cannot hold the joint at the start: its static load " + std::to_string(a.hold_torque) +
+                            " exceeds D (p_s - p_t) = " + std::to_string(stall));
+  }
 }
 
 }  // namespace
@@ -258,6 +302,7 @@ ArmModel make_arm(const ArmSpec& spec) {
   for (const auto& [name, value] : spec.start) start[spec.tree.dof_index.at(name)] = value;
   m.q0 = calc_arm_sag(m, start).q;
   m.qd0 = Eigen::VectorXd::Zero(nv);
+  set_hold_torques(m, m.q0);
 
   // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
   m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
@@ -275,7 +320,7 @@ ArmModel make_arm(const ArmSpec& spec) {
                      m.integrator == Integrator::kCvodeGmres;
   m.substeps = cvode ? 1 : spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
   if (!cvode && spec.substeps == 0)
-    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(calc_friction_rate(m, m.q0, m.integrator) * m.control_period)));
+    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(calc_joint_rate(m, m.q0, m.integrator) * m.control_period)));
   for (ActuatedJoint& a : m.actuated) {
     const ShaperSpec& sh = a.control.shaper;
     const ShaperKind kind = parse_shaper_kind(sh.type);
@@ -330,6 +375,12 @@ StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& p
   StaticEquilibriumResult r = solve_static_equilibrium(m.tree, pose, Eigen::VectorXd::Zero(m.tree.nv()), held);
   if (!r.converged()) r.q = pose;  // a link that buckles under its weight: it starts straight
   return r;
+}
+
+std::pair<double, double> calc_initial_pressures(const ActuatedJoint& a) {
+  const HydraulicSpec& h = a.control.hydraulics;
+  const double mean = 0.5 * (h.supply_pressure + h.tank_pressure), half = 0.5 * a.hold_torque / calc_displacement(h);
+  return {mean + half, mean - half};
 }
 
 void eval_arm_reference(const ArmModel& m, double t, double* r, double* rd, double* rdd, double* scratch) {
