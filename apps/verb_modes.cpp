@@ -129,10 +129,6 @@ void urdf_modes(const std::string& path, const std::string& sidecar, const Modes
 // gains added); --static prints the sag of each link tip and of the tool.
 void arm_modes(const std::string& path, const std::vector<std::string>& sets, const ModesOptions& o) {
   const ArmModel arm = load_arm_with(path, sets);
-  for (const ActuatedJoint& a : arm.actuated)
-    if (a.control.hydraulics.enabled)
-      throw ExitError(path + ": joint " + a.name + " has a hydraulic actuator, whose states `modes` does not linearise "
-                      "(the arm's closed-loop modes would leave out its valve and oil spring); simulate it instead", 2);
   const TreeDescription& d = arm.spec.tree;
   const Tree& tree = arm.tree;
   const int nv = tree.nv();
@@ -154,15 +150,16 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
       if (std::find(clamped.locked_dofs.begin(), clamped.locked_dofs.end(), a.dof) == clamped.locked_dofs.end())
         clamped.locked_dofs.push_back(a.dof);
     print_tree_modes("clamped (the actuated joints held):", calc_tree_modes(tree, q0, clamped), o.count);
-    TreeModeOptions loop = options;
-    loop.extra_stiffness = Eigen::MatrixXd::Zero(nv, nv);
-    loop.extra_damping = Eigen::MatrixXd::Zero(nv, nv);
-    for (const ActuatedJoint& a : arm.actuated) {
-      loop.extra_stiffness(a.dof, a.dof) = a.control.kp;
-      loop.extra_damping(a.dof, a.dof) = a.control.kd;
-    }
+    // The PD on K and C, each hydraulic actuator's states linearised with it (make_arm_loop_options).
+    TreeModeOptions loop = make_arm_loop_options(arm, q0);
+    loop.locked_dofs = options.locked_dofs;
     modes = calc_tree_modes(tree, q0, loop);
-    print_tree_modes("closed loop (continuous-time PD on the actuated joints):", modes, o.count);
+    bool hydraulic = false;
+    for (const ActuatedJoint& a : arm.actuated) hydraulic = hydraulic || a.control.hydraulics.enabled;
+    print_tree_modes(hydraulic ? "closed loop (continuous-time PD on the actuated joints, the hydraulic actuators' "
+                                 "spool, torque loop and chambers linearised):"
+                               : "closed loop (continuous-time PD on the actuated joints):",
+                     modes, o.count);
     std::printf("fixed-step substeps per control period: %d (h = %.3g ms, %s)\n", arm.substeps,
                 1e3 * arm.control_period / arm.substeps, arm.integrator == Integrator::kRk4 ? "rk4" : "implicit");
   }

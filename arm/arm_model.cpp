@@ -31,23 +31,6 @@ ShaperKind parse_shaper_kind(const std::string& type) {
 
 std::string joint_key(const ActuatedJoint& a, const std::string& tail) { return "joints." + a.name + "." + tail; }
 
-// The closed-loop modes at q: each actuated joint's kp and kd added to K and C.
-std::vector<TreeMode> closed_loop_modes(const ArmModel& m) {
-  const int n = m.tree.nv();
-  TreeModeOptions o;
-  o.extra_stiffness = Eigen::MatrixXd::Zero(n, n);
-  o.extra_damping = Eigen::MatrixXd::Zero(n, n);
-  for (const ActuatedJoint& a : m.actuated) {
-    o.extra_stiffness(a.dof, a.dof) = a.control.kp;
-    o.extra_damping(a.dof, a.dof) = a.control.kd;
-    // A hydraulic actuator's torque loop below its bandwidth: a torque source in series with a damper
-    // D^2 p_s / (K K_q) (kernel/drive.hpp; the rig's modes take it so, kernel/modes.cpp).
-    const HydraulicSpec& h = a.control.hydraulics;
-    if (h.enabled && h.pressure_gain > 0) o.extra_damping(a.dof, a.dof) += calc_hydraulic_damping(h);
-  }
-  return calc_tree_modes(m.tree, m.q0, o);
-}
-
 // The joint info of the body whose joint is `dof`.
 const JointInfo& joint_info(const ArmSpec& spec, const Tree& tree, int dof) {
   for (int i = 0; i < tree.num_bodies(); ++i)
@@ -136,21 +119,32 @@ double calc_joint_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator i
   return rate;
 }
 
-// The torque each hydraulic joint holds at rest at q (nv): its gravity load g(q), its own spring
-// k (q - q_ref) and its torque offset; each actuator's chamber pressures must carry it.
-void set_hold_torques(ArmModel& m, const Eigen::VectorXd& q) {
+// The torque each hydraulic joint holds at rest at q: its gravity load g(q), its own spring
+// k (q - q_ref) and its torque offset (nh, in actuated order); each actuator's chambers must carry it.
+std::vector<double> calc_hold_torques(const ArmModel& m, const Eigen::VectorXd& q) {
+  std::vector<double> hold;
   bool any = false;
   for (const ActuatedJoint& a : m.actuated) any = any || a.control.hydraulics.enabled;
-  if (!any) return;
+  if (!any) return hold;
   TreeWorkspace ws(m.tree);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(m.tree.nv());
   Eigen::VectorXd g(m.tree.nv());
   calc_bias_forces(m.tree, q, zero, g, ws);
+  for (const ActuatedJoint& a : m.actuated) {
+    if (!a.control.hydraulics.enabled) continue;
+    const Body& b = m.tree.body(a.body);
+    hold.push_back(g[a.dof] + b.stiffness * (q[a.dof] - b.spring_reference) + a.control.torque_offset);
+  }
+  return hold;
+}
+
+void set_hold_torques(ArmModel& m, const Eigen::VectorXd& q) {
+  const std::vector<double> hold = calc_hold_torques(m, q);
+  std::size_t i = 0;
   for (ActuatedJoint& a : m.actuated) {
     const HydraulicSpec& h = a.control.hydraulics;
     if (!h.enabled) continue;
-    const Body& b = m.tree.body(a.body);
-    a.hold_torque = g[a.dof] + b.stiffness * (q[a.dof] - b.spring_reference) + a.control.torque_offset;
+    a.hold_torque = hold[i++];
     const double stall = calc_displacement(h) * (h.supply_pressure - h.tank_pressure);
     if (!(std::abs(a.hold_torque) <= stall))
       throw ConfigError(m.spec.source, 0, joint_key(a, "hydraulics"),
@@ -159,7 +153,80 @@ void set_hold_torques(ArmModel& m, const Eigen::VectorXd& q) {
   }
 }
 
+// One hydraulic actuator linearised at rest at pinion angle theta holding `hold` (chambers at
+// (p_s + p_t)/2 +- hold / (2 D), spool centred), its valve loop commanded by the PD:
+// demand = hold - kp dtheta - kd domega. Central differences (at the centred spool the lands' flow gains
+// of either side averaged), per unit of the stored states (MPa): the torque's row dtau/dz (4), the
+// rates' columns df/dtheta, df/domega (4 each) and df/dz (4 x 4, column-major).
+void linearise_actuator(const ActuatedJoint& a, double theta, double hold, double* dtau, double* dq, double* dqd,
+                        double* dz) {
+  constexpr int n = kHydraulicStates;
+  const HydraulicSpec& h = a.control.hydraulics;
+  const LaneDrive p = make_hydraulic_drive(h);
+  const double mean = 0.5 * (h.supply_pressure + h.tank_pressure), half = 0.5 * hold / p.D;
+  const double x0[n] = {0.0, 0.0, (mean + half) / kPressureUnit, (mean - half) / kPressureUnit};
+  const double kp = a.control.kp, kd = a.control.kd;
+  auto rates = [&](const double* x, double dth, double dw, double* f) {
+    return eval_hydraulic_actuator(p, hold - kp * dth - kd * dw, theta + dth, dw, x, 1, f);
+  };
+  double xp[n], xm[n], fp[n], fm[n];
+  for (int j = 0; j < n; ++j) {
+    std::copy(x0, x0 + n, xp);
+    std::copy(x0, x0 + n, xm);
+    const double d = 1e-6 * std::max(std::abs(x0[j]), 1.0);
+    xp[j] += d;
+    xm[j] -= d;
+    dtau[j] = (rates(xp, 0.0, 0.0, fp) - rates(xm, 0.0, 0.0, fm)) / (2.0 * d);
+    for (int i = 0; i < n; ++i) dz[j * n + i] = (fp[i] - fm[i]) / (2.0 * d);
+  }
+  const double d = 1e-6;
+  rates(x0, d, 0.0, fp);
+  rates(x0, -d, 0.0, fm);
+  for (int i = 0; i < n; ++i) dq[i] = (fp[i] - fm[i]) / (2.0 * d);
+  rates(x0, 0.0, d, fp);
+  rates(x0, 0.0, -d, fm);
+  for (int i = 0; i < n; ++i) dqd[i] = (fp[i] - fm[i]) / (2.0 * d);
+}
+
 }  // namespace
+
+TreeModeOptions make_arm_loop_options(const ArmModel& m, const Eigen::VectorXd& q) {
+  const int n = m.tree.nv();
+  TreeModeOptions o;
+  o.extra_stiffness = Eigen::MatrixXd::Zero(n, n);
+  o.extra_damping = Eigen::MatrixXd::Zero(n, n);
+  const std::vector<double> hold = calc_hold_torques(m, q);
+  const int nz = kHydraulicStates * static_cast<int>(hold.size());
+  if (nz > 0) {
+    o.actuator_force = Eigen::MatrixXd::Zero(n, nz);
+    o.actuator_q = Eigen::MatrixXd::Zero(nz, n);
+    o.actuator_qd = Eigen::MatrixXd::Zero(nz, n);
+    o.actuator_z = Eigen::MatrixXd::Zero(nz, nz);
+  }
+  int z = 0;
+  for (const ActuatedJoint& a : m.actuated) {
+    if (!a.control.hydraulics.enabled) {
+      o.extra_stiffness(a.dof, a.dof) = a.control.kp;
+      o.extra_damping(a.dof, a.dof) = a.control.kd;
+      continue;
+    }
+    constexpr int k = kHydraulicStates;
+    double dtau[k], dq[k], dqd[k], dz[k * k];
+    linearise_actuator(a, q[a.dof], hold[static_cast<std::size_t>(z / k)], dtau, dq, dqd, dz);
+    for (int i = 0; i < k; ++i) {
+      o.actuator_force(a.dof, z + i) = dtau[i];
+      o.actuator_q(z + i, a.dof) = dq[i];
+      o.actuator_qd(z + i, a.dof) = dqd[i];
+      for (int j = 0; j < k; ++j) o.actuator_z(z + i, z + j) = dz[j * k + i];
+    }
+    z += k;
+  }
+  return o;
+}
+
+std::vector<TreeMode> calc_arm_closed_loop_modes(const ArmModel& m, const Eigen::VectorXd& q) {
+  return calc_tree_modes(m.tree, q, make_arm_loop_options(m, q));
+}
 
 ArmModel make_arm(const ArmSpec& spec) {
   const std::string& src = spec.source;
@@ -306,7 +373,7 @@ ArmModel make_arm(const ArmSpec& spec) {
 
   // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
   m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
-  const std::vector<TreeMode> modes = closed_loop_modes(m);
+  const std::vector<TreeMode> modes = calc_arm_closed_loop_modes(m, m.q0);
   std::vector<Mode> kernel_modes;
   std::vector<double> zetas;
   for (const TreeMode& md : modes) {

@@ -24,6 +24,7 @@
 #include "kernel/shaper.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/joint_trajectory.hpp"
+#include "multibody/modes.hpp"
 #include "multibody/statics.hpp"
 #include "multibody/tree.hpp"
 
@@ -151,6 +152,14 @@ ArmModel make_arm(const ArmSpec& spec);
 // there (statics.hpp with the non-elastic dofs locked). When it does not converge (a link buckling),
 // q is `pose` and the result says why.
 StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose);
+
+// The closed loop linearised at rest at q (nv): each electric joint's kp and kd added to K and C, each
+// hydraulic joint's actuator as its four states (TreeModeOptions::actuator_*: spool, torque loop, orifice
+// flows, oil spring, linearised by central differences with the chambers holding the joint's static load
+// at q), the PD commanding its valve loop. make_arm's notches, shapers and substeps and `flexfarm modes`
+// take these.
+TreeModeOptions make_arm_loop_options(const ArmModel& m, const Eigen::VectorXd& q);
+std::vector<TreeMode> calc_arm_closed_loop_modes(const ArmModel& m, const Eigen::VectorXd& q);
 
 // A hydraulic joint's chamber pressures at the start (Pa): p_a, p_b = (p_s + p_t)/2 +- hold_torque / (2 D).
 std::pair<double, double> calc_initial_pressures(const ActuatedJoint& a);
