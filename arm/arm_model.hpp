@@ -11,6 +11,8 @@
 // the shaped joint reference, ID the rigid arm's inverse dynamics (RNEA, flexible links held
 // straight, the joint's own passive spring and damper added) and G(r) its gravity torques, f_i and f_g the feed-forward gains, the integral frozen
 // while the torque saturates in the direction of the error (clamping anti-windup).
+// A joint with a hydraulic actuator (`hydraulics:`) gets D (p_a - p_b) - torque_offset and its
+// friction instead, tau_j being the actuator's valve-loop command (kernel/drive.hpp).
 #pragma once
 
 #include <cstdint>

@@ -215,6 +215,37 @@ TEST(ArmHydraulics, TheFixedStepIntegratorsFollowCvodeOnATwoLinkArmWithAHydrauli
   }
 }
 
+TEST(ArmHydraulics, AVariantGivesTheSameBitsAloneAndInAnyLaneOfABatch) {
+  // Three actuators (loop gain, supply, chamber volume) on the two-link arm, alone and as lanes 0..2 and
+  // in reverse, under each integrator: the actuators' states are per lane, so the bits are.
+  for (const char* integ : {"rk4", "midpoint", "sdirk2", "cvode_dense", "cvode_klu", "cvode_gmres"}) {
+    std::vector<ArmModel> lanes;
+    const double gains[] = {2.0, 5.0, 9.0}, supplies[] = {21e6, 18e6, 25e6}, volumes[] = {5e-4, 4e-4, 6e-4};
+    for (int v = 0; v < 3; ++v) {
+      const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/hydraulic_arm.yaml";
+      YAML::Node doc = load_yaml_file(path);
+      YAML::Node h = doc["joints"]["shoulder"]["hydraulics"];
+      h["pressure_gain"] = gains[v];
+      h["supply_pressure"] = supplies[v];
+      h["chamber_volume"] = volumes[v];
+      doc["simulation"]["integrator"] = integ;
+      doc["simulation"]["duration"] = 0.4;
+      doc["simulation"]["substeps"] = 3;
+      doc["trajectory"]["waypoints"][0]["time"] = 0.3;
+      lanes.push_back(parse_arm(doc, path));
+    }
+    const ArmRun together = simulate_arms(lanes);
+    std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
+    const ArmRun back = simulate_arms(reversed);
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      ASSERT_EQ(together.status[l], LaneStatus::kOk) << integ << " lane " << l;
+      EXPECT_EQ(run_one(lanes[l]).traces[0].columns, together.traces[l].columns) << integ << " lane " << l;
+      EXPECT_EQ(back.traces[lanes.size() - 1 - l].columns, together.traces[l].columns) << integ << " lane " << l;
+    }
+    EXPECT_NE(together.traces[0].column("shoulder.pressure_a"), together.traces[1].column("shoulder.pressure_a"));
+  }
+}
+
 TEST(ArmHydraulics, TheActuatorHoldsTheArmsWeightFromTheStartAndTheJointTorqueIsItsDp) {
   // Without leakage (which the proportional torque loop answers with a small torque error, and the
   // arm with a slow droop its PD corrects) nothing moves: the chambers carry the load exactly.
@@ -243,6 +274,21 @@ TEST(ArmHydraulics, TheActuatorHoldsTheArmsWeightFromTheStartAndTheJointTorqueIs
   EXPECT_LT(dp, 1e-9 * (pa - pb));
   // The electric elbow has no pressure columns.
   EXPECT_THROW(tr.column("elbow.pressure_a"), std::out_of_range);
+  // A torque offset on the hydraulic joint is a load on top: the chambers carry it too, the arm still at rest.
+  const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/hydraulic_arm.yaml";
+  YAML::Node doc = load_yaml_file(path);
+  doc["joints"]["shoulder"]["hydraulics"]["leakage"] = 0.0;
+  doc["joints"]["shoulder"]["torque_offset"] = 150.0;
+  doc["joints"]["shoulder"]["controller"]["ki"] = 0.0;
+  doc["trajectory"].remove("waypoints");
+  doc["simulation"]["duration"] = 0.5;
+  const ArmModel offset = parse_arm(doc, path);
+  EXPECT_NEAR(offset.actuated.at(0).hold_torque, load + 150.0, 1e-9 * load);
+  const ArmRun held = run_one(offset);
+  ASSERT_EQ(held.status[0], LaneStatus::kOk);
+  // The PD commands the gravity load only: the valve loop pulls the torque to the command, and the
+  // joint sags until kp e makes up the offset: e = 150 / kp.
+  EXPECT_NEAR(held.traces[0].column("shoulder.q").back(), -150.0 / 2.0e4, 2e-4);
 }
 
 TEST(ArmHydraulics, ABadKeyOrValueIsNamedAtItsLineAndKey) {
