@@ -150,15 +150,16 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
       if (std::find(clamped.locked_dofs.begin(), clamped.locked_dofs.end(), a.dof) == clamped.locked_dofs.end())
         clamped.locked_dofs.push_back(a.dof);
     print_tree_modes("clamped (the actuated joints held):", calc_tree_modes(tree, q0, clamped), o.count);
-    TreeModeOptions loop = options;
-    loop.extra_stiffness = Eigen::MatrixXd::Zero(nv, nv);
-    loop.extra_damping = Eigen::MatrixXd::Zero(nv, nv);
-    for (const ActuatedJoint& a : arm.actuated) {
-      loop.extra_stiffness(a.dof, a.dof) = a.control.kp;
-      loop.extra_damping(a.dof, a.dof) = a.control.kd;
-    }
+    // The PD on K and C, each hydraulic actuator's states linearised with it (make_arm_loop_options).
+    TreeModeOptions loop = make_arm_loop_options(arm, q0);
+    loop.locked_dofs = options.locked_dofs;
     modes = calc_tree_modes(tree, q0, loop);
-    print_tree_modes("closed loop (continuous-time PD on the actuated joints):", modes, o.count);
+    bool hydraulic = false;
+    for (const ActuatedJoint& a : arm.actuated) hydraulic = hydraulic || a.control.hydraulics.enabled;
+    print_tree_modes(hydraulic ? "closed loop (continuous-time PD on the actuated joints, the hydraulic actuators' "
+                                 "spool, torque loop and chambers linearised):"
+                               : "closed loop (continuous-time PD on the actuated joints):",
+                     modes, o.count);
     std::printf("fixed-step substeps per control period: %d (h = %.3g ms, %s)\n", arm.substeps,
                 1e3 * arm.control_period / arm.substeps, arm.integrator == Integrator::kRk4 ? "rk4" : "implicit");
   }

@@ -9,6 +9,7 @@
 
 #include "kernel/batch.hpp"  // calc_sensor_hold
 #include "common/errors.hpp"
+#include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "kernel/modes.hpp"
 #include "common/random.hpp"
@@ -29,19 +30,6 @@ ShaperKind parse_shaper_kind(const std::string& type) {
 }
 
 std::string joint_key(const ActuatedJoint& a, const std::string& tail) { return "joints." + a.name + "." + tail; }
-
-// The closed-loop modes at q: each actuated joint's kp and kd added to K and C.
-std::vector<TreeMode> closed_loop_modes(const ArmModel& m) {
-  const int n = m.tree.nv();
-  TreeModeOptions o;
-  o.extra_stiffness = Eigen::MatrixXd::Zero(n, n);
-  o.extra_damping = Eigen::MatrixXd::Zero(n, n);
-  for (const ActuatedJoint& a : m.actuated) {
-    o.extra_stiffness(a.dof, a.dof) = a.control.kp;
-    o.extra_damping(a.dof, a.dof) = a.control.kd;
-  }
-  return calc_tree_modes(m.tree, m.q0, o);
-}
 
 // The joint info of the body whose joint is `dof`.
 const JointInfo& joint_info(const ArmSpec& spec, const Tree& tree, int dof) {
@@ -71,6 +59,13 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
   if (f.model != "static")
     throw ConfigError(src, 0, key + "friction.model", "an arm joint has the static map only, got '" + f.model + "'");
   if (!std::isfinite(c.torque_offset)) throw ConfigError(src, 0, key + "torque_offset", "must be finite");
+  if (c.hydraulics.enabled) {
+    if (c.drive)
+      throw ConfigError(src, 0, key + "hydraulics",
+                        "a joint has either a compliant drive train (drive:) or a hydraulic actuator (hydraulics:), not both");
+    if (const auto [k, why] = explain_hydraulic_fault(c.hydraulics); !k.empty())
+      throw ConfigError(src, 0, key + "hydraulics." + k, why);
+  }
   for (const auto& [ch, name] : {std::pair{&c.angle_sensor, "sensors.angle"}, std::pair{&c.rate_sensor, "sensors.rate"}}) {
     const std::string k(name);
     non_negative(ch->resolution, k + ".resolution");
@@ -90,15 +85,21 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
   }
 }
 
-// The rate (1/s) of the steepest joint friction on its joint's effective inertia 1 / (M^-1)_jj at q,
-// as the integrator must resolve it: the map's slope (b + max(Fc, Fs) / eps) / J_eff is a real
-// eigenvalue; RK4 is stable to h rate = 2.78 (allowed 2.5); the midpoint rule takes the friction
-// backward-Euler implicit and follows at h rate <= 250 (the rig's bound, kernel/drive.cpp); SDIRK2 and
-// CVODE need nothing. 0 without friction.
-double calc_friction_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator integ) {
-  if (integ != Integrator::kRk4 && integ != Integrator::kMidpoint) return 0.0;
+// The fastest rate (1/s) of the joints' own dynamics a fixed step must resolve, on each joint's
+// effective inertia J_eff = 1 / (M^-1)_jj at q (what the joint moves with everything else free: the
+// stiffest case):
+// - friction (RK4 and midpoint only): the map's slope (b + max(Fc, Fs) / eps) / J_eff is a real
+//   eigenvalue; RK4 is stable to h rate = 2.78 (allowed 2.5); the midpoint rule takes the friction
+//   backward-Euler implicit and follows at h rate <= 250 (the rig's bound, kernel/drive.cpp); SDIRK2
+//   and CVODE need nothing;
+// - a hydraulic actuator (every fixed-step method, h rate <= 1, as the rig's hub drive:
+//   calc_hydraulic_rate): spool, torque loop, relief valves, the oil spring on J_eff.
+// 0 without either.
+double calc_joint_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator integ) {
+  const bool friction_counts = integ == Integrator::kRk4 || integ == Integrator::kMidpoint;
   bool any = false;
-  for (const ActuatedJoint& a : m.actuated) any = any || is_friction_on(make_friction_map(a.control.friction));
+  for (const ActuatedJoint& a : m.actuated)
+    any = any || a.control.hydraulics.enabled || (friction_counts && is_friction_on(make_friction_map(a.control.friction)));
   if (!any) return 0.0;
   const int n = m.tree.nv();
   Eigen::MatrixXd M(n, n);
@@ -108,14 +109,124 @@ double calc_friction_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrato
   double rate = 0.0;
   for (const ActuatedJoint& a : m.actuated) {
     const FrictionSpec& f = a.control.friction;
-    if (!is_friction_on(make_friction_map(f))) continue;
-    const double slope = (f.viscous + std::max(f.coulomb, f.stiction) / f.smoothing) * Minv(a.dof, a.dof);
-    rate = std::max(rate, integ == Integrator::kRk4 ? slope / 2.5 : slope / 250.0);
+    if (friction_counts && is_friction_on(make_friction_map(f))) {
+      const double slope = (f.viscous + std::max(f.coulomb, f.stiction) / f.smoothing) * Minv(a.dof, a.dof);
+      rate = std::max(rate, integ == Integrator::kRk4 ? slope / 2.5 : slope / 250.0);
+    }
+    if (a.control.hydraulics.enabled)
+      rate = std::max(rate, calc_hydraulic_rate(make_hydraulic_drive(a.control.hydraulics), 1.0 / Minv(a.dof, a.dof)));
   }
   return rate;
 }
 
+// The torque each hydraulic joint holds at rest at q: its gravity load g(q), its own spring
+// k (q - q_ref) and its torque offset (nh, in actuated order); each actuator's chambers must carry it.
+std::vector<double> calc_hold_torques(const ArmModel& m, const Eigen::VectorXd& q) {
+  std::vector<double> hold;
+  bool any = false;
+  for (const ActuatedJoint& a : m.actuated) any = any || a.control.hydraulics.enabled;
+  if (!any) return hold;
+  TreeWorkspace ws(m.tree);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(m.tree.nv());
+  Eigen::VectorXd g(m.tree.nv());
+  calc_bias_forces(m.tree, q, zero, g, ws);
+  for (const ActuatedJoint& a : m.actuated) {
+    if (!a.control.hydraulics.enabled) continue;
+    const Body& b = m.tree.body(a.body);
+    hold.push_back(g[a.dof] + b.stiffness * (q[a.dof] - b.spring_reference) + a.control.torque_offset);
+  }
+  return hold;
+}
+
+void set_hold_torques(ArmModel& m, const Eigen::VectorXd& q) {
+  const std::vector<double> hold = calc_hold_torques(m, q);
+  std::size_t i = 0;
+  for (ActuatedJoint& a : m.actuated) {
+    const HydraulicSpec& h = a.control.hydraulics;
+    if (!h.enabled) continue;
+    a.hold_torque = hold[i++];
+    const double stall = calc_displacement(h) * (h.supply_pressure - h.tank_pressure);
+    if (!(std::abs(a.hold_torque) <= stall))
+      throw ConfigError(m.spec.source, 0, joint_key(a, "hydraulics"),
+                        "the actuator cannot hold the joint at the start: its static load " + std::to_string(a.hold_torque) +
+                            " exceeds D (p_s - p_t) = " + std::to_string(stall));
+  }
+}
+
+// One hydraulic actuator linearised at rest at pinion angle theta holding `hold` (chambers at
+// (p_s + p_t)/2 +- hold / (2 D), spool centred), its valve loop commanded by the PD:
+// demand = hold - kp dtheta - kd domega. Central differences (at the centred spool the lands' flow gains
+// of either side averaged), per unit of the stored states (MPa): the torque's row dtau/dz (4), the
+// rates' columns df/dtheta, df/domega (4 each) and df/dz (4 x 4, column-major).
+void linearise_actuator(const ActuatedJoint& a, double theta, double hold, double* dtau, double* dq, double* dqd,
+                        double* dz) {
+  constexpr int n = kHydraulicStates;
+  const HydraulicSpec& h = a.control.hydraulics;
+  const LaneDrive p = make_hydraulic_drive(h);
+  const double mean = 0.5 * (h.supply_pressure + h.tank_pressure), half = 0.5 * hold / p.D;
+  const double x0[n] = {0.0, 0.0, (mean + half) / kPressureUnit, (mean - half) / kPressureUnit};
+  const double kp = a.control.kp, kd = a.control.kd;
+  auto rates = [&](const double* x, double dth, double dw, double* f) {
+    return eval_hydraulic_actuator(p, hold - kp * dth - kd * dw, theta + dth, dw, x, 1, f);
+  };
+  double xp[n], xm[n], fp[n], fm[n];
+  for (int j = 0; j < n; ++j) {
+    std::copy(x0, x0 + n, xp);
+    std::copy(x0, x0 + n, xm);
+    const double d = 1e-6 * std::max(std::abs(x0[j]), 1.0);
+    xp[j] += d;
+    xm[j] -= d;
+    dtau[j] = (rates(xp, 0.0, 0.0, fp) - rates(xm, 0.0, 0.0, fm)) / (2.0 * d);
+    for (int i = 0; i < n; ++i) dz[j * n + i] = (fp[i] - fm[i]) / (2.0 * d);
+  }
+  const double d = 1e-6;
+  rates(x0, d, 0.0, fp);
+  rates(x0, -d, 0.0, fm);
+  for (int i = 0; i < n; ++i) dq[i] = (fp[i] - fm[i]) / (2.0 * d);
+  rates(x0, 0.0, d, fp);
+  rates(x0, 0.0, -d, fm);
+  for (int i = 0; i < n; ++i) dqd[i] = (fp[i] - fm[i]) / (2.0 * d);
+}
+
 }  // namespace
+
+TreeModeOptions make_arm_loop_options(const ArmModel& m, const Eigen::VectorXd& q) {
+  const int n = m.tree.nv();
+  TreeModeOptions o;
+  o.extra_stiffness = Eigen::MatrixXd::Zero(n, n);
+  o.extra_damping = Eigen::MatrixXd::Zero(n, n);
+  const std::vector<double> hold = calc_hold_torques(m, q);
+  const int nz = kHydraulicStates * static_cast<int>(hold.size());
+  if (nz > 0) {
+    o.actuator_force = Eigen::MatrixXd::Zero(n, nz);
+    o.actuator_q = Eigen::MatrixXd::Zero(nz, n);
+    o.actuator_qd = Eigen::MatrixXd::Zero(nz, n);
+    o.actuator_z = Eigen::MatrixXd::Zero(nz, nz);
+  }
+  int z = 0;
+  for (const ActuatedJoint& a : m.actuated) {
+    if (!a.control.hydraulics.enabled) {
+      o.extra_stiffness(a.dof, a.dof) = a.control.kp;
+      o.extra_damping(a.dof, a.dof) = a.control.kd;
+      continue;
+    }
+    constexpr int k = kHydraulicStates;
+    double dtau[k], dq[k], dqd[k], dz[k * k];
+    linearise_actuator(a, q[a.dof], hold[static_cast<std::size_t>(z / k)], dtau, dq, dqd, dz);
+    for (int i = 0; i < k; ++i) {
+      o.actuator_force(a.dof, z + i) = dtau[i];
+      o.actuator_q(z + i, a.dof) = dq[i];
+      o.actuator_qd(z + i, a.dof) = dqd[i];
+      for (int j = 0; j < k; ++j) o.actuator_z(z + i, z + j) = dz[j * k + i];
+    }
+    z += k;
+  }
+  return o;
+}
+
+std::vector<TreeMode> calc_arm_closed_loop_modes(const ArmModel& m, const Eigen::VectorXd& q) {
+  return calc_tree_modes(m.tree, q, make_arm_loop_options(m, q));
+}
 
 ArmModel make_arm(const ArmSpec& spec) {
   const std::string& src = spec.source;
@@ -258,10 +369,11 @@ ArmModel make_arm(const ArmSpec& spec) {
   for (const auto& [name, value] : spec.start) start[spec.tree.dof_index.at(name)] = value;
   m.q0 = calc_arm_sag(m, start).q;
   m.qd0 = Eigen::VectorXd::Zero(nv);
+  set_hold_torques(m, m.q0);
 
   // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
   m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
-  const std::vector<TreeMode> modes = closed_loop_modes(m);
+  const std::vector<TreeMode> modes = calc_arm_closed_loop_modes(m, m.q0);
   std::vector<Mode> kernel_modes;
   std::vector<double> zetas;
   for (const TreeMode& md : modes) {
@@ -275,7 +387,7 @@ ArmModel make_arm(const ArmSpec& spec) {
                      m.integrator == Integrator::kCvodeGmres;
   m.substeps = cvode ? 1 : spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
   if (!cvode && spec.substeps == 0)
-    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(calc_friction_rate(m, m.q0, m.integrator) * m.control_period)));
+    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(calc_joint_rate(m, m.q0, m.integrator) * m.control_period)));
   for (ActuatedJoint& a : m.actuated) {
     const ShaperSpec& sh = a.control.shaper;
     const ShaperKind kind = parse_shaper_kind(sh.type);
@@ -330,6 +442,12 @@ StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& p
   StaticEquilibriumResult r = solve_static_equilibrium(m.tree, pose, Eigen::VectorXd::Zero(m.tree.nv()), held);
   if (!r.converged()) r.q = pose;  // a link that buckles under its weight: it starts straight
   return r;
+}
+
+std::pair<double, double> calc_initial_pressures(const ActuatedJoint& a) {
+  const HydraulicSpec& h = a.control.hydraulics;
+  const double mean = 0.5 * (h.supply_pressure + h.tank_pressure), half = 0.5 * a.hold_torque / calc_displacement(h);
+  return {mean + half, mean - half};
 }
 
 void eval_arm_reference(const ArmModel& m, double t, double* r, double* rd, double* rdd, double* scratch) {

@@ -11,10 +11,13 @@
 // the shaped joint reference, ID the rigid arm's inverse dynamics (RNEA, flexible links held
 // straight, the joint's own passive spring and damper added) and G(r) its gravity torques, f_i and f_g the feed-forward gains, the integral frozen
 // while the torque saturates in the direction of the error (clamping anti-windup).
+// A joint with a hydraulic actuator (`hydraulics:`) gets D (p_a - p_b) - torque_offset and its
+// friction instead, tau_j being the actuator's valve-loop command (kernel/drive.hpp).
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "description/tree_description.hpp"
@@ -23,6 +26,7 @@
 #include "kernel/shaper.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/joint_trajectory.hpp"
+#include "multibody/modes.hpp"
 #include "multibody/statics.hpp"
 #include "multibody/tree.hpp"
 
@@ -48,6 +52,11 @@ struct JointControlSpec {
   ChannelSpec rate_sensor;     // and of qd (sensors.rate), rad/s (m/s)
   bool drive = false;          // a compliant drive train (`drive:`): the tree holds the joint's rotor and
                                // its twist "<joint>.twist" (insert_drive_train); the joint is the rotor's
+  // A hydraulic rotary actuator behind a servo valve (`hydraulics:`, the rig's, kernel/drive.hpp;
+  // enabled by the block's presence): the joint then gets D (p_a - p_b) from the actuator's states,
+  // the controller's torque is the valve loop's command, the chamber flows take the joint's rate, the
+  // rack centred at q = 0. Not with `drive:`.
+  HydraulicSpec hydraulics;
 };
 
 // Where a waypoint goes: joint values by name (the others keep the previous waypoint's), or a tool
@@ -108,6 +117,10 @@ struct ActuatedJoint {
   // in ArmModel::actuated.
   int angle_hold = 1, rate_hold = 1;
   std::uint64_t angle_key = 0, rate_key = 0;
+  // With hydraulics: the torque the actuator holds at the start, the joint's static load at q0
+  // (gravity, its own spring, torque_offset), N·m (N). The chambers start at (p_s + p_t)/2 +- hold / (2 D),
+  // the spool centred (calc_initial_pressures).
+  double hold_torque = 0.0;
 };
 
 struct ArmModel {
@@ -141,6 +154,17 @@ ArmModel make_arm(const ArmSpec& spec);
 // there (statics.hpp with the non-elastic dofs locked). When it does not converge (a link buckling),
 // q is `pose` and the result says why.
 StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose);
+
+// The closed loop linearised at rest at q (nv): each electric joint's kp and kd added to K and C, each
+// hydraulic joint's actuator as its four states (TreeModeOptions::actuator_*: spool, torque loop, orifice
+// flows, oil spring, linearised by central differences with the chambers holding the joint's static load
+// at q), the PD commanding its valve loop. make_arm's notches, shapers and substeps and `flexfarm modes`
+// take these.
+TreeModeOptions make_arm_loop_options(const ArmModel& m, const Eigen::VectorXd& q);
+std::vector<TreeMode> calc_arm_closed_loop_modes(const ArmModel& m, const Eigen::VectorXd& q);
+
+// A hydraulic joint's chamber pressures at the start (Pa): p_a, p_b = (p_s + p_t)/2 +- hold_torque / (2 D).
+std::pair<double, double> calc_initial_pressures(const ActuatedJoint& a);
 
 // The joint reference of the actuated joints at t (their order), shaped by each joint's shaper:
 // r_j(t) = sum_i A_i s_j(t - t_i), and its first two derivatives. `scratch` holds 3 x (actuated

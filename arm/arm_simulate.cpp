@@ -32,6 +32,9 @@ std::vector<std::string> arm_trace_names(const ArmModel& m) {
     for (const char* s : {".deflection_y", ".deflection_z"}) n.push_back(l.name + s);
   for (const ActuatedJoint& a : m.actuated)
     for (const char* s : {".q_measured", ".qd_measured"}) n.push_back(a.name + s);
+  for (const ActuatedJoint& a : m.actuated)
+    if (a.control.hydraulics.enabled)
+      for (const char* s : {".pressure_a", ".pressure_b"}) n.push_back(a.name + s);
   return n;
 }
 
@@ -43,7 +46,8 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
   if (a.actuated.size() != b.actuated.size()) return "the actuated joints differ";
   for (std::size_t j = 0; j < a.actuated.size(); ++j)
     if (a.actuated[j].dof != b.actuated[j].dof || a.actuated[j].notch.size() != b.actuated[j].notch.size() ||
-        a.actuated[j].notch_on_feedback != b.actuated[j].notch_on_feedback)
+        a.actuated[j].notch_on_feedback != b.actuated[j].notch_on_feedback ||
+        a.actuated[j].control.hydraulics.enabled != b.actuated[j].control.hydraulics.enabled)
       return "joint " + a.actuated[j].name + "'s control differs in shape";
   if (a.links.size() != b.links.size()) return "the flexible links differ";
   if (a.control_period != b.control_period || a.duration != b.duration || a.substeps != b.substeps ||
@@ -120,7 +124,31 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
     for (const ArmModel& m : lanes) f.push_back(m.actuated[static_cast<std::size_t>(j)].control.friction);
     set_tree_lanes_friction(tl, m0.actuated[static_cast<std::size_t>(j)].dof, f);
   }
+  // Each hydraulic joint's actuator (its states after the tree's, in joint order), its torque offset the
+  // constant load on the joint; the chambers holding the joint's static load, the spool centred.
+  std::vector<int> hyd_joints;  // actuated joint index of actuator a
+  for (int j = 0; j < na; ++j) {
+    const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
+    if (!a0.control.hydraulics.enabled) continue;
+    std::vector<LaneDrive> p;
+    std::vector<double> load;
+    for (const ArmModel& m : lanes) {
+      const ActuatedJoint& a = m.actuated[static_cast<std::size_t>(j)];
+      p.push_back(make_hydraulic_drive(a.control.hydraulics));
+      load.push_back(a.control.torque_offset);
+    }
+    add_tree_lanes_hydraulics(tl, a0.dof, p, load);
+    hyd_joints.push_back(j);
+  }
+  const int nh = static_cast<int>(hyd_joints.size());
   TreeLanesState s = make_tree_lanes_state(tl);
+  for (int a = 0; a < nh; ++a)
+    for (int l = 0; l < W; ++l) {
+      const auto [pa, pb] = calc_initial_pressures(lanes[l].actuated[static_cast<std::size_t>(hyd_joints[static_cast<std::size_t>(a)])]);
+      s.z[static_cast<std::size_t>((kHydraulicStates * a + 2) * W + l)] = pa / kPressureUnit;
+      s.z[static_cast<std::size_t>((kHydraulicStates * a + 3) * W + l)] = pb / kPressureUnit;
+    }
+  const std::vector<double> z0 = s.z;
   TreeStepWorkspace ws(tl);
   for (int l = 0; l < W; ++l)
     for (int j = 0; j < nv; ++j) {
@@ -153,7 +181,8 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   }
   if (options.keep_q) run.q.assign(static_cast<std::size_t>(W), Eigen::MatrixXd::Zero(nv, samples));
   const std::size_t kin0 = 1 + 4 * static_cast<std::size_t>(na);  // first kinematic column
-  const std::size_t meas0 = names.size() - 2 * static_cast<std::size_t>(na);  // first measured column
+  const std::size_t hyd0 = names.size() - 2 * static_cast<std::size_t>(nh);  // first pressure column
+  const std::size_t meas0 = hyd0 - 2 * static_cast<std::size_t>(na);           // first measured column
 
   // Controller state; each notch at rest at its first input.
   ControlLanes c;
@@ -280,6 +309,16 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
         tr.columns[static_cast<std::size_t>(3 + 4 * j)][ks] = s.qd[static_cast<std::size_t>(a.dof * W + l)];
         tr.columns[static_cast<std::size_t>(4 + 4 * j)][ks] = c.tau_held[static_cast<std::size_t>(j * W + l)];
       }
+      // A hydraulic joint's torque is its actuator's, D (p_a - p_b), and its chamber pressures (Pa).
+      for (int a = 0; a < nh; ++a) {
+        const std::size_t z = static_cast<std::size_t>(kHydraulicStates * a * W + l);
+        const std::size_t col = hyd0 + 2 * static_cast<std::size_t>(a);
+        tr.columns[static_cast<std::size_t>(4 + 4 * hyd_joints[static_cast<std::size_t>(a)])][ks] =
+            eval_hydraulic_actuator(tl.hydraulics[static_cast<std::size_t>(a * W + l)], 0.0, 0.0, 0.0, s.z.data() + z,
+                                    static_cast<std::size_t>(W), nullptr);
+        tr.columns[col][ks] = s.z[z + 2 * static_cast<std::size_t>(W)] * kPressureUnit;
+        tr.columns[col + 1][ks] = s.z[z + 3 * static_cast<std::size_t>(W)] * kPressureUnit;
+      }
       if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) {
         q_ref.setZero();
         for (int j = 0; j < nv; ++j) q_lane[j] = s.q[static_cast<std::size_t>(j * W + l)];
@@ -297,12 +336,15 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       }
     }
     if (k + 1 == samples) break;
-    // The plant over one period with the torques held, less each joint's constant load.
+    // The plant over one period with the torques held, less each joint's constant load; a hydraulic
+    // joint's held torque is its valve loop's command (the load is the actuator's, TreeLanes).
     for (int j = 0; j < na; ++j) {
-      const int d = m0.actuated[static_cast<std::size_t>(j)].dof;
+      const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
+      const bool hydraulic = a0.control.hydraulics.enabled;
       for (int l = 0; l < W; ++l)
-        tau_applied[static_cast<std::size_t>(d * W + l)] =
-            c.tau_held[static_cast<std::size_t>(j * W + l)] - lanes[l].actuated[static_cast<std::size_t>(j)].control.torque_offset;
+        tau_applied[static_cast<std::size_t>(a0.dof * W + l)] =
+            c.tau_held[static_cast<std::size_t>(j * W + l)] -
+            (hydraulic ? 0.0 : lanes[l].actuated[static_cast<std::size_t>(j)].control.torque_offset);
     }
     if (cvode) {
       cvode->advance(tl, tau_applied.data(), s, t, T, cvode_ok);
@@ -326,6 +368,7 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
       bool finite = true;
       for (int j = 0; j < nv; ++j)
         finite &= std::isfinite(s.q[static_cast<std::size_t>(j * W + l)]) && std::isfinite(s.qd[static_cast<std::size_t>(j * W + l)]);
+      for (int i = 0; i < tl.nz(); ++i) finite &= std::isfinite(s.z[static_cast<std::size_t>(i * W + l)]);
       if (!finite) {
         if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) run.status[static_cast<std::size_t>(l)] = LaneStatus::kNonfinite;
         for (int j = 0; j < nv; ++j) {
@@ -333,6 +376,7 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
           s.qd[static_cast<std::size_t>(j * W + l)] = 0.0;
           s.a_prev[static_cast<std::size_t>(j * W + l)] = 0.0;
         }
+        for (int i = 0; i < tl.nz(); ++i) s.z[static_cast<std::size_t>(i * W + l)] = z0[static_cast<std::size_t>(i * W + l)];
       }
     }
   }

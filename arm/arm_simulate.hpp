@@ -21,6 +21,9 @@ namespace ff {
 //                                                        tip, in the link's root frame, m
 //   <joint>.q_measured, <joint>.qd_measured              per actuated joint, what its controller measured
 //                                                        at this sample (joints.NAME.sensors), rad, rad/s
+//   <joint>.pressure_a, <joint>.pressure_b               per hydraulic joint, its chamber pressures, Pa
+// A hydraulic joint's torque column is its actuator's torque D (p_a - p_b) at the sample (the joint's
+// own torque, not the controller's demand, which is the valve loop's command).
 struct ArmTrace {
   std::vector<std::string> names;
   std::vector<std::vector<double>> columns;  // (names) x (samples)

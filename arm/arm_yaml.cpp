@@ -11,6 +11,7 @@
 #include "description/tree_yaml.hpp"
 #include "description/urdf.hpp"
 #include "common/errors.hpp"
+#include "kernel/drive.hpp"
 #include "kernel/model_io.hpp"
 
 namespace ff {
@@ -240,6 +241,18 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       DriveTrain train;
       read_present(drive, kDriveFields, train);
       drive.finish();
+      // A hydraulic actuator (the rig's `hydraulics:` keys, one table): on by the block's presence.
+      YamlReader hydraulics = one.child("hydraulics");
+      read_present(hydraulics, hydraulic_fields(), c.hydraulics);
+      check_hydraulic_forms(hydraulics, c.hydraulics);
+      c.hydraulics.enabled = one.has("hydraulics");
+      if (c.hydraulics.enabled) {
+        if (const auto [key, why] = explain_hydraulic_fault(c.hydraulics); !key.empty()) hydraulics.fail(key, why);
+        if (one.has("drive"))
+          one.fail("hydraulics", "a joint has either a compliant drive train (drive:) or a hydraulic actuator "
+                                 "(hydraulics:), not both");
+      }
+      hydraulics.finish();
       one.finish();
       if (!s.tree.dof_index.count(name)) {
         std::string known;
@@ -355,6 +368,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   add_keys(out, "joints.NAME.sensors.angle.", kAngleSensorFields);
   add_keys(out, "joints.NAME.sensors.rate.", kRateSensorFields);
   add_keys(out, "joints.NAME.drive.", kDriveFields);
+  add_keys(out, "joints.NAME.hydraulics.", hydraulic_fields());
   add_keys(out, "trajectory.", kTrajectoryFields);
   out.push_back({"trajectory.start", "rad (m)", "no", "every joint at 0"});
   add_keys(out, "trajectory.waypoints[i].", kWaypointFields);

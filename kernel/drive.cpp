@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
+#include <limits>
 
 #include "kernel/dynamics.hpp"
 
@@ -22,30 +24,33 @@ DriveLayout make_drive_layout(const ModelSpec& spec) {
   return d;
 }
 
+LaneDrive make_hydraulic_drive(const HydraulicSpec& h) {
+  LaneDrive p;
+  p.D = calc_displacement(h);
+  p.V0 = h.chamber_volume;
+  p.beta = h.bulk_modulus;
+  p.ps = h.supply_pressure;
+  p.pt = h.tank_pressure;
+  p.pr = h.relief_pressure > 0 ? h.relief_pressure : 1.1 * h.supply_pressure;
+  p.dp_lam = h.laminar_drop;
+  p.kv = calc_valve_coefficient(h);  // Q = kv x root(dp)
+  // Relief valves pass the rated flow 10 % above their cracking pressure.
+  p.kr = calc_rated_flow(h) / (0.1 * p.pr);
+  p.leak = h.leakage;
+  p.wv = 2.0 * M_PI * h.valve_frequency;
+  p.zv = h.valve_damping;
+  p.gain = h.pressure_gain;
+  return p;
+}
+
 LaneDrive make_lane_drive(const Model& m) {
   const auto& h = m.spec.hydraulics;
   const auto& d = m.spec.drive;
   const auto& f = m.spec.friction;
-  LaneDrive p;
+  LaneDrive p = h.enabled ? make_hydraulic_drive(h) : LaneDrive{};
   p.lugre = f.model == "lugre";
   p.sigma0 = f.bristle_stiffness;
   p.sigma1 = f.bristle_damping;
-  if (h.enabled) {
-    p.D = calc_displacement(h);
-    p.V0 = h.chamber_volume;
-    p.beta = h.bulk_modulus;
-    p.ps = h.supply_pressure;
-    p.pt = h.tank_pressure;
-    p.pr = h.relief_pressure > 0 ? h.relief_pressure : 1.1 * h.supply_pressure;
-    p.dp_lam = h.laminar_drop;
-    p.kv = calc_valve_coefficient(h);  // Q = kv x root(dp)
-    // Relief valves pass the rated flow 10 % above their cracking pressure.
-    p.kr = calc_rated_flow(h) / (0.1 * p.pr);
-    p.leak = h.leakage;
-    p.wv = 2.0 * M_PI * h.valve_frequency;
-    p.zv = h.valve_damping;
-    p.gain = h.pressure_gain;
-  }
   if (d.enabled) {
     p.ja = d.inertia;
     p.n = d.ratio;
@@ -96,17 +101,18 @@ double calc_hydraulic_frequency(const HydraulicSpec& h, double inertia) {
   return std::sqrt(4.0 * h.bulk_modulus * D * D / (2.0 * h.chamber_volume * inertia));
 }
 
+double calc_hydraulic_rate(const LaneDrive& p, double inertia) {
+  const double spring = std::sqrt(2.0 * p.beta * p.D * p.D / (p.V0 * inertia));  // oil spring on the pinion
+  const double kq = p.kv * std::sqrt(0.5 * p.ps);                                // flow gain at full supply, m^3/s
+  return std::max({spring, p.wv, 2.0 * p.beta * kq * p.gain / (p.V0 * p.ps), p.beta * p.kr / p.V0});
+}
+
 double calc_drive_rate(const Model& m) {
   const LaneDrive p = make_lane_drive(m);
   const DriveLayout L = make_drive_layout(m.spec);
   const double j0 = m.body[0].inertia;  // the hub's own inertia: what a stiff drive shakes first
   double coupled = 0.0, own = 0.0;
-  if (L.pressure >= 0) {
-    const double jp = L.shaft >= 0 ? p.ja : j0;
-    coupled = std::max(coupled, std::sqrt(2.0 * p.beta * p.D * p.D / (p.V0 * jp)));  // oil spring on the pinion
-    const double kq = p.kv * std::sqrt(0.5 * p.ps);                                   // flow gain at full supply, m^3/s
-    own = std::max({own, p.wv, 2.0 * p.beta * kq * p.gain / (p.V0 * p.ps), p.beta * p.kr / p.V0});
-  }
+  if (L.pressure >= 0) own = calc_hydraulic_rate(p, L.shaft >= 0 ? p.ja : j0);
   if (L.shaft >= 0) {
     const double inv = 1.0 / (p.ja * p.n * p.n) + 1.0 / j0;  // shaft reflected to the output, and the hub
     coupled = std::max({coupled, std::sqrt(p.k * inv), p.c * inv});
@@ -126,6 +132,135 @@ double calc_drive_rate(const Model& m) {
     own = std::max(own, p.sigma0 / m.spec.friction.coulomb);  // bristle relaxation at 1 rad/s
   }
   return std::max(coupled, own);
+}
+
+double eval_hydraulic_actuator(const LaneDrive& p, double demand, double theta, double omega, const double* x,
+                               std::size_t stride, double* xdot) {
+  const double pa = x[2 * stride] * kPressureUnit, pb = x[3 * stride] * kPressureUnit;
+  const double tau_p = p.D * (pa - pb);
+  if (!xdot) return tau_p;
+  // Servo valve: second-order spool driven by the torque loop's command, travel limited to +-1.
+  const double u = std::clamp(p.gain * (demand - tau_p) / (p.D * p.ps), -1.0, 1.0);
+  const double xv = x[0], xvd = x[stride];
+  xdot[0] = xvd;
+  xdot[stride] = p.wv * p.wv * (u - xv) - 2.0 * p.zv * p.wv * xvd;
+  // Orifice flows of the four lands (critically lapped), Q = kv x root(dp), m^3/s.
+  const double xs = std::clamp(xv, -1.0, 1.0), xp = std::max(xs, 0.0), xm = std::max(-xs, 0.0);
+  const double qa = p.kv * (xp * calc_orifice_root(p.ps - pa, p.dp_lam) - xm * calc_orifice_root(pa - p.pt, p.dp_lam));
+  const double qb = p.kv * (xm * calc_orifice_root(p.ps - pb, p.dp_lam) - xp * calc_orifice_root(pb - p.pt, p.dp_lam));
+  const double ql = p.leak * (pa - pb);  // cross-port leakage a -> b
+  // Relief to tank above p_r, anti-cavitation from tank below p_t.
+  const double ra = p.kr * (std::max(p.pt - pa, 0.0) - std::max(pa - p.pr, 0.0));
+  const double rb = p.kr * (std::max(p.pt - pb, 0.0) - std::max(pb - p.pr, 0.0));
+  // Chamber continuity with compressibility: dp/dt = beta / V (Q_in - dV/dt), V = V0 +- D theta.
+  const double va = std::max(p.V0 + p.D * theta, 0.05 * p.V0), vb = std::max(p.V0 - p.D * theta, 0.05 * p.V0);
+  xdot[2 * stride] = p.beta / va * (qa - ql + ra - p.D * omega) / kPressureUnit;
+  xdot[3 * stride] = p.beta / vb * (qb + ql + rb + p.D * omega) / kPressureUnit;
+  return tau_p;
+}
+
+void solve_small_system(int n, double* A, double* b) {
+  for (int c = 0; c < n; ++c) {
+    int piv = c;
+    for (int r = c + 1; r < n; ++r)
+      if (std::abs(A[r * n + c]) > std::abs(A[piv * n + c])) piv = r;
+    if (piv != c) {
+      for (int k = 0; k < n; ++k) std::swap(A[c * n + k], A[piv * n + k]);
+      std::swap(b[c], b[piv]);
+    }
+    const double d = A[c * n + c];
+    for (int r = c + 1; r < n; ++r) {
+      const double f = A[r * n + c] / d;
+      for (int k = c; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
+      b[r] -= f * b[c];
+    }
+  }
+  for (int r = n - 1; r >= 0; --r) {
+    double x = b[r];
+    for (int k = r + 1; k < n; ++k) x -= A[r * n + k] * b[k];
+    b[r] = x / A[r * n + r];
+  }
+}
+
+void calc_hydraulic_jacobian(const LaneDrive& p, double demand, double theta, double omega, const double* x,
+                             double* f0, double* jac) {
+  constexpr int n = kHydraulicStates;
+  static const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
+  double xp[n], fp[n];
+  eval_hydraulic_actuator(p, demand, theta, omega, x, 1, f0);
+  std::copy(x, x + n, xp);
+  for (int j = 0; j < n; ++j) {
+    const double delta = (x[j] + srur * std::max(std::abs(x[j]), 1.0)) - x[j];
+    xp[j] = x[j] + delta;
+    eval_hydraulic_actuator(p, demand, theta, omega, xp, 1, fp);
+    xp[j] = x[j];
+    for (int i = 0; i < n; ++i) jac[i * n + j] = (fp[i] - f0[i]) / delta;
+  }
+}
+
+void solve_hydraulic_stage(const LaneDrive& p, double demand, double theta, double omega, const double* xpre,
+                           double gh, double* X) {
+  constexpr int n = kHydraulicStates;
+  double f[n], jac[n * n], A[n * n], r[n];
+  calc_hydraulic_jacobian(p, demand, theta, omega, xpre, f, jac);
+  std::copy(xpre, xpre + n, X);
+  for (int it = 0; it < 4; ++it) {
+    if (it > 0) eval_hydraulic_actuator(p, demand, theta, omega, X, 1, f);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) A[i * n + j] = (i == j ? 1.0 : 0.0) - gh * jac[i * n + j];
+      r[i] = -(X[i] - xpre[i] - gh * f[i]);
+    }
+    solve_small_system(n, A, r);
+    for (int i = 0; i < n; ++i) X[i] += r[i];
+  }
+}
+
+std::pair<std::string, std::string> explain_hydraulic_fault(const HydraulicSpec& h) {
+  using Fault = std::pair<std::string, std::string>;
+  const auto positive = [](double x) { return x > 0 && std::isfinite(x); };
+  const auto non_negative = [](double x) { return x >= 0 && std::isfinite(x); };
+  const auto need = [](const char* key, const char* what, double x) {
+    return Fault{key, std::string("must be a finite number ") + what + ", got " + std::to_string(x)};
+  };
+  const std::pair<const char*, double> pos1[] = {{"displacement", h.displacement},
+                                                 {"chamber_volume", h.chamber_volume},
+                                                 {"bulk_modulus", h.bulk_modulus},
+                                                 {"supply_pressure", h.supply_pressure}};
+  for (const auto& [key, x] : pos1)
+    if (!positive(x)) return need(key, "> 0", x);
+  if (!non_negative(h.tank_pressure)) return need("tank_pressure", ">= 0", h.tank_pressure);
+  if (!(h.tank_pressure < h.supply_pressure)) return {"tank_pressure", "must be below hydraulics.supply_pressure"};
+  if (!non_negative(h.relief_pressure)) return need("relief_pressure", ">= 0", h.relief_pressure);
+  if (h.relief_pressure > 0 && !(h.relief_pressure > h.tank_pressure))
+    return {"relief_pressure", "must be above hydraulics.tank_pressure (or 0 for 1.1 p_s)"};
+  const std::pair<const char*, double> pos2[] = {
+      {"rated_flow", h.rated_flow}, {"rated_drop", h.rated_drop}, {"laminar_drop", h.laminar_drop}};
+  for (const auto& [key, x] : pos2)
+    if (!positive(x)) return need(key, "> 0", x);
+  if (!non_negative(h.leakage)) return need("leakage", ">= 0", h.leakage);
+  if (!positive(h.valve_frequency)) return need("valve_frequency", "> 0", h.valve_frequency);
+  if (!positive(h.valve_damping)) return need("valve_damping", "> 0", h.valve_damping);
+  if (!non_negative(h.pressure_gain)) return need("pressure_gain", ">= 0", h.pressure_gain);
+  // The physical forms of k_v and D (0 = not given): all of a group or none, named at the first given.
+  const auto whole = [&](std::initializer_list<std::pair<double, const char*>> group, const char* law) -> Fault {
+    const char* given = nullptr;
+    std::string missing;
+    for (const auto& [x, key] : group) {
+      if (!non_negative(x)) return need(key, ">= 0", x);
+      if (x > 0 && !given) given = key;
+      if (x == 0) missing += std::string(missing.empty() ? "" : ", ") + "hydraulics." + key;
+    }
+    if (given && !missing.empty()) return {given, "needs " + missing + " too (" + law + ": all of them or none)"};
+    return {};
+  };
+  if (Fault f = whole({{h.discharge_coefficient, "discharge_coefficient"},
+                       {h.port_width, "port_width"},
+                       {h.spool_stroke, "spool_stroke"},
+                       {h.oil_density, "oil_density"}},
+                      "k_v = C_d w x_max sqrt(2 / rho)");
+      !f.first.empty())
+    return f;
+  return whole({{h.piston_area, "piston_area"}, {h.pinion_radius, "pinion_radius"}}, "D = A r");
 }
 
 void init_drive_state(const BatchModel& bm, double* z) {
@@ -158,27 +293,9 @@ double lane_drive(const BatchModel& bm, int l, const double* q, const double* v,
   const double demand = tau_cmd / p.n;  // at the shaft, N·m
   double tau_p = demand;                // what the actuator puts on its shaft, N·m
 
-  if (L.pressure >= 0) {
-    const double pa = Z(L.pressure) * kPressureUnit, pb = Z(L.pressure + 1) * kPressureUnit;
-    tau_p = p.D * (pa - pb);
-    // Servo valve: second-order spool driven by the torque loop's command, travel limited to +-1.
-    const double u = std::clamp(p.gain * (demand - tau_p) / (p.D * p.ps), -1.0, 1.0);
-    const double xv = Z(L.spool), xvd = Z(L.spool + 1);
-    set(L.spool, xvd);
-    set(L.spool + 1, p.wv * p.wv * (u - xv) - 2.0 * p.zv * p.wv * xvd);
-    // Orifice flows of the four lands (critically lapped), Q = kv x root(dp), m^3/s.
-    const double x = std::clamp(xv, -1.0, 1.0), xp = std::max(x, 0.0), xm = std::max(-x, 0.0);
-    const double qa = p.kv * (xp * calc_orifice_root(p.ps - pa, p.dp_lam) - xm * calc_orifice_root(pa - p.pt, p.dp_lam));
-    const double qb = p.kv * (xm * calc_orifice_root(p.ps - pb, p.dp_lam) - xp * calc_orifice_root(pb - p.pt, p.dp_lam));
-    const double ql = p.leak * (pa - pb);  // cross-port leakage a -> b
-    // Relief to tank above p_r, anti-cavitation from tank below p_t.
-    const double ra = p.kr * (std::max(p.pt - pa, 0.0) - std::max(pa - p.pr, 0.0));
-    const double rb = p.kr * (std::max(p.pt - pb, 0.0) - std::max(pb - p.pr, 0.0));
-    // Chamber continuity with compressibility: dp/dt = beta / V (Q_in - dV/dt), V = V0 +- D theta_p.
-    const double va = std::max(p.V0 + p.D * th_p, 0.05 * p.V0), vb = std::max(p.V0 - p.D * th_p, 0.05 * p.V0);
-    set(L.pressure, p.beta / va * (qa - ql + ra - p.D * w_p) / kPressureUnit);
-    set(L.pressure + 1, p.beta / vb * (qb + ql + rb + p.D * w_p) / kPressureUnit);
-  }
+  if (L.pressure >= 0)  // the spool's rows, then the pressures' (make_drive_layout)
+    tau_p = eval_hydraulic_actuator(p, demand, th_p, w_p, z + L.spool * W + l, static_cast<std::size_t>(W),
+                                    zdot ? zdot + L.spool * W + l : nullptr);
 
   double tau_hub = tau_p;
   if (L.shaft >= 0) {

@@ -8,6 +8,10 @@
 // Without any of them the hub torque is the demand plus the static friction map, as before.
 #pragma once
 
+#include <cstddef>
+#include <string>
+#include <utility>
+
 #include "kernel/model.hpp"
 
 namespace ff {
@@ -40,6 +44,49 @@ struct LaneDrive {
 };
 
 LaneDrive make_lane_drive(const Model& m);
+
+// The hydraulic constants of a LaneDrive from the actuator's spec alone (SI units; drive-train
+// fields at their neutral defaults): what make_lane_drive takes for the rig's hub and what a tree
+// joint's actuator uses (multibody/lanes.hpp).
+LaneDrive make_hydraulic_drive(const HydraulicSpec& h);
+
+// Rows of one hydraulic actuator's states: spool x_v, its rate (1/s), p_a, p_b (MPa, kPressureUnit).
+inline constexpr int kHydraulicStates = 4;
+
+// One hydraulic actuator (the rig's equations, one copy: the rig's hub and every tree joint call it).
+// x[k * stride], k = 0..3: x_v, dx_v/dt, p_a, p_b (MPa); `demand` the torque loop's command (N·m at
+// the pinion), theta and omega the pinion's angle (rad; the rack centred at 0) and rate. Returns the
+// actuator's torque D (p_a - p_b), N·m; writes the states' rates to xdot[k * stride] when xdot is set:
+//   u = sat(K (demand - D dp) / (D p_s), -1, 1),  x_v'' = w_v^2 (u - x_v) - 2 z_v w_v x_v'
+//   p_a' = beta / V_a (Q_a - Q_leak + Q_relief,a - D omega),  V_a = max(V0 + D theta, V0 / 20)
+//   p_b' = beta / V_b (Q_b + Q_leak + Q_relief,b + D omega),  V_b = max(V0 - D theta, V0 / 20)
+// with the four lands' orifice flows k_v x root(dp), the leakage a -> b and relief / anti-cavitation.
+double eval_hydraulic_actuator(const LaneDrive& p, double demand, double theta, double omega, const double* x,
+                               std::size_t stride, double* xdot);
+
+// An implicit stage of one actuator with its pinion held at (theta, omega): solves
+// X = xpre + gh f(X) (4 states, contiguous) by simplified Newton (Jacobian by forward differences at
+// xpre, four iterations), as the rig solves its hub drive's stages (kernel/fixed_step.cpp).
+void solve_hydraulic_stage(const LaneDrive& p, double demand, double theta, double omega, const double* xpre,
+                           double gh, double* X);
+
+// The Jacobian df/dx of one actuator's rates with the pinion held (4 x 4 row-major), by forward
+// differences at x (contiguous), and the rates f0 there.
+void calc_hydraulic_jacobian(const LaneDrive& p, double demand, double theta, double omega, const double* x,
+                             double* f0, double* jac);
+
+// Solves A x = b in place (b becomes x) for a small dense n x n A (row-major), Gaussian elimination
+// with partial pivoting.
+void solve_small_system(int n, double* A, double* b);
+
+// The fastest rate (1/s) of one hydraulic actuator a fixed step must resolve (h rate <= 1): the spool,
+// the torque loop, the relief valves and the oil spring sqrt(2 beta D^2 / (V0 J)) on the inertia J
+// (kg·m^2) the pinion moves.
+double calc_hydraulic_rate(const LaneDrive& p, double inertia);
+
+// The hydraulic block's values checked (the rig's make_model and the arm reader): the first fault as
+// {key within the block, message}, or two empty strings.
+std::pair<std::string, std::string> explain_hydraulic_fault(const HydraulicSpec& h);
 
 // The drive at rest with the hub at angle zero: spool centred, both chambers at the mean of
 // supply and tank pressure, shaft aligned with the hub, bristles relaxed. Writes z (nz x W).

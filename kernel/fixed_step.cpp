@@ -17,31 +17,6 @@ void axpy(std::size_t n, const double* y, double a, const double* k, double* y1)
   for (std::size_t j = 0; j < n; ++j) y1[j] = y[j] + a * k[j];
 }
 
-// Solves A x = b in place (b becomes x) for a small dense n x n A (row-major), Gaussian
-// elimination with partial pivoting.
-void solve_small(int n, double* A, double* b) {
-  for (int c = 0; c < n; ++c) {
-    int piv = c;
-    for (int r = c + 1; r < n; ++r)
-      if (std::abs(A[r * n + c]) > std::abs(A[piv * n + c])) piv = r;
-    if (piv != c) {
-      for (int k = 0; k < n; ++k) std::swap(A[c * n + k], A[piv * n + k]);
-      std::swap(b[c], b[piv]);
-    }
-    const double d = A[c * n + c];
-    for (int r = c + 1; r < n; ++r) {
-      const double f = A[r * n + c] / d;
-      for (int k = c; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
-      b[r] -= f * b[c];
-    }
-  }
-  for (int r = n - 1; r >= 0; --r) {
-    double x = b[r];
-    for (int k = r + 1; k < n; ++k) x -= A[r * n + k] * b[k];
-    b[r] = x / A[r * n + r];
-  }
-}
-
 // Joint armature gh c + gh^2 k for the implicit spring-damper terms of a stage with coefficient gh
 // (row 0: the hub, none); remade only when gh changes.
 void set_armature(const BatchModel& bm, Workspace& ws, double gh) {
@@ -97,7 +72,7 @@ void solve_drive_stage(const BatchModel& bm, const double* q, const double* v, c
       double A[kMax * kMax], r[kMax];
       std::copy(jac + l * nz * nz, jac + (l + 1) * nz * nz, A);
       for (int i = 0; i < nz; ++i) r[i] = -(Z[i * W + l] - zpre[i * W + l] - gh * fp[i * W + l]);
-      solve_small(nz, A, r);
+      solve_small_system(nz, A, r);
       for (int i = 0; i < nz; ++i) Z[i * W + l] += r[i];
     }
   }

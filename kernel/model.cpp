@@ -157,44 +157,8 @@ void validate(const ModelSpec& s, const std::string& src) {
   if (s.controller.load_signal == "pressure" && !s.hydraulics.enabled)
     throw ConfigError(src, 0, "controller.load_signal", "'pressure' needs hydraulics.enabled: true");
   // The hub drive's values are checked whether its parts are enabled or not (as the recorded sensors').
-  const auto& h = s.hydraulics;
-  {
-    positive(h.displacement, "hydraulics.displacement");
-    positive(h.chamber_volume, "hydraulics.chamber_volume");
-    positive(h.bulk_modulus, "hydraulics.bulk_modulus");
-    positive(h.supply_pressure, "hydraulics.supply_pressure");
-    non_negative(h.tank_pressure, "hydraulics.tank_pressure");
-    if (!(h.tank_pressure < h.supply_pressure))
-      throw ConfigError(src, 0, "hydraulics.tank_pressure", "must be below hydraulics.supply_pressure");
-    non_negative(h.relief_pressure, "hydraulics.relief_pressure");
-    if (h.relief_pressure > 0 && !(h.relief_pressure > h.tank_pressure))
-      throw ConfigError(src, 0, "hydraulics.relief_pressure", "must be above hydraulics.tank_pressure (or 0 for 1.1 p_s)");
-    positive(h.rated_flow, "hydraulics.rated_flow");
-    positive(h.rated_drop, "hydraulics.rated_drop");
-    positive(h.laminar_drop, "hydraulics.laminar_drop");
-    non_negative(h.leakage, "hydraulics.leakage");
-    positive(h.valve_frequency, "hydraulics.valve_frequency");
-    positive(h.valve_damping, "hydraulics.valve_damping");
-    non_negative(h.pressure_gain, "hydraulics.pressure_gain");
-    // The physical forms of k_v and D (0 = not given): all of a group or none, named at the first given.
-    auto whole = [&](std::initializer_list<std::pair<double, const char*>> group, const char* law) {
-      const char* given = nullptr;
-      std::string missing;
-      for (const auto& [x, key] : group) {
-        non_negative(x, key);
-        if (x > 0 && !given) given = key;
-        if (x == 0) missing += std::string(missing.empty() ? "" : ", ") + key;
-      }
-      if (given && !missing.empty())
-        throw ConfigError(src, 0, given, std::string("needs ") + missing + " too (" + law + ": all of them or none)");
-    };
-    whole({{h.discharge_coefficient, "hydraulics.discharge_coefficient"},
-           {h.port_width, "hydraulics.port_width"},
-           {h.spool_stroke, "hydraulics.spool_stroke"},
-           {h.oil_density, "hydraulics.oil_density"}},
-          "k_v = C_d w x_max sqrt(2 / rho)");
-    whole({{h.piston_area, "hydraulics.piston_area"}, {h.pinion_radius, "hydraulics.pinion_radius"}}, "D = A r");
-  }
+  if (const auto [key, why] = explain_hydraulic_fault(s.hydraulics); !key.empty())
+    throw ConfigError(src, 0, "hydraulics." + key, why);
   const auto& d = s.drive;
   {
     positive(d.inertia, "drive.inertia");

@@ -4,11 +4,64 @@
 #include <initializer_list>
 #include <string>
 #include <utility>
+#include <variant>
 
 #include "common/errors.hpp"
 #include "common/yaml_reader.hpp"
 
 namespace ff {
+
+const std::array<Field<HydraulicSpec>, kHydraulicFieldCount>& hydraulic_fields() {
+  using H = HydraulicSpec;
+  static const std::array<Field<H>, kHydraulicFieldCount> fields{{
+      {.key = "displacement", .member = &H::displacement, .unit = "m³/rad (m²)", .bound = Bound::kPositive},
+      {.key = "piston_area", .member = &H::piston_area, .unit = "m²", .bound = Bound::kNonNegative,
+       .fallback = "0: not given"},
+      {.key = "pinion_radius", .member = &H::pinion_radius, .unit = "m", .bound = Bound::kNonNegative,
+       .fallback = "0: not given"},
+      {.key = "chamber_volume", .member = &H::chamber_volume, .unit = "m³", .bound = Bound::kPositive},
+      {.key = "bulk_modulus", .member = &H::bulk_modulus, .unit = "Pa", .bound = Bound::kPositive},
+      {.key = "supply_pressure", .member = &H::supply_pressure, .unit = "Pa", .bound = Bound::kPositive},
+      {.key = "tank_pressure", .member = &H::tank_pressure, .unit = "Pa", .bound = Bound::kNonNegative},
+      {.key = "relief_pressure", .member = &H::relief_pressure, .unit = "Pa", .bound = Bound::kNonNegative,
+       .fallback = "0: 1.1 p_s"},
+      {.key = "rated_flow", .member = &H::rated_flow, .unit = "m³/s", .bound = Bound::kPositive},
+      {.key = "rated_drop", .member = &H::rated_drop, .unit = "Pa", .bound = Bound::kPositive},
+      {.key = "discharge_coefficient", .member = &H::discharge_coefficient, .bound = Bound::kNonNegative,
+       .fallback = "0: not given"},
+      {.key = "port_width", .member = &H::port_width, .unit = "m", .bound = Bound::kNonNegative,
+       .fallback = "0: not given"},
+      {.key = "spool_stroke", .member = &H::spool_stroke, .unit = "m", .bound = Bound::kNonNegative,
+       .fallback = "0: not given"},
+      {.key = "oil_density", .member = &H::oil_density, .unit = "kg/m³", .bound = Bound::kNonNegative,
+       .fallback = "0: not given"},
+      {.key = "laminar_drop", .member = &H::laminar_drop, .unit = "Pa", .bound = Bound::kPositive},
+      {.key = "leakage", .member = &H::leakage, .unit = "m³/(s·Pa)", .bound = Bound::kNonNegative},
+      {.key = "valve_frequency", .member = &H::valve_frequency, .unit = "Hz", .bound = Bound::kPositive},
+      {.key = "valve_damping", .member = &H::valve_damping, .bound = Bound::kPositive},
+      {.key = "pressure_gain", .member = &H::pressure_gain, .bound = Bound::kNonNegative},
+  }};
+  return fields;
+}
+
+void check_hydraulic_forms(YamlReader& hy, const HydraulicSpec& h) {
+  // k_v and D in one form each: a physical key given (> 0) next to a rated one in the file is named.
+  auto one_form = [&](std::initializer_list<std::pair<const char*, double>> physical,
+                      std::initializer_list<const char*> rated, const std::string& forms) {
+    for (const auto& [key, x] : physical)
+      for (const char* r : rated)
+        if (x > 0 && hy.has(r)) hy.fail(key, std::string("given with hydraulics.") + r + ": " + forms + ", not both");
+  };
+  one_form({{"discharge_coefficient", h.discharge_coefficient},
+            {"port_width", h.port_width},
+            {"spool_stroke", h.spool_stroke},
+            {"oil_density", h.oil_density}},
+           {"rated_flow", "rated_drop"},
+           "k_v comes from rated_flow and rated_drop or from discharge_coefficient, port_width, spool_stroke and "
+           "oil_density");
+  one_form({{"piston_area", h.piston_area}, {"pinion_radius", h.pinion_radius}}, {"displacement"},
+           "D is displacement or piston_area times pinion_radius");
+}
 
 const char* integrator_name(Integrator i) {
   switch (i) {
@@ -144,41 +197,8 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   auto hy = top.child("hydraulics");
   auto& h = s.hydraulics;
   hy.optional("enabled", h.enabled);
-  hy.optional("displacement", h.displacement);
-  hy.optional("piston_area", h.piston_area);
-  hy.optional("pinion_radius", h.pinion_radius);
-  hy.optional("chamber_volume", h.chamber_volume);
-  hy.optional("bulk_modulus", h.bulk_modulus);
-  hy.optional("supply_pressure", h.supply_pressure);
-  hy.optional("tank_pressure", h.tank_pressure);
-  hy.optional("relief_pressure", h.relief_pressure);
-  hy.optional("rated_flow", h.rated_flow);
-  hy.optional("rated_drop", h.rated_drop);
-  hy.optional("discharge_coefficient", h.discharge_coefficient);
-  hy.optional("port_width", h.port_width);
-  hy.optional("spool_stroke", h.spool_stroke);
-  hy.optional("oil_density", h.oil_density);
-  hy.optional("laminar_drop", h.laminar_drop);
-  hy.optional("leakage", h.leakage);
-  hy.optional("valve_frequency", h.valve_frequency);
-  hy.optional("valve_damping", h.valve_damping);
-  hy.optional("pressure_gain", h.pressure_gain);
-  // k_v and D in one form each: a physical key given (> 0) next to a rated one in the file is named.
-  auto one_form = [&](std::initializer_list<std::pair<const char*, double>> physical,
-                      std::initializer_list<const char*> rated, const std::string& forms) {
-    for (const auto& [key, x] : physical)
-      for (const char* r : rated)
-        if (x > 0 && hy.has(r)) hy.fail(key, std::string("given with hydraulics.") + r + ": " + forms + ", not both");
-  };
-  one_form({{"discharge_coefficient", h.discharge_coefficient},
-            {"port_width", h.port_width},
-            {"spool_stroke", h.spool_stroke},
-            {"oil_density", h.oil_density}},
-           {"rated_flow", "rated_drop"},
-           "k_v comes from rated_flow and rated_drop or from discharge_coefficient, port_width, spool_stroke and "
-           "oil_density");
-  one_form({{"piston_area", h.piston_area}, {"pinion_radius", h.pinion_radius}}, {"displacement"},
-           "D is displacement or piston_area times pinion_radius");
+  for (const Field<HydraulicSpec>& f : hydraulic_fields()) hy.optional(f.key, h.*std::get<double HydraulicSpec::*>(f.member));
+  check_hydraulic_forms(hy, h);
   hy.finish();
 
   auto dr = top.child("drive");

@@ -3,8 +3,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <string>
 
+#include "common/field_table.hpp"
 #include "kernel/model.hpp"
 
 namespace ff {
@@ -15,5 +17,16 @@ Model parse_model(const YAML::Node& doc, const std::string& source);
 Model load_model(const std::string& path);
 
 const char* integrator_name(Integrator i);
+
+// The hydraulic actuator's keys (kernel/model.hpp HydraulicSpec), one table for the rig's
+// `hydraulics:` block (which reads them without bounds: make_model checks them, explain_hydraulic_fault)
+// and an arm joint's `joints.NAME.hydraulics:` (arm/arm_yaml.cpp: read with the bounds). `enabled` is
+// the rig's alone (an arm's block is on by its presence). Units: a prismatic joint's in parentheses.
+inline constexpr std::size_t kHydraulicFieldCount = 19;
+const std::array<Field<HydraulicSpec>, kHydraulicFieldCount>& hydraulic_fields();
+
+// k_v and D in one form each: a physical key given (> 0) next to a rated one in the block `hy` is
+// named (hy.fail).
+void check_hydraulic_forms(YamlReader& hy, const HydraulicSpec& h);
 
 }  // namespace ff

@@ -21,6 +21,16 @@
 // (Coriolis, gyroscopic) stay explicit at the predictor: the midpoint rule, which does not damp the
 // unresolved modes, can go unstable when they are strongly excited (a twist put into the link as an
 // initial condition), SDIRK2 damps them and does not.
+// Hydraulic actuators (TreeLanes::hydraulic_dofs; their states TreeLanesState::z) join every stage as
+// the reference rig's hub drive does (kernel/fixed_step.cpp): in RK4 as four more rates of its
+// tableau; in the implicit pair each actuator's stage Z = zpre + gh f(Z) is solved per lane by
+// simplified Newton with its joint held at the stage's kinematic predictor (qk, vk; the rig holds its
+// hub at the spring state, whose velocity is the step's start: on an undamped oil spring that gained
+// 19 % of amplitude in 9 periods at h omega = 0.014; with the predictor the amplitude stays within
+// 5e-5 over 27 periods, tests/arm/arm_hydraulics_test.cpp), and its torque
+// D (p_a - p_b) from Z then acts in the stage's dynamics (SDIRK2's second stage from
+// zpre = z + (1 - g) h F1; the midpoint rule's z_new = 2 Z - z). The substeps must resolve the
+// actuators' rates (calc_hydraulic_rate) for accuracy.
 #pragma once
 
 #include <vector>
@@ -34,8 +44,9 @@ struct TreeLanesState {
   std::vector<double> q, qd;  // joint coordinates (rad or m) and rates
   std::vector<double> a_prev; // the last step's accelerations: the implicit pair's velocity predictor
                               // (zero before the first step)
+  std::vector<double> z;      // (nz x W) the hydraulic actuators' states (TreeLanes::hydraulic_dofs)
 };
-TreeLanesState make_tree_lanes_state(const TreeLanes& tl);  // q = qd = 0
+TreeLanesState make_tree_lanes_state(const TreeLanes& tl);  // q = qd = 0, z = 0 (the caller sets the pressures)
 
 // Scratch sized once for a batch.
 struct TreeStepWorkspace {
@@ -43,6 +54,8 @@ struct TreeStepWorkspace {
   explicit TreeStepWorkspace(const TreeLanes& tl);
   TreeLanesWorkspace aba;
   std::vector<double> q1, qd1, kq[4], kv[4], tau, armature;  // (nv x W)
+  std::vector<double> tau_act;                               // (nv x W) with hydraulic actuators only
+  std::vector<double> z1, kz[4];                             // (nz x W) their stage states and rates
   double armature_gh = -1.0;  // the stage coefficient `armature` was made for, s
 };
 

@@ -470,4 +470,34 @@ void set_tree_lanes_friction(TreeLanes& tl, int dof, std::span<const FrictionSpe
   }
 }
 
+void add_tree_lanes_hydraulics(TreeLanes& tl, int dof, std::span<const LaneDrive> per_lane,
+                               std::span<const double> load) {
+  if (dof < 0 || dof >= tl.nv)
+    throw std::invalid_argument("add_tree_lanes_hydraulics: dof " + std::to_string(dof) + " out of range");
+  if (std::find(tl.hydraulic_dofs.begin(), tl.hydraulic_dofs.end(), dof) != tl.hydraulic_dofs.end())
+    throw std::invalid_argument("add_tree_lanes_hydraulics: dof " + std::to_string(dof) + " has an actuator already");
+  if (per_lane.size() != static_cast<std::size_t>(tl.W) || load.size() != static_cast<std::size_t>(tl.W))
+    throw std::invalid_argument("add_tree_lanes_hydraulics: " + std::to_string(per_lane.size()) + " actuators and " +
+                                std::to_string(load.size()) + " loads for " + std::to_string(tl.W) + " lanes");
+  tl.hydraulic_dofs.push_back(dof);
+  tl.hydraulics.insert(tl.hydraulics.end(), per_lane.begin(), per_lane.end());
+  tl.hydraulic_load.insert(tl.hydraulic_load.end(), load.begin(), load.end());
+}
+
+void compute_tree_actuator_forces(const TreeLanes& tl, const double* q, const double* qd, const double* z,
+                                  const double* tau_applied, double* tau_act, double* zdot) {
+  const std::size_t W = static_cast<std::size_t>(tl.W), n = static_cast<std::size_t>(tl.nv) * W;
+  if (tau_applied) std::copy(tau_applied, tau_applied + n, tau_act);
+  else std::fill(tau_act, tau_act + n, 0.0);
+  for (std::size_t a = 0; a < tl.hydraulic_dofs.size(); ++a) {
+    const std::size_t o = static_cast<std::size_t>(tl.hydraulic_dofs[a]) * W, zo = kHydraulicStates * a * W;
+    for (std::size_t l = 0; l < W; ++l) {
+      const double cmd = tau_act[o + l];
+      tau_act[o + l] = eval_hydraulic_actuator(tl.hydraulics[a * W + l], cmd, q[o + l], qd[o + l], z + zo + l, W,
+                                               zdot ? zdot + zo + l : nullptr) -
+                       tl.hydraulic_load[a * W + l];
+    }
+  }
+}
+
 }  // namespace ff

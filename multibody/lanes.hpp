@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "multibody/tree.hpp"
 
@@ -36,6 +37,17 @@ struct TreeLanes {
   // (a lane without friction there holds the zero map). compute_tree_passive_forces adds it.
   std::vector<int> friction_dofs;
   std::vector<FrictionMap> friction;
+  // Hydraulic actuators (kernel/drive.hpp, eval_hydraulic_actuator; none from make_tree_lanes,
+  // add_tree_lanes_hydraulics adds them), on the same dofs in every lane: the dofs driven by one, in the
+  // order added, and per actuator a and lane l its constants and the constant load on its joint (N·m or
+  // N: a torque offset) at [a * W + l]. At such a dof the integrators read tau_applied as the actuator's
+  // torque command (its valve loop's); the joint gets D (p_a - p_b) - load instead
+  // (compute_tree_actuator_forces). Their states are TreeLanesState::z, rows 4 a .. 4 a + 3: spool, its
+  // rate, p_a, p_b (MPa).
+  std::vector<int> hydraulic_dofs;
+  std::vector<LaneDrive> hydraulics;
+  std::vector<double> hydraulic_load;
+  int nz() const { return kHydraulicStates * static_cast<int>(hydraulic_dofs.size()); }
 };
 
 // Gathers trees of one topology (the same number of bodies, parents and joint types) into lanes.
@@ -49,6 +61,18 @@ TreeLanes make_tree_lanes(std::span<const Tree> trees);
 // out of range, a count other than W, or a map that is not physical (negative b, Fc or stiction,
 // stiction below Fc unless 0, non-positive stribeck_velocity or smoothing).
 void set_tree_lanes_friction(TreeLanes& tl, int dof, std::span<const FrictionSpec> per_lane);
+
+// Puts a hydraulic actuator on joint coordinate `dof` of every lane: per_lane[l] its constants
+// (make_hydraulic_drive), load[l] the constant load on the joint (W of each). Throws
+// std::invalid_argument on a dof out of range or driven already, or counts other than W.
+void add_tree_lanes_hydraulics(TreeLanes& tl, int dof, std::span<const LaneDrive> per_lane,
+                               std::span<const double> load);
+
+// The generalised force the actuators give (nv x W): tau_applied (null: none), at each hydraulic dof
+// replaced by D (p_a - p_b) - load from the actuator's states z (nz x W), its command tau_applied there;
+// the actuators' state rates into zdot (nz x W) when it is not null. Nothing allocated.
+void compute_tree_actuator_forces(const TreeLanes& tl, const double* q, const double* qd, const double* z,
+                                  const double* tau_applied, double* tau_act, double* zdot);
 
 // Scratch of the recursions for every body and lane, sized once: nothing is allocated per call.
 struct TreeLanesWorkspace {

@@ -35,6 +35,11 @@ std::vector<TreeMode> calc_tree_modes(const Tree& tree, const Eigen::Ref<const E
     if (x->size() != 0 && (x->rows() != nv || x->cols() != nv))
       throw std::invalid_argument("calc_tree_modes: an extra stiffness or damping matrix is not " + std::to_string(nv) +
                                   " x " + std::to_string(nv));
+  const int nz = static_cast<int>(o.actuator_z.rows());
+  if (o.actuator_z.cols() != nz || o.actuator_force.rows() != (nz ? nv : 0) || o.actuator_force.cols() != nz ||
+      o.actuator_q.rows() != nz || o.actuator_q.cols() != (nz ? nv : 0) || o.actuator_qd.rows() != nz ||
+      o.actuator_qd.cols() != (nz ? nv : 0))
+    throw std::invalid_argument("calc_tree_modes: the actuator matrices are not nv x nz, nz x nv, nz x nv, nz x nz");
   std::vector<char> locked(static_cast<std::size_t>(nv), 0);
   for (int j : o.locked_dofs) {
     if (j < 0 || j >= nv) throw std::invalid_argument("calc_tree_modes: no dof " + std::to_string(j) + " to lock");
@@ -71,7 +76,7 @@ std::vector<TreeMode> calc_tree_modes(const Tree& tree, const Eigen::Ref<const E
   };
 
   std::vector<TreeMode> modes;
-  if (C.cwiseAbs().maxCoeff() == 0.0) {
+  if (C.cwiseAbs().maxCoeff() == 0.0 && nz == 0) {
     // K v = w^2 M v with the symmetric part of K.
     const Eigen::MatrixXd Ks = 0.5 * (K + K.transpose());
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Ks, M);
@@ -89,12 +94,24 @@ std::vector<TreeMode> calc_tree_modes(const Tree& tree, const Eigen::Ref<const E
     // x' = A x, x = [q; qd]: each complex pair once, real poles alone.
     const Eigen::LLT<Eigen::MatrixXd> llt(M);
     if (llt.info() != Eigen::Success) throw std::invalid_argument("calc_tree_modes: M is not positive definite at q0");
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * n, 2 * n);
-    A.topRightCorner(n, n).setIdentity();
-    A.bottomLeftCorner(n, n) = -llt.solve(K);
-    A.bottomRightCorner(n, n) = -llt.solve(C);
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * n + nz, 2 * n + nz);
+    A.block(0, n, n, n).setIdentity();
+    A.block(n, 0, n, n) = -llt.solve(K);
+    A.block(n, n, n, n) = -llt.solve(C);
+    if (nz > 0) {
+      Eigen::MatrixXd B(n, nz), Zq(nz, n), Zv(nz, n);
+      for (int a = 0; a < n; ++a) {
+        B.row(a) = o.actuator_force.row(free[a]);
+        Zq.col(a) = o.actuator_q.col(free[a]);
+        Zv.col(a) = o.actuator_qd.col(free[a]);
+      }
+      A.block(n, 2 * n, n, nz) = llt.solve(B);
+      A.block(2 * n, 0, nz, n) = Zq;
+      A.block(2 * n, n, nz, n) = Zv;
+      A.block(2 * n, 2 * n, nz, nz) = o.actuator_z;
+    }
     const Eigen::EigenSolver<Eigen::MatrixXd> eig(A);
-    for (int k = 0; k < 2 * n; ++k) {
+    for (int k = 0; k < 2 * n + nz; ++k) {
       const std::complex<double> lam = eig.eigenvalues()[k];
       if (lam.imag() < 0.0) continue;  // the conjugate of one reported
       TreeMode m;

@@ -2,8 +2,9 @@
 //   M x'' + C x' + K x = 0,  M = M(q0) (CRBA, armature included), K = dg/dq + diag(k) at q0
 //   (calc_static_stiffness: the springs and the gravity stiffness), C = diag(c) (the joint dampers),
 // each plus an optional caller-given matrix (a closed loop's PD gains on the actuated dofs). Locked
-// dofs (clamped joints) are removed. Undamped (C = 0): the symmetric-definite problem K v = w^2 M v;
-// damped: the eigenvalues lambda of A = [[0, I], [-M^-1 K, -M^-1 C]], omega_n = |lambda|,
+// dofs (clamped joints) are removed. Undamped (C = 0, no actuator states): the symmetric-definite
+// problem K v = w^2 M v; damped: the eigenvalues lambda of A = [[0, I], [-M^-1 K, -M^-1 C]] (with
+// actuator states: TreeModeOptions::actuator_*), omega_n = |lambda|,
 // zeta = -Re(lambda) / |lambda|, as kernel/modes.hpp does for the reference rig.
 //
 // K is symmetric at an equilibrium; away from one (gravity not balanced at q0) dg/dq is not, and only
@@ -22,6 +23,12 @@ struct TreeModeOptions {
   Eigen::MatrixXd extra_stiffness;  // (nv x nv) added to K, N·m/rad; empty = none
   Eigen::MatrixXd extra_damping;    // (nv x nv) added to C, N·m·s/rad; empty = none
   double fd_step = 1e-6;            // the gravity stiffness's central-difference step (calc_static_stiffness)
+  // First-order states z coupled to the tree (actuators, linearised at q0; all four empty = none): the
+  // generalised force per unit z, B = dtau/dz (nv x nz), and the states' rates
+  // z' = Zq dq + Zv dqd + Zz dz (nz x nv, nz x nv, nz x nz). The problem is then x' = A x,
+  // x = [q; qd; z], A = [[0, I, 0], [-M^-1 K, -M^-1 C, M^-1 B], [Zq, Zv, Zz]] (a locked dof's rows and
+  // columns removed); a mode's shape is its q block.
+  Eigen::MatrixXd actuator_force, actuator_q, actuator_qd, actuator_z;
 };
 
 struct TreeMode {

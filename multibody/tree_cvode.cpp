@@ -35,7 +35,18 @@ struct Lane {
   VectorXd tau_held;        // (nv) the applied force over the current advance
   VectorXd tau;             // (nv) scratch: applied + passive + friction
   std::vector<std::pair<int, FrictionMap>> friction;  // the lane's joint friction (TreeLanes::friction)
-  VectorXd ypert, fpert;    // (2 nv) the finite-difference Jacobian's perturbed state and rate
+  // The lane's hydraulic actuators (TreeLanes::hydraulic_dofs): their states follow q and qd in y.
+  struct Actuator {
+    int dof;
+    LaneDrive p;
+    double load;  // constant load on the joint, N·m (N)
+    double cmd;   // the held torque command over the current advance, N·m (N)
+  };
+  std::vector<Actuator> acts;
+  int nz = 0;               // kHydraulicStates per actuator
+  VectorXd tau_joint;       // (nv) tau_held with the actuators' dofs 0 (their command is Actuator::cmd)
+  std::vector<double> pjac; // (acts x 16) kGmres: each actuator's df/dz at the preconditioner's setup
+  VectorXd ypert, fpert;    // (2 nv + nz) the finite-difference Jacobian's perturbed state and rate
   long fd_rhs_evals = 0;    // right-hand sides of our own Jacobian since the last ReInit
 
   // kGmres's preconditioner: the lane's tree as one lane without gravity, its ABA with armature.
@@ -87,11 +98,16 @@ bool eval(Lane& L, const double* y, double* f) {
   const Map<const VectorXd> q(y, n), qd(y + n, n);
   Map<VectorXd> qdd(f + n, n);
   calc_passive_forces(L.tree, q, qd, L.tau);
-  L.tau += L.tau_held;
+  L.tau += L.tau_joint;
   for (const auto& [d, fm] : L.friction) L.tau[d] += calc_friction_torque(fm, qd[d]);
+  for (std::size_t a = 0; a < L.acts.size(); ++a) {  // y and f hold the actuators' states after q and qd
+    const Lane::Actuator& A = L.acts[a];
+    const std::size_t o = 2 * static_cast<std::size_t>(n) + kHydraulicStates * a;
+    L.tau[A.dof] += eval_hydraulic_actuator(A.p, A.cmd, q[A.dof], qd[A.dof], y + o, 1, f + o) - A.load;
+  }
   calc_forward_dynamics(L.tree, q, qd, L.tau, qdd, L.ws);
   std::copy(y + n, y + 2 * n, f);
-  for (int i = 0; i < 2 * n; ++i)
+  for (int i = 0; i < 2 * n + L.nz; ++i)
     if (!std::isfinite(f[i])) return false;
   return true;
 }
@@ -103,19 +119,21 @@ int rhs(sunrealtype /*t*/, N_Vector y, N_Vector ydot, void* user_data) {
   return eval(L, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot)) ? 0 : 1;
 }
 
-// CSC pattern of J = [[0, I], [dqdd/dq, dqdd/dqd]]: column j < nv holds rows {j} + {nv .. 2nv-1}
-// (the diagonal stored as an explicit zero), column nv + i holds rows {i} + {nv .. 2nv-1}. Written on
-// every call, because CVODE zeroes the matrix (SUNMatZero clears the pattern too).
-void write_pattern(SUNMatrix A, int n) {
+// CSC pattern of J = [[0, I, 0], [dqdd/dq, dqdd/dqd, dqdd/dz], [dz'/dq, dz'/dqd, dz'/dz]] (z the nz
+// actuator states, none without): column j < nv holds rows {j} + {nv .. 2nv+nz-1} (the diagonal stored
+// as an explicit zero), column nv + i holds rows {i} + {nv .. 2nv+nz-1}, column 2nv + k rows
+// {nv .. 2nv+nz-1}. Written on every call, because CVODE zeroes the matrix (SUNMatZero clears the
+// pattern too).
+void write_pattern(SUNMatrix A, int n, int nz) {
   sunindextype* colptrs = SUNSparseMatrix_IndexPointers(A);
   sunindextype* rowvals = SUNSparseMatrix_IndexValues(A);
   sunindextype p = 0;
-  for (int j = 0; j < 2 * n; ++j) {
+  for (int j = 0; j < 2 * n + nz; ++j) {
     colptrs[j] = p;
-    rowvals[p++] = j < n ? j : j - n;
-    for (int i = 0; i < n; ++i) rowvals[p++] = n + i;
+    if (j < 2 * n) rowvals[p++] = j < n ? j : j - n;
+    for (int i = 0; i < n + nz; ++i) rowvals[p++] = n + i;
   }
-  colptrs[2 * n] = p;
+  colptrs[2 * n + nz] = p;
 }
 
 // Forward-difference Jacobian for KLU: the top block exact (0 and I); each column of the bottom
@@ -124,18 +142,18 @@ void write_pattern(SUNMatrix A, int n) {
 int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_data, N_Vector /*tmp1*/,
             N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
   Lane& L = *static_cast<Lane*>(user_data);
-  const int n = L.nv;
+  const int n = L.nv, nz = L.nz;
   const double* yd = N_VGetArrayPointer(y);
   const double* f_low = N_VGetArrayPointer(fy) + n;
   double* data = SUNSparseMatrix_Data(A);
-  write_pattern(A, n);
+  write_pattern(A, n, nz);
   static const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
   double* yp = L.ypert.data();
   double* fp = L.fpert.data();
-  std::copy(yd, yd + 2 * n, yp);
+  std::copy(yd, yd + 2 * n + nz, yp);
   sunindextype p = 0;
-  for (int j = 0; j < 2 * n; ++j) {
-    data[p++] = j < n ? 0.0 : 1.0;
+  for (int j = 0; j < 2 * n + nz; ++j) {
+    if (j < 2 * n) data[p++] = j < n ? 0.0 : 1.0;
     const double yj = yd[j];
     const double delta = (yj + srur * std::max(std::abs(yj), 1.0)) - yj;
     yp[j] = yj + delta;
@@ -144,7 +162,7 @@ int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_
     yp[j] = yj;
     if (!finite) return 1;  // recoverable: CVODE cuts the step and retries
     const double r = 1.0 / delta;
-    for (int i = 0; i < n; ++i) data[p++] = (fp[n + i] - f_low[i]) * r;
+    for (int i = 0; i < n + nz; ++i) data[p++] = (fp[n + i] - f_low[i]) * r;
   }
   return 0;
 }
@@ -152,9 +170,24 @@ int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_
 // kGmres's preconditioner P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]] (K, C: the joint springs and
 // dampers, the stiff part of the Jacobian; gravity, velocity products and dM/dq left out). P z = r:
 //   (M + D) w = -D r_v - gamma K r_q,  z_v = r_v + w,  z_q = r_q + gamma z_v,  D = gamma C + gamma^2 K,
-// one ABA pass with D as extra armature (no gravity, qd = 0), O(nv); nothing to set up.
-int psetup(sunrealtype, N_Vector, N_Vector, sunbooleantype, sunbooleantype* jcur, sunrealtype, void*) {
+// one ABA pass with D as extra armature (no gravity, qd = 0), O(nv). The actuators' states (block
+// Jacobi): (I - gamma dz'/dz) z_z = r_z per actuator, dz'/dz by forward differences at the setup's y
+// with its joint held (calc_hydraulic_jacobian), a 4 x 4 solve.
+int psetup(sunrealtype, N_Vector y, N_Vector, sunbooleantype jok, sunbooleantype* jcur, sunrealtype, void* user_data) {
+  Lane& L = *static_cast<Lane*>(user_data);
   *jcur = SUNTRUE;
+  if (jok && !L.acts.empty()) {
+    *jcur = SUNFALSE;
+    return 0;
+  }
+  const double* yd = N_VGetArrayPointer(y);
+  const int n = L.nv;
+  for (std::size_t a = 0; a < L.acts.size(); ++a) {
+    const Lane::Actuator& A = L.acts[a];
+    double f0[kHydraulicStates];
+    calc_hydraulic_jacobian(A.p, A.cmd, yd[A.dof], yd[n + A.dof], yd + 2 * n + kHydraulicStates * a, f0,
+                            L.pjac.data() + kHydraulicStates * kHydraulicStates * a);
+  }
   return 0;
 }
 
@@ -179,7 +212,16 @@ int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector 
     zd[n + i] = rd[n + i] + L.out[static_cast<std::size_t>(i)];
     zd[i] = rd[i] + gamma * zd[n + i];
   }
-  for (int i = 0; i < 2 * n; ++i)
+  constexpr int m = kHydraulicStates;
+  for (std::size_t a = 0; a < L.acts.size(); ++a) {
+    const std::size_t o = 2 * static_cast<std::size_t>(n) + m * a;
+    const double* J = L.pjac.data() + m * m * a;
+    double P[m * m];
+    for (int i = 0; i < m * m; ++i) P[i] = (i % (m + 1) == 0 ? 1.0 : 0.0) - gamma * J[i];
+    std::copy(rd + o, rd + o + m, zd + o);
+    solve_small_system(m, P, zd + o);
+  }
+  for (int i = 0; i < 2 * n + L.nz; ++i)
     if (!std::isfinite(zd[i])) return 1;  // recoverable
   return 0;
 }
@@ -195,8 +237,15 @@ std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptio
   auto L = std::make_unique<Lane>();
   L->tree = tl.trees[static_cast<std::size_t>(l)];
   L->ws = TreeWorkspace(L->tree);
-  const int n = tl.nv, ny = 2 * n;
+  const std::size_t W = static_cast<std::size_t>(tl.W);
+  for (std::size_t a = 0; a < tl.hydraulic_dofs.size(); ++a)
+    L->acts.push_back({tl.hydraulic_dofs[a], tl.hydraulics[a * W + static_cast<std::size_t>(l)],
+                       tl.hydraulic_load[a * W + static_cast<std::size_t>(l)], 0.0});
+  L->nz = tl.nz();
+  L->pjac.assign(L->acts.size() * kHydraulicStates * kHydraulicStates, 0.0);
+  const int n = tl.nv, ny = 2 * n + L->nz;
   L->nv = n;
+  L->tau_joint = VectorXd::Zero(n);
   L->tau_held = VectorXd::Zero(n);
   L->tau = VectorXd::Zero(n);
   L->tau_end = VectorXd::Zero(n);
@@ -220,7 +269,7 @@ std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptio
   if (CVodeSetMaxNumSteps(L->mem, opt.max_steps) != CV_SUCCESS) fail("CVodeSetMaxNumSteps", l);
 
   if (opt.solver == TreeCvodeSolver::kKlu) {
-    const sunindextype nnz = static_cast<sunindextype>(ny) * (n + 1);
+    const sunindextype nnz = static_cast<sunindextype>(2 * n) * (n + 1 + L->nz) + static_cast<sunindextype>(L->nz) * (n + L->nz);
     L->A = SUNSparseMatrix(ny, ny, nnz, CSC_MAT, L->ctx);
     if (!L->A) fail("SUNSparseMatrix", l);
     L->ls = SUNLinSol_KLU(L->y, L->A, L->ctx);
@@ -279,8 +328,9 @@ void TreeCvode::advance(const TreeLanes& tl, const double* tau_applied, TreeLane
   const int W = impl_->W, n = impl_->nv;
   if (tl.W != W || tl.nv != n) throw std::invalid_argument("TreeCvode: lanes of another shape than it was made for");
   const std::size_t size = static_cast<std::size_t>(n) * W;
-  if (s.q.size() != size || s.qd.size() != size || s.a_prev.size() != size)
-    throw std::invalid_argument("TreeCvode: state vectors are not nv x W");
+  if (s.q.size() != size || s.qd.size() != size || s.a_prev.size() != size ||
+      s.z.size() != static_cast<std::size_t>(tl.nz()) * W)
+    throw std::invalid_argument("TreeCvode: state vectors are not nv x W (z: nz x W)");
   if (!std::isfinite(t) || !std::isfinite(dt) || dt < 0.0)
     throw std::invalid_argument("TreeCvode: t and dt must be finite, dt >= 0");
   ok.assign(static_cast<std::size_t>(W), 1);
@@ -299,6 +349,17 @@ void TreeCvode::advance(const TreeLanes& tl, const double* tau_applied, TreeLane
       y[i] = s.q[k];
       y[n + i] = s.qd[k];
       L.tau_held[i] = tau_i;
+    }
+    for (int i = 0; i < L.nz; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i) * W + l;
+      same = same && s.z[k] == y[2 * n + i];
+      y[2 * n + i] = s.z[k];
+    }
+    // At an actuator's dof the held force is its command; the joint gets the actuator's torque.
+    L.tau_joint = L.tau_held;
+    for (Lane::Actuator& A : L.acts) {
+      A.cmd = L.tau_held[A.dof];
+      L.tau_joint[A.dof] = 0.0;
     }
     int flag = CV_SUCCESS;
     if (!same) {
@@ -326,6 +387,7 @@ void TreeCvode::advance(const TreeLanes& tl, const double* tau_applied, TreeLane
       s.qd[k] = y[n + i];
       s.a_prev[k] = L.fpert[n + i];
     }
+    for (int i = 0; i < L.nz; ++i) s.z[static_cast<std::size_t>(i) * W + l] = y[2 * n + i];
   }
 }
 

@@ -6,7 +6,10 @@
 // Each lane is an independent ODE y = [q; qd] (2 nv), ydot = [qd; qdd] with
 // qdd = calc_forward_dynamics(tree_l, q, qd, tau_applied_l + calc_passive_forces(tree_l, q, qd) + the
 // joint friction of TreeLanes::friction at qd, kernel/friction.hpp): the
-// scalar ABA of multibody/algorithms.hpp on the lane's own tree. Each lane owns its SUNContext, vector,
+// scalar ABA of multibody/algorithms.hpp on the lane's own tree. With hydraulic actuators
+// (TreeLanes::hydraulic_dofs) their states follow: y = [q; qd; z] (2 nv + 4 per actuator), their rates
+// from kernel/drive.hpp's eval_hydraulic_actuator, their torque D (p_a - p_b) - load at their dofs,
+// where the held force is their command. Each lane owns its SUNContext, vector,
 // matrix, linear solver, CVODE memory, tree copy and workspace, so a lane's result depends on its own
 // inputs and history only: the same bits alone or in a batch, in any position.
 //
@@ -22,14 +25,16 @@
 //   kKlu    SUNSparseMatrix (CSC) + SUNLinSol_KLU with our own forward-difference Jacobian on the
 //           pattern [[0, I], [dqdd/dq, dqdd/dqd]] (the zero diagonal of the top-left block stored so
 //           that CVODE forms I - gamma J in place): 2 nv (nv + 1) stored entries, 2 nv right-hand sides
-//           per Jacobian, as dense.
+//           per Jacobian, as dense. Actuator states add their rows below qd's to every column and their
+//           own columns (rows nv .. 2 nv + nz - 1).
 //   kGmres  matrix-free: SUNLinSol_SPGMR (left preconditioning, Krylov dimension 5), J v by CVODE's
 //           difference quotient (one right-hand side per iteration), preconditioned by the stiff part
 //           of the Jacobian, the joint springs K and dampers C: P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]],
 //           solved exactly in O(nv) by one ABA pass with gamma C + gamma^2 K as extra armature (the
 //           fixed-step implicit pair's trick, multibody/lane_integrators.hpp; the joint friction's
 //           slope at the current rate added to C), gravity and qd off. No
-//           Jacobian evaluations, no factorisation.
+//           Jacobian evaluations, no factorisation. Actuator states: block Jacobi, each actuator's
+//           I - gamma dz'/dz (4 x 4, forward differences at the preconditioner's setup).
 // Honest note on KLU: the reduced (joint-space) ODE has no sparse Jacobian -- M(q)^-1 couples every
 // joint of a chain, so dqdd/dq and dqdd/dqd are full nv x nv blocks whatever the topology -- and KLU
 // cannot gain from sparsity in the usual sense. What it gains is the ordering: eliminating the
