@@ -136,14 +136,26 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   out.push_back({"torque_offset@" + a.name, "a constant load torque on " + a.name + " (cable drag, an unbalanced axis)",
                  {}, {make_effect_param(j + "torque_offset", a.control.torque_offset, js.torque)}, "", {}, false, ""});
   // The drive train: its spring from the loop's own to a thousand times it, its damper's time constant
-  // c/k from 1e-6 to 0.1 s, the rotor from a thousandth of the joint's inertia to all of it.
+  // c/k from 1e-6 to 0.1 s, the rotor from a thousandth of the joint's inertia to all of it. (Not on a
+  // hydraulic joint: the two do not go together.)
+  const HydraulicSpec& hyd = a.control.hydraulics;
   const double k0 = number_at(doc, j + "drive.stiffness", 200.0 * kp);
-  out.push_back({"drive_compliance@" + a.name, "a compliant drive train between " + a.name + "'s actuator and its link", {},
+  if (!hyd.enabled)
+    out.push_back({"drive_compliance@" + a.name, "a compliant drive train between " + a.name + "'s actuator and its link", {},
                  {make_positive_param(j + "drive.stiffness", k0, 200.0 * kp, kp, 1e3 * kp),
                   make_positive_param(j + "drive.damping", number_at(doc, j + "drive.damping", 0.0), 1e-3 * k0, 1e-6 * kp, 1e2 * kp),
                   make_positive_param(j + "drive.rotor_inertia", number_at(doc, j + "drive.rotor_inertia", 0.0),
                                       0.1 * js.inertia, 1e-3 * js.inertia, js.inertia)},
                  "", {}, false, ""});
+  // A hydraulic joint's oil spring 4 beta D^2 / V (the rig's hydraulic_compressibility): the bulk modulus
+  // (entrained air lowers it by decades) and the chamber volume.
+  if (hyd.enabled)
+    out.push_back({"hydraulic_compressibility@" + a.name, "oil compressibility of " + a.name + "'s hydraulic actuator",
+                   {},
+                   {make_positive_param(j + "hydraulics.bulk_modulus", 0.5 * hyd.bulk_modulus, 0.5 * hyd.bulk_modulus, 1e7, 2e9),
+                    make_positive_param(j + "hydraulics.chamber_volume", hyd.chamber_volume, hyd.chamber_volume,
+                                        0.1 * hyd.chamber_volume, 10.0 * hyd.chamber_volume)},
+                   "", {}, false, ""});
   out.push_back({"torque_saturation@" + a.name, "saturation of " + a.name + "'s actuator torque", {},
                  {make_positive_param(j + "controller.torque_limit", 0.0, 0.8 * peak, 0.05 * peak, 1.5 * peak)}, "", {},
                  false, ""});
