@@ -147,6 +147,17 @@ BatchModel make_batch(std::span<const Model> models) {
   return bm;
 }
 
+BodyTable make_body_table(const BatchModel& bm, const TipLoad& tip) {
+  return {bm.W, bm.nseg, bm.body_mass.data(), bm.body_first.data(), bm.body_inertia.data(),
+          {tip.mass.data(), tip.first.data(), tip.inertia.data()}};
+}
+
+BodyTable make_body_table(const BatchModel& bm) {
+  const std::size_t o = static_cast<std::size_t>(bm.nseg - 1) * bm.W;
+  return {bm.W, bm.nseg, bm.body_mass.data(), bm.body_first.data(), bm.body_inertia.data(),
+          {bm.body_mass.data() + o, bm.body_first.data() + o, bm.body_inertia.data() + o}};
+}
+
 BatchState make_state(const BatchModel& bm) {
   BatchState s;
   const std::size_t nw = static_cast<std::size_t>(bm.nseg) * bm.W;
@@ -158,6 +169,10 @@ BatchState make_state(const BatchModel& bm) {
   s.tau.assign(bm.W, 0.0);
   s.integral.assign(bm.W, 0.0);
   s.notch_state.assign(static_cast<std::size_t>(2) * bm.nsections * bm.W, 0.0);
+  const std::size_t tip = static_cast<std::size_t>(bm.nseg - 1) * bm.W;
+  s.tip.mass.assign(bm.body_mass.begin() + tip, bm.body_mass.begin() + tip + bm.W);
+  s.tip.first.assign(bm.body_first.begin() + tip, bm.body_first.begin() + tip + bm.W);
+  s.tip.inertia.assign(bm.body_inertia.begin() + tip, bm.body_inertia.begin() + tip + bm.W);
   s.status.assign(bm.W, LaneStatus::kOk);
   for (auto& m : s.measured) m.assign(static_cast<std::size_t>(bm.sensor_history) * bm.W, 0.0);
   for (int c = 0; c < kRecordedChannels; ++c)
@@ -171,7 +186,8 @@ void copy_lane(const BatchModel& bm, BatchState& s, int from, int to) {
   auto copy = [&](std::vector<double>& x) {
     for (std::size_t o = 0; o < x.size(); o += W) x[o + to] = x[o + from];
   };
-  for (auto* x : {&s.q, &s.v, &s.a_prev, &s.z, &s.tau, &s.integral, &s.notch_state, &s.measured[0], &s.measured[1]})
+  for (auto* x : {&s.q, &s.v, &s.a_prev, &s.z, &s.tau, &s.integral, &s.notch_state, &s.measured[0], &s.measured[1],
+                  &s.tip.mass, &s.tip.first, &s.tip.inertia})
     copy(*x);
   for (auto& x : s.recorded) copy(x);
   s.status[to] = s.status[from];

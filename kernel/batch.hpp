@@ -23,7 +23,8 @@ inline constexpr int kMaxLanes = 256;
 // (0 and 1 are the hub angle and rate).
 enum RecordedChannel { kStrainGauge = 0, kTipAccelerometer, kTipPositionSensor, kRecordedChannels };
 
-// The parameters of W models of equal shape, gathered lane-innermost. Immutable once made.
+// The parameters of W models of equal shape, gathered lane-innermost. Immutable once made: nothing
+// a run changes lives here (the tip body a payload event changes is BatchState::tip).
 struct BatchModel {
   int W = 0;                        // lanes
   int nseg = 0;                     // N, bodies and joints
@@ -35,6 +36,8 @@ struct BatchModel {
   std::vector<double> body_mass;    // (N x W), kg
   std::vector<double> body_first;   // mass times centre-of-mass offset (N x W), kg·m
   std::vector<double> body_inertia; // about the joint axis (N x W), kg·m^2
+                                    // (row N-1, the tip body with its payload, as made: where a run's
+                                    // BatchState::tip starts)
   std::vector<double> seg_length;   // (N x W), m
   std::vector<double> joint_k;      // (N x W), N·m/rad, row 0 = 0
   std::vector<double> joint_c;      // (N x W), N·m·s/rad, row 0 = 0
@@ -91,7 +94,46 @@ int calc_sensor_hold(const ChannelSpec& ch, double controller_rate);
 // The continuous notch filter (seed eq. 6) a model asks for, with its zeros in place.
 NotchDesign make_notch_design(const Model& m);
 
-// Everything that changes during a run.
+// The tip body's inertial parameters (body N-1: the last segment with its payload, and the hub when
+// N = 1), W each, lane innermost: the part of the body table a run changes (payload events pick and
+// release at their samples). make_state starts it from the model's row N-1.
+struct TipLoad {
+  std::vector<double> mass;         // (W), kg
+  std::vector<double> first;        // (W) mass times centre-of-mass offset, kg·m
+  std::vector<double> inertia;      // (W) about the joint axis, kg·m^2
+};
+
+// One body row of the dynamics' inputs: mass, first moment, inertia about the joint axis (W each).
+struct BodyRow {
+  const double* mass;
+  const double* first;
+  const double* inertia;
+};
+
+// The bodies the dynamics read (a view, nothing owned): bodies 0..N-2 from the model's tables
+// (BatchModel::body_*, N x W), the tip body N-1 from a run's TipLoad (or the model's own row N-1).
+struct BodyTable {
+  int W = 0, nseg = 0;
+  const double* mass = nullptr;     // (N x W), rows 0..N-2 read
+  const double* first = nullptr;
+  const double* inertia = nullptr;
+  BodyRow tip{};                    // (W) body N-1
+  BodyRow row(int i) const {
+    if (i == nseg - 1) return tip;
+    const std::size_t o = static_cast<std::size_t>(i) * W;
+    return {mass + o, first + o, inertia + o};
+  }
+};
+
+// The model's bodies with `tip` as the tip body.
+BodyTable make_body_table(const BatchModel& bm, const TipLoad& tip);
+// The model's bodies as made (its own tip row): for callers without a run's state.
+BodyTable make_body_table(const BatchModel& bm);
+
+// Everything that changes during a run, and nothing else: a copy of it is a checkpoint the same
+// model resumes from bit for bit (the fixed-step integrators; CVODE restarts at every sample anyway).
+// The payload events already applied follow from `sample` (kernel/simulate.cpp), so they need no
+// counter of their own.
 struct BatchState {
   double t = 0.0;                   // s
   long sample = 0;                  // controller samples taken
@@ -105,15 +147,16 @@ struct BatchState {
   std::vector<double> recorded[kRecordedChannels];  // (rec_history x W) rings of the enabled recorded sensors
   std::vector<double> a_prev;       // (N x W) the last step's accelerations, rad/s^2: SDIRK2's and the
                                     // midpoint rule's velocity predictor (zero before the first step)
+  TipLoad tip;                      // the tip body now (payload events change it), W each
   std::vector<LaneStatus> status;   // (W)
 };
 
 BatchState make_state(const BatchModel& bm);
 
 // Copies everything of lane `from` that changes during a run (plant q, v, drive z, held torque,
-// integral, notch, sensor rings, the integrators' predictor, status) into lane `to`: lane `to` then
-// continues bit for bit as lane `from` would (the fixed-step integrators; CVODE keeps its own
-// history). Allocates nothing.
+// integral, notch, sensor rings, the integrators' predictor, the tip load, status) into lane `to`:
+// lane `to` then continues bit for bit as lane `from` would (the fixed-step integrators; CVODE keeps
+// its own history; payload events still to come are lane `to`'s model's). Allocates nothing.
 void copy_lane(const BatchModel& bm, BatchState& s, int from, int to);
 
 // Scratch for the articulated-body algorithm and the integrators, sized once: nothing is

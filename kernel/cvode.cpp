@@ -1,8 +1,9 @@
 // CVODE (SUNDIALS 6) as the reference integrator of the batch kernel.
 //
 // Each lane is an independent ODE y = [q (N); v (N); z (nz)], ydot = [v; qdd; zdot](q, v, z, tau_held),
-// with qdd from the articulated-body algorithm on a one-lane copy of the batch model and z the hub
-// drive's states (kernel/drive.hpp: valve, oil pressures, drive train, LuGre bristles). Each lane owns its
+// with qdd from the articulated-body algorithm on a one-lane copy of the batch model whose tip body is
+// the lane's BatchState::tip at the advance (held over it), and z the hub drive's states
+// (kernel/drive.hpp: valve, oil pressures, drive train, LuGre bristles). Each lane owns its
 // SUNContext, vector, matrix, linear solver and CVODE memory, and its own one-lane model and
 // workspace, so lanes share no mutable state and may be advanced on different threads.
 //
@@ -50,6 +51,8 @@ constexpr long kMaxStepsPerAdvance = 100000;
 // a pointer to it (kept behind unique_ptr).
 struct Lane {
   BatchModel bm;               // one-lane copy of the lane's model
+  TipLoad tip;                 // the lane's tip body over the current advance (BatchState::tip)
+  BodyTable body;              // bm's bodies with `tip`
   Workspace ws;                // its articulated-body scratch
   int n = 0;                   // N
   int nz = 0;                  // hub drive states
@@ -85,7 +88,7 @@ int rhs(sunrealtype /*t*/, N_Vector y, N_Vector ydot, void* user_data) {
   const double* yd = N_VGetArrayPointer(y);
   double* fd = N_VGetArrayPointer(ydot);
   std::copy(yd + n, yd + 2 * n, fd);
-  compute_acceleration(L.bm, yd, yd + n, yd + 2 * n, &L.tau, fd + n, fd + 2 * n, L.ws);
+  compute_acceleration(L.bm, L.body, yd, yd + n, yd + 2 * n, &L.tau, fd + n, fd + 2 * n, L.ws);
   for (int i = 0; i < 2 * n + L.nz; ++i)
     if (!std::isfinite(fd[i])) return 1;
   return 0;
@@ -132,7 +135,7 @@ int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_
     const double yj = yd[j];
     const double delta = (yj + srur * std::max(std::abs(yj), 1.0)) - yj;
     yp[j] = yj + delta;
-    compute_acceleration(L.bm, yp, yp + n, yp + 2 * n, &L.tau, fp, fp + n, L.ws);
+    compute_acceleration(L.bm, L.body, yp, yp + n, yp + 2 * n, &L.tau, fp, fp + n, L.ws);
     ++L.fd_rhs_evals;
     yp[j] = yj;
     const double r = 1.0 / delta;
@@ -157,6 +160,8 @@ std::unique_ptr<Lane> make_lane(const BatchModel& bm, int l, Integrator kind) {
   auto L = std::make_unique<Lane>();
   L->bm = make_batch(std::span<const Model>(&bm.models[l], 1));
   L->ws = make_workspace(L->bm);
+  L->tip = make_state(L->bm).tip;
+  L->body = make_body_table(L->bm, L->tip);  // the Lane never moves, nor do its tip's one-lane vectors
   const int n = bm.nseg, nz = bm.layout.nz, ny = 2 * n + nz;
   L->n = n;
   L->nz = nz;
@@ -240,6 +245,9 @@ void CvodeBatch::advance(BatchState& s, double dt) {
     }
     for (int i = 0; i < L.nz; ++i) y[2 * n + i] = s.z[i * W + l];
     L.tau = s.tau[l];
+    L.tip.mass[0] = s.tip.mass[l];
+    L.tip.first[0] = s.tip.first[l];
+    L.tip.inertia[0] = s.tip.inertia[l];
     // Restart the BDF history at the torque jump and integrate exactly to the next sample.
     int flag = CVodeReInit(L.mem, t0, L.y);
     if (flag >= 0) flag = CVodeSetStopTime(L.mem, t1);

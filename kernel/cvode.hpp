@@ -23,7 +23,7 @@ class CvodeBatch {
   CvodeBatch(const CvodeBatch&) = delete;
   CvodeBatch& operator=(const CvodeBatch&) = delete;
 
-  // Integrates every ok lane from s.t to s.t + dt with s.tau held; a lane whose solver fails
+  // Integrates every ok lane from s.t to s.t + dt with s.tau and the tip body s.tip held; a lane whose solver fails
   // is marked LaneStatus::kSolverFail and left at its last good state.
   void advance(BatchState& s, double dt);
   CvodeStats stats() const;

@@ -54,12 +54,14 @@ void compute_sincos(int n, const double* x, double* s, double* c) {
 }
 }  // namespace
 
-void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, const double* tau,
-                              const double* arm, double* qdd, Workspace& ws) {
+void compute_forward_dynamics(const BatchModel& bm, const BodyTable& body, const double* q, const double* v,
+                              const double* tau, const double* arm, double* qdd, Workspace& ws) {
   const int W = bm.W, N = bm.nseg;
-  const double* bmass = bm.body_mass.data();
-  const double* bfirst = bm.body_first.data();
-  const double* binert = bm.body_inertia.data();
+  // Bodies 0..N-2 (the parents pass 2 projects onto) by offset into the table; the tip by its row.
+  const double* bmass = body.mass;
+  const double* bfirst = body.first;
+  const double* binert = body.inertia;
+  const BodyRow tip = body.tip;
   const double* len = bm.seg_length.data();
   double *cq = ws.cq.data(), *sq = ws.sq.data(), *vw = ws.vw.data(), *vx = ws.vx.data(), *vy = ws.vy.data();
   double *cy = ws.cy.data(), *cz = ws.cz.data();
@@ -72,8 +74,8 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   compute_sincos((N - 1) * W, q + W, sq + W, cq + W);
 
   // Pass 1, root to tip: velocities, velocity-product accelerations and rigid-body bias forces.
-  // The rigid inertias I_i = [[J, 0, h], [0, m, 0], [h, 0, m]] are read from the model in pass 2.
-  auto body = [=](int o, int l, double w, double x, double y) {
+  // The rigid inertias I_i = [[J, 0, h], [0, m, 0], [h, 0, m]] are read from the body table in pass 2.
+  auto pass1 = [=](int o, int l, const BodyRow& b, double w, double x, double y) {
     vw[o + l] = w;
     vx[o + l] = x;
     vy[o + l] = y;
@@ -81,21 +83,23 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
     cy[o + l] = y * v[o + l];
     cz[o + l] = -x * v[o + l];
     // p_i = crf(v_i) I_i v_i
-    const double h = bfirst[o + l], m = bmass[o + l];
+    const double h = b.first[l], m = b.mass[l];
     const double fx = m * x, fy = h * w + m * y;
     p0[o + l] = -y * fx + x * fy;
     p1[o + l] = -w * fy;
     p2[o + l] = w * fx;
   };
+  const BodyRow b0 = body.row(0);
 #pragma omp simd
-  for (int l = 0; l < W; ++l) body(0, l, v[l], 0.0, 0.0);
+  for (int l = 0; l < W; ++l) pass1(0, l, b0, v[l], 0.0, 0.0);
   for (int i = 1; i < N; ++i) {
     const int o = i * W, op = (i - 1) * W;
+    const BodyRow b = body.row(i);
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
       const double c = cq[o + l], s = sq[o + l];
       const double lp = len[op + l], wp = vw[op + l], xp = vx[op + l], yp = vy[op + l];
-      body(o, l, wp + v[o + l], s * lp * wp + c * xp + s * yp, c * lp * wp - s * xp + c * yp);
+      pass1(o, l, b, wp + v[o + l], s * lp * wp + c * xp + s * yp, c * lp * wp - s * xp + c * yp);
     }
   }
 
@@ -134,12 +138,12 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   };
   if (N == 1) {
 #pragma omp simd
-    for (int l = 0; l < W; ++l) i00[l] = binert[l];
+    for (int l = 0; l < W; ++l) i00[l] = tip.inertia[l];
   } else {
     const int o = (N - 1) * W, op = (N - 2) * W;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      const double J = binert[o + l], h = bfirst[o + l], m = bmass[o + l];
+      const double J = tip.inertia[l], h = tip.first[l], m = tip.mass[l];
       i00[o + l] = J;  // U of the tip, for pass 3
       i01[o + l] = 0.0;
       i02[o + l] = h;
@@ -179,11 +183,21 @@ void compute_forward_dynamics(const BatchModel& bm, const double* q, const doubl
   }
 }
 
-void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* z,
-                          const double* tau_cmd, double* qdd, double* zdot, Workspace& ws) {
+void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, const double* tau,
+                              const double* arm, double* qdd, Workspace& ws) {
+  compute_forward_dynamics(bm, make_body_table(bm), q, v, tau, arm, qdd, ws);
+}
+
+void compute_acceleration(const BatchModel& bm, const BodyTable& body, const double* q, const double* v,
+                          const double* z, const double* tau_cmd, double* qdd, double* zdot, Workspace& ws) {
   compute_hub_drive(bm, q, v, z, tau_cmd, ws.tau_hub.data(), zdot);
   compute_joint_torques(bm, q, v, ws.tau_hub.data(), ws.tau_joint.data());
-  compute_forward_dynamics(bm, q, v, ws.tau_joint.data(), ws.armature.data(), qdd, ws);
+  compute_forward_dynamics(bm, body, q, v, ws.tau_joint.data(), ws.armature.data(), qdd, ws);
+}
+
+void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* z,
+                          const double* tau_cmd, double* qdd, double* zdot, Workspace& ws) {
+  compute_acceleration(bm, make_body_table(bm), q, v, z, tau_cmd, qdd, zdot, ws);
 }
 
 void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws) {
@@ -247,6 +261,10 @@ TipKinematics calc_tip(const BatchModel& bm, const double* q, int lane) {
 }
 
 double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* v, int lane) {
+  return calc_kinetic_energy(bm, make_body_table(bm), q, v, lane);
+}
+
+double calc_kinetic_energy(const BatchModel& bm, const BodyTable& body, const double* q, const double* v, int lane) {
   const int W = bm.W;
   double w = 0.0, x = 0.0, y = 0.0, T = 0.0;
   for (int i = 0; i < bm.nseg; ++i) {
@@ -262,7 +280,8 @@ double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* 
       y = yn;
     }
     // 1/2 v^T I v with I = [[J, 0, h], [0, m, 0], [h, 0, m]]
-    T += 0.5 * (bm.body_inertia[o] * w * w + 2.0 * bm.body_first[o] * w * y + bm.body_mass[o] * (x * x + y * y));
+    const BodyRow b = body.row(i);
+    T += 0.5 * (b.inertia[lane] * w * w + 2.0 * b.first[lane] * w * y + b.mass[lane] * (x * x + y * y));
   }
   return T;
 }

@@ -20,13 +20,21 @@ double calc_hub_friction_damping(const BatchModel& bm, int lane, double w);
 
 // Forward dynamics qdd = M(q)^-1 (tau - C(q, v) v) by the articulated-body algorithm
 // (Featherstone, Rigid Body Dynamics Algorithms, 2008, Table 7.1, planar form), O(N) per lane.
-// q, v, tau (joint torques), armature (extra joint-space inertia on M's diagonal) and qdd are (N x W);
-// ws is scratch.
+// The bodies' inertial parameters are `body` (make_body_table: the model's, with a run's tip load);
+// the model gives the rest (segment lengths). q, v, tau (joint torques), armature (extra joint-space
+// inertia on M's diagonal) and qdd are (N x W); ws is scratch.
+void compute_forward_dynamics(const BatchModel& bm, const BodyTable& body, const double* q, const double* v,
+                              const double* tau, const double* armature, double* qdd, Workspace& ws);
+// The same on the model's bodies as made (its own tip body, before any payload event).
 void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, const double* tau,
                               const double* armature, double* qdd, Workspace& ws);
 
 // Everything at once: the hub drive (torque on the hub and its state rates zdot, nz x W) from the
-// held demand tau_cmd (W), the joint torques, then qdd. zdot may be null when there are no drive states.
+// held demand tau_cmd (W), the joint torques, then qdd on the bodies `body`. zdot may be null when
+// there are no drive states.
+void compute_acceleration(const BatchModel& bm, const BodyTable& body, const double* q, const double* v,
+                          const double* z, const double* tau_cmd, double* qdd, double* zdot, Workspace& ws);
+// The same on the model's bodies as made.
 void compute_acceleration(const BatchModel& bm, const double* q, const double* v, const double* z,
                           const double* tau_cmd, double* qdd, double* zdot, Workspace& ws);
 
@@ -46,7 +54,9 @@ void compute_tip(const BatchModel& bm, const double* q, double* deflection, doub
 void compute_tip_acceleration(const BatchModel& bm, const double* q, const double* v, const double* qdd,
                               double* accel);
 
-// Kinetic energy 1/2 v^T M(q) v and spring energy sum (k_i q_i^2 / 2 + k3_i q_i^4 / 4) of one lane, J.
+// Kinetic energy 1/2 v^T M(q) v (of the bodies `body`, or the model's as made) and spring energy
+// sum (k_i q_i^2 / 2 + k3_i q_i^4 / 4) of one lane, J.
+double calc_kinetic_energy(const BatchModel& bm, const BodyTable& body, const double* q, const double* v, int lane);
 double calc_kinetic_energy(const BatchModel& bm, const double* q, const double* v, int lane);
 double calc_spring_energy(const BatchModel& bm, const double* q, int lane);
 

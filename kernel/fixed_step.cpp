@@ -86,6 +86,7 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   double* z = s.z.data();
   double *q1 = ws.q1.data(), *v1 = ws.v1.data(), *z1 = ws.z1.data();
   const double* tau = s.tau.data();
+  const BodyTable body = make_body_table(bm, s.tip);
   // Stage derivatives: kq[i] = velocity, kv[i] = acceleration, kz[i] = drive state rate (Butcher tableau of RK4).
   const double c[4] = {0.0, 0.5 * h, 0.5 * h, h};
   for (int st = 0; st < 4; ++st) {
@@ -101,7 +102,7 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
       zs = z1;
     }
     std::copy(vs, vs + n, ws.kq[st].data());
-    compute_acceleration(bm, qs, vs, zs, tau, ws.kv[st].data(), ws.kz[st].data(), ws);
+    compute_acceleration(bm, body, qs, vs, zs, tau, ws.kv[st].data(), ws.kz[st].data(), ws);
   }
   rk4_combine(n, ws.kq, ws.kv, h, q, v);
   const double w6 = h / 6.0;
@@ -114,6 +115,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const double g = kSdirk2Gamma;
   const double gh = g * h;
   set_armature(bm, ws, gh);
+  const BodyTable body = make_body_table(bm, s.tip);
   double* q = s.q.data();
   double* v = s.v.data();
   double* a_prev = s.a_prev.data();
@@ -128,7 +130,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   compute_hub_drive(bm, qs, vs, Z1, s.tau.data(), ws.tau_hub.data(), nullptr);
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
   set_friction_armature(bm, vs, gh, ws);
-  compute_forward_dynamics(bm, qk, vk, ws.tau_joint.data(), ws.armature.data(), A1, ws);
+  compute_forward_dynamics(bm, body, qk, vk, ws.tau_joint.data(), ws.armature.data(), A1, ws);
   const double b1 = (1.0 - g) * h;
   double* vpre = ws.v1.data();
   double* qpre = ws.q1.data();
@@ -143,7 +145,7 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   compute_hub_drive(bm, qs, vs, z, s.tau.data(), ws.tau_hub.data(), nullptr);
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
   set_friction_armature(bm, vs, gh, ws);
-  compute_forward_dynamics(bm, qk, vk, ws.tau_joint.data(), ws.armature.data(), A2, ws);
+  compute_forward_dynamics(bm, body, qk, vk, ws.tau_joint.data(), ws.armature.data(), A2, ws);
   sdirk2_finish(n, qpre, vpre, A2, gh, q, v, a_prev);
 }
 
@@ -151,6 +153,7 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   const std::size_t n = s.q.size();
   const double gh = 0.5 * h;
   set_armature(bm, ws, gh);
+  const BodyTable body = make_body_table(bm, s.tip);
   double* q = s.q.data();
   double* v = s.v.data();
   double* a_prev = s.a_prev.data();
@@ -168,7 +171,7 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   // The friction map backward-Euler implicit (armature h F', not h/2 F'): the midpoint rule is not
   // L-stable, and a stuck hub would flip its rate's sign every step.
   set_friction_armature(bm, v, h, ws);
-  compute_forward_dynamics(bm, qs, vk, ws.tau_joint.data(), ws.armature.data(), A, ws);
+  compute_forward_dynamics(bm, body, qs, vk, ws.tau_joint.data(), ws.armature.data(), A, ws);
   midpoint_finish(n, A, h, gh, q, v, a_prev);
 }
 

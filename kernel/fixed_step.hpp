@@ -1,4 +1,6 @@
-// The batch kernel's fixed-step integrators, with the hub torque held over the step.
+// The batch kernel's fixed-step integrators, with the hub torque held over the step. They read the
+// model's parameters and advance the state; the bodies are the model's with the state's tip load
+// (BatchState::tip, make_body_table).
 #pragma once
 
 #include "kernel/batch.hpp"

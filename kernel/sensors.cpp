@@ -57,7 +57,7 @@ void compute_recorded_sensors(const BatchModel& bm, BatchState& s, Workspace& ws
     } else if (c == kTipAccelerometer) {
       double* qdd = ws.q1.data();
       double* zdot = bm.layout.nz > 0 ? ws.zdot.data() : nullptr;
-      compute_acceleration(bm, q, s.v.data(), s.z.data(), s.tau.data(), qdd, zdot, ws);
+      compute_acceleration(bm, make_body_table(bm, s.tip), q, s.v.data(), s.z.data(), s.tau.data(), qdd, zdot, ws);
       compute_tip_acceleration(bm, q, s.v.data(), qdd, truth);
     } else {
       compute_tip(bm, q, truth, angle, ws);

@@ -43,8 +43,8 @@ inline RecordedChannel recorded_channel(RecordedColumn c) {
 // (d = delay, n = hold = controller rate / sensor rate), or the first reading while k < d. The truths x:
 //   strain gauge: M = k_i q_i + k3_i q_i^3 at its joint (the elastic moment: a gauge reads strain, so the
 //     damper c_i qd_i is not seen), N·m; its tip estimate is strain_gain times the recorded M, m;
-//   tip accelerometer: compute_tip_acceleration with qdd = compute_acceleration under the held torque
-//     s.tau (called before compute_control: the previous sample's torque, the acceleration just before
+//   tip accelerometer: compute_tip_acceleration with qdd = compute_acceleration (the tip body s.tip)
+//     under the held torque s.tau (called before compute_control: the previous sample's torque, the acceleration just before
 //     this sample, as a sensor read before the new torque acts), m/s^2;
 //   tip position: the tip deflection (compute_tip), m.
 // ws is scratch of its own, not the integrators' (SDIRK2 leaves joint armature in theirs): its q1 and zdot

@@ -80,17 +80,21 @@ void record(const BatchModel& bm, const BatchState& s, const double* ref, const 
 }  // namespace
 
 namespace {
-// Payload events (pick, release) due by time t change the tip body of their lane in `live`.
-void apply_payload_events(BatchModel& live, std::vector<std::size_t>& next, double t) {
-  const int W = live.W, tip = (live.nseg - 1) * W;
-  for (int l = 0; l < W; ++l) {
-    const Model& m = live.models[l];
-    while (next[l] < m.spec.payload_events.size() && m.spec.payload_events[next[l]].time <= t + 1e-12) {
-      const auto& e = m.spec.payload_events[next[l]++];
+// Payload events (pick, release) due at controller sample k = s.sample set their lane's tip load
+// s.tip: those at or before t_k (1e-12 s of slack) and not already due at t_(k-1), in order. Which
+// events are done follows from the sample alone, so the state needs no event counter.
+void apply_payload_events(const BatchModel& bm, BatchState& s) {
+  const double T = bm.control_period;
+  const double t = s.sample * T + 1e-12, t_prev = (s.sample - 1) * T + 1e-12;
+  for (int l = 0; l < bm.W; ++l) {
+    const Model& m = bm.models[l];
+    for (const PayloadEvent& e : m.spec.payload_events) {
+      if (e.time > t) break;  // in time order (make_model)
+      if (s.sample > 0 && e.time <= t_prev) continue;
       const BodyInertia b = make_tip_body(m, e.mass, e.inertia);
-      live.body_mass[tip + l] = b.mass;
-      live.body_first[tip + l] = b.first;
-      live.body_inertia[tip + l] = b.inertia;
+      s.tip.mass[l] = b.mass;
+      s.tip.first[l] = b.first;
+      s.tip.inertia[l] = b.inertia;
     }
   }
 }
@@ -110,15 +114,11 @@ void apply_inputs(const SampleInputs& in, long k, BatchState& s, double* ref, do
 }
 }  // namespace
 
-BatchRun simulate(const BatchModel& model, const std::function<void(const BatchState&)>& observe,
+BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe,
                   const SampleInputs* inputs) {
-  // A run with payload events works on its own copy of the batch, changed at those samples.
+  // The model stays as it is; payload events change the state's tip load (BatchState::tip).
   bool events = false;
-  for (const auto& m : model.models) events |= !m.spec.payload_events.empty();
-  BatchModel live_copy;
-  if (events) live_copy = model;
-  std::vector<std::size_t> next_event(model.W, 0);
-  const BatchModel& bm = events ? live_copy : model;
+  for (const auto& m : bm.models) events |= !m.spec.payload_events.empty();
   const int W = bm.W;
   const double T = bm.control_period;
   const long nsamples = std::lround(bm.duration / T) + 1;
@@ -149,7 +149,7 @@ BatchRun simulate(const BatchModel& model, const std::function<void(const BatchS
   for (long k = 0; k < nsamples; ++k) {
     s.t = k * T;
     s.sample = k;
-    if (events) apply_payload_events(live_copy, next_event, s.t);
+    if (events) apply_payload_events(bm, s);
     // Controller sample: reference, filter, PID; then record the signals of this instant.
     for (int l = 0; l < W; ++l) {
       ref[l] = calc_shaped_reference(bm.models[l].spec.trajectory, bm.models[l].shaper, s.t);
