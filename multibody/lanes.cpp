@@ -11,6 +11,11 @@ namespace ff {
 namespace {
 
 #define FF_INLINE [[gnu::always_inline]] inline
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define FF_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define FF_TARGET_CLONES
+#endif
 
 // The lane loops are written in scalar locals only (x0, x1, x2 for a 3-vector, M0..M8 for a 3x3
 // row-major matrix, each a `double`): GCC vectorises a loop over lanes written so, and not one that
@@ -408,6 +413,11 @@ TreeLanesWorkspace::TreeLanesWorkspace(const TreeLanes& tl) : W(tl.W), nb(tl.nb)
   zeros.assign(static_cast<std::size_t>(tl.nv) * tl.W, 0.0);
 }
 
+// Compiled for AVX-512, AVX2 and the baseline, the one the CPU has chosen at load time (GCC/clang
+// function multiversioning), the passes inlined into each (flatten) so that their lane loops use its
+// registers. The same bits on every path: the lanes never mix, and no multiply-add is fused
+// (-ffp-contract=off), so each lane's operations are IEEE's, in the same order, at any width.
+FF_TARGET_CLONES [[gnu::flatten]]
 void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const double* qd, const double* tau,
                                    const double* extra_armature, double* qdd, TreeLanesWorkspace& ws) {
   if (ws.W != tl.W || ws.nb != tl.nb)
