@@ -103,6 +103,30 @@ void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) 
   }
 }
 
+// Reads the fields in table order as YamlReader's required and optional do, without bounds or checks
+// (a reader whose model checks the values later: the reference rig's make_model): a required field
+// absent is reported where it comes, before a later field's error.
+template <class T, std::size_t N>
+void read_unchecked(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) {
+  for (const Field<T>& f : fields) {
+    if (f.required && !r.has(f.key)) r.fail(f.key, "missing required value");
+    std::visit(Overloaded{[&](Vec3 T::*m) {
+                            if (r.has(f.key)) read_vec3(r, f.key, out.*m);
+                          },
+                          [&](auto T::*m) { r.optional(f.key, out.*m); }},
+               f.member);
+  }
+}
+
+// YamlReader::only from a table: a key not in it is unknown before any value is read (a misspelt
+// required key is then reported as the unknown key it is, not as a missing one).
+template <class T, std::size_t N>
+void only_keys(const YamlReader& r, const std::array<Field<T>, N>& fields) {
+  YamlReader probe = r;
+  for (const Field<T>& f : fields) probe.raw(f.key);
+  probe.finish();
+}
+
 // After finish() (so a misspelt key is reported as unknown, not as the required one it misses).
 template <class T, std::size_t N>
 void require(const YamlReader& r, const std::array<Field<T>, N>& fields) {

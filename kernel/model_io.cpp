@@ -77,13 +77,140 @@ const char* integrator_name(Integrator i) {
 
 namespace {
 
-Integrator parse_integrator(YamlReader& r) {
-  std::string name = "rk4";
-  r.optional("integrator", name);
-  for (auto i : {Integrator::kRk4, Integrator::kSdirk2, Integrator::kCvodeDense, Integrator::kCvodeKlu,
-                 Integrator::kMidpoint})
-    if (name == integrator_name(i)) return i;
-  r.fail("integrator", "unknown integrator '" + name + "' (rk4, sdirk2, cvode_dense, cvode_klu, midpoint)");
+// The reference rig's model file: one field table per block, read in table order without bounds
+// (make_model checks the values and names the key).
+const std::array<Field<BeamSpec>, 5> kBeamFields{{
+    {.key = "length", .member = &BeamSpec::length, .unit = "m", .required = true},
+    {.key = "height", .member = &BeamSpec::height, .unit = "m", .required = true},
+    {.key = "thickness", .member = &BeamSpec::thickness, .unit = "m", .required = true},
+    {.key = "density", .member = &BeamSpec::density, .unit = "kg/m³", .required = true},
+    {.key = "youngs_modulus", .member = &BeamSpec::youngs_modulus, .unit = "Pa", .required = true},
+}};
+const std::array<Field<ModelSpec>, 1> kTopFields{{
+    {.key = "segments", .member = &ModelSpec::segments, .required = true},
+}};
+const std::array<Field<JointSpec>, 4> kJointFields{{
+    {.key = "stiffness", .member = &JointSpec::stiffness, .unit = "N·m/rad", .required = true},
+    {.key = "damping", .member = &JointSpec::damping, .unit = "N·m·s/rad", .required = true},
+    {.key = "reference_cell", .member = &JointSpec::reference_cell, .unit = "m", .required = true},
+    {.key = "cubic_stiffness", .member = &JointSpec::cubic_stiffness, .unit = "N·m/rad³"},
+}};
+const std::array<Field<ModelSpec>, 2> kHubFields{{
+    {.key = "inertia", .member = &ModelSpec::hub_inertia, .unit = "kg·m²", .required = true},
+    {.key = "torque_offset", .member = &ModelSpec::hub_torque_offset, .unit = "N·m"},
+}};
+const std::array<Field<ModelSpec>, 2> kPayloadFields{{
+    {.key = "mass", .member = &ModelSpec::payload_mass, .unit = "kg", .required = true},
+    {.key = "inertia", .member = &ModelSpec::payload_inertia, .unit = "kg·m²", .required = true},
+}};
+const std::array<Field<PayloadEvent>, 3> kEventFields{{
+    {.key = "time", .member = &PayloadEvent::time, .unit = "s", .required = true},
+    {.key = "mass", .member = &PayloadEvent::mass, .unit = "kg", .required = true},
+    {.key = "inertia", .member = &PayloadEvent::inertia, .unit = "kg·m²", .required = true},
+}};
+const std::array<Field<ControllerSpec>, 8> kControllerFields{{
+    {.key = "rate", .member = &ControllerSpec::rate, .unit = "Hz"},
+    {.key = "kp", .member = &ControllerSpec::kp, .unit = "N·m/rad"},
+    {.key = "ki", .member = &ControllerSpec::ki, .unit = "N·m/(rad·s)"},
+    {.key = "kd", .member = &ControllerSpec::kd, .unit = "N·m·s/rad"},
+    {.key = "torque_limit", .member = &ControllerSpec::torque_limit, .unit = "N·m", .fallback = "0: unlimited"},
+    {.key = "load_compensation", .member = &ControllerSpec::load_compensation},
+    {.key = "feedforward", .member = &ControllerSpec::feedforward},
+    {.key = "load_signal", .member = &ControllerSpec::load_signal},
+}};
+const std::array<Field<NotchSpec>, 3> kNotchFields{{
+    {.key = "enabled", .member = &NotchSpec::enabled},
+    {.key = "order", .member = &NotchSpec::order},
+    {.key = "placement", .member = &NotchSpec::placement},
+}};
+// The notch's pairs (sections 1 and 2; one number means both; fallback nullptr: the default pair).
+struct NotchPair { const char* key; double (NotchSpec::*member)[2]; const char* unit; const char* fallback; };
+const NotchPair kNotchPairs[] = {
+    {"alpha", &NotchSpec::alpha, "", nullptr},
+    {"zeta", &NotchSpec::zeta, "", nullptr},
+    {"omega_z", &NotchSpec::omega_z, "rad/s", "[0, 0]: the first two closed-loop resonances"}};
+const std::array<Field<ShaperSpec>, 4> kShaperFields{{
+    {.key = "type", .member = &ShaperSpec::type},
+    {.key = "frequency", .member = &ShaperSpec::frequency, .unit = "rad/s",
+     .fallback = "0: the first closed-loop resonance"},
+    {.key = "damping", .member = &ShaperSpec::damping, .fallback = "-1: that resonance's"},
+    {.key = "vtol", .member = &ShaperSpec::vtol},
+}};
+
+// Every sensor channel: resolution and noise in the channel's unit, delay and rate; the recorded ones
+// can be enabled, the strain gauge placed.
+std::array<Field<ChannelSpec>, 4> channel_fields(const char* unit) {
+  return {{{.key = "resolution", .member = &ChannelSpec::resolution, .unit = unit, .fallback = "0: none"},
+           {.key = "noise", .member = &ChannelSpec::noise, .unit = unit, .fallback = "0: none"},
+           {.key = "delay", .member = &ChannelSpec::delay, .unit = "controller samples"},
+           {.key = "rate", .member = &ChannelSpec::rate, .unit = "Hz", .fallback = "0: controller.rate"}}};
+}
+const std::array<Field<RecordedChannelSpec>, 1> kRecordedFields{{
+    {.key = "enabled", .member = &RecordedChannelSpec::enabled},
+}};
+const std::array<Field<StrainGaugeSpec>, 1> kStrainGaugeFields{{{.key = "joint", .member = &StrainGaugeSpec::joint}}};
+struct Channel { const char* name; const char* unit; ChannelSpec* channel; RecordedChannelSpec* recorded; };
+std::array<Channel, 9> channels(SensorSpec& ss) {
+  return {{{"hub_angle", "rad", &ss.hub_angle, nullptr},
+           {"hub_rate", "rad/s", &ss.hub_rate, nullptr},
+           {"strain_gauge", "N·m", &ss.strain_gauge, &ss.strain_gauge},
+           {"tip_accelerometer", "m/s²", &ss.tip_accelerometer, &ss.tip_accelerometer},
+           {"tip_position", "m", &ss.tip_position, &ss.tip_position},
+           {"hub_torque", "N·m", &ss.hub_torque, nullptr},
+           {"tip_deflection", "m", &ss.tip_deflection, nullptr},
+           {"pressure_a", "Pa", &ss.pressure_a, nullptr},
+           {"pressure_b", "Pa", &ss.pressure_b, nullptr}}};
+}
+
+const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
+    {.key = "viscous", .member = &FrictionSpec::viscous, .unit = "N·m·s/rad"},
+    {.key = "coulomb", .member = &FrictionSpec::coulomb, .unit = "N·m"},
+    {.key = "stiction", .member = &FrictionSpec::stiction, .unit = "N·m", .fallback = "0: no Stribeck peak"},
+    {.key = "stribeck_velocity", .member = &FrictionSpec::stribeck_velocity, .unit = "rad/s"},
+    {.key = "smoothing", .member = &FrictionSpec::smoothing, .unit = "rad/s"},
+    {.key = "model", .member = &FrictionSpec::model},
+    {.key = "bristle_stiffness", .member = &FrictionSpec::bristle_stiffness, .unit = "N·m/rad"},
+    {.key = "bristle_damping", .member = &FrictionSpec::bristle_damping, .unit = "N·m·s/rad"},
+}};
+// The rest of the block is hydraulic_fields(), the arm's too.
+const std::array<Field<HydraulicSpec>, 1> kHydraulicEnabledFields{{
+    {.key = "enabled", .member = &HydraulicSpec::enabled},
+}};
+const std::array<Field<DriveSpec>, 8> kDriveFields{{
+    {.key = "enabled", .member = &DriveSpec::enabled},
+    {.key = "inertia", .member = &DriveSpec::inertia, .unit = "kg·m²"},
+    {.key = "ratio", .member = &DriveSpec::ratio},
+    {.key = "efficiency", .member = &DriveSpec::efficiency},
+    {.key = "stiffness", .member = &DriveSpec::stiffness, .unit = "N·m/rad"},
+    {.key = "cubic_stiffness", .member = &DriveSpec::cubic_stiffness, .unit = "N·m/rad³"},
+    {.key = "damping", .member = &DriveSpec::damping, .unit = "N·m·s/rad"},
+    {.key = "backlash", .member = &DriveSpec::backlash, .unit = "rad"},
+}};
+const std::array<Field<TrajectorySpec>, 1> kTrajectoryFields{{
+    {.key = "move_time", .member = &TrajectorySpec::move_time, .unit = "s"},
+}};
+const std::array<Field<MoveSpec>, 2> kMoveFields{{
+    {.key = "target", .member = &MoveSpec::target, .unit = "rad", .required = true},
+    {.key = "hold", .member = &MoveSpec::hold, .unit = "s"},
+}};
+// The integrator by name and the seed as a number, checked after reading.
+struct SimulationBlock : SimulationSpec { std::string integrator_name = "rk4"; double seed_number = 1; };
+const std::array<Field<SimulationBlock>, 6> kSimulationFields{{
+    {.key = "duration", .member = &SimulationBlock::duration, .unit = "s", .fallback = "0: the end of the last hold"},
+    {.key = "integrator", .member = &SimulationBlock::integrator_name},
+    {.key = "substeps", .member = &SimulationBlock::substeps, .fallback = "0: from the modes"},
+    {.key = "rtol", .member = &SimulationBlock::rtol},
+    {.key = "atol", .member = &SimulationBlock::atol},
+    {.key = "seed", .member = &SimulationBlock::seed_number},
+}};
+
+// The block `name` of `top` read through its table; the caller reads the rest and finishes it.
+template <class T, std::size_t N>
+YamlReader read_block(YamlReader& top, const char* name, const std::array<Field<T>, N>& fields, T& out,
+                      bool required = false) {
+  YamlReader r = top.child(name, required);
+  read_unchecked(r, fields, out);
+  return r;
 }
 
 ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lines) {
@@ -91,147 +218,63 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   YamlReader top(doc, src, "", &lines);
   if (!doc || doc.IsNull()) top.fail("beam", "the file is empty");
 
-  auto beam = top.child("beam", true);
-  beam.required("length", s.beam.length);
-  beam.required("height", s.beam.height);
-  beam.required("thickness", s.beam.thickness);
-  beam.required("density", s.beam.density);
-  beam.required("youngs_modulus", s.beam.youngs_modulus);
-  beam.finish();
+  read_block(top, "beam", kBeamFields, s.beam, true).finish();
+  read_unchecked(top, kTopFields, s);
+  read_block(top, "joints", kJointFields, s.joints, true).finish();
+  read_block(top, "hub", kHubFields, s, true).finish();
 
-  top.required("segments", s.segments);
-
-  auto joints = top.child("joints", true);
-  joints.required("stiffness", s.joints.stiffness);
-  joints.required("damping", s.joints.damping);
-  joints.required("reference_cell", s.joints.reference_cell);
-  joints.optional("cubic_stiffness", s.joints.cubic_stiffness);
-  joints.finish();
-
-  auto hub = top.child("hub", true);
-  hub.required("inertia", s.hub_inertia);
-  hub.optional("torque_offset", s.hub_torque_offset);
-  hub.finish();
-
-  auto payload = top.child("payload", true);
-  payload.required("mass", s.payload_mass);
-  payload.required("inertia", s.payload_inertia);
+  auto payload = read_block(top, "payload", kPayloadFields, s, true);
   for (auto& ev : payload.sequence("events")) {
-    ev.only({"time", "mass", "inertia"});  // a misspelt key is unknown, not a missing one
-    PayloadEvent e;
-    ev.required("time", e.time);
-    ev.required("mass", e.mass);
-    ev.required("inertia", e.inertia);
+    only_keys(ev, kEventFields);
+    read_unchecked(ev, kEventFields, s.payload_events.emplace_back());
     ev.finish();
-    s.payload_events.push_back(e);
   }
   payload.finish();
 
-  auto ctrl = top.child("controller");
-  ctrl.optional("rate", s.controller.rate);
-  ctrl.optional("kp", s.controller.kp);
-  ctrl.optional("ki", s.controller.ki);
-  ctrl.optional("kd", s.controller.kd);
-  ctrl.optional("torque_limit", s.controller.torque_limit);
-  ctrl.optional("load_compensation", s.controller.load_compensation);
-  ctrl.optional("feedforward", s.controller.feedforward);
-  ctrl.optional("load_signal", s.controller.load_signal);
-  ctrl.finish();
+  read_block(top, "controller", kControllerFields, s.controller).finish();
 
-  auto notch = top.child("notch");
-  notch.optional("enabled", s.notch.enabled);
-  notch.optional("order", s.notch.order);
-  notch.optional_array("alpha", s.notch.alpha, 2);
-  notch.optional_array("zeta", s.notch.zeta, 2);
-  notch.optional_array("omega_z", s.notch.omega_z, 2);
-  notch.optional("placement", s.notch.placement);
+  auto notch = read_block(top, "notch", kNotchFields, s.notch);
+  for (const auto& p : kNotchPairs) notch.optional_array(p.key, s.notch.*p.member, 2);
   notch.finish();
 
-  auto shaper = top.child("shaper");
-  shaper.optional("type", s.shaper.type);
-  shaper.optional("frequency", s.shaper.frequency);
-  shaper.optional("damping", s.shaper.damping);
-  shaper.optional("vtol", s.shaper.vtol);
-  shaper.finish();
+  read_block(top, "shaper", kShaperFields, s.shaper).finish();
 
   auto sensors = top.child("sensors");
-  // Every channel: resolution, noise, delay, rate; the recorded ones can be enabled, the strain gauge placed;
-  // the output channels (hub_torque ... pressure_b) are the record's columns.
-  auto& ss = s.sensors;
-  const struct {
-    const char* name;
-    ChannelSpec* ch;
-    bool* enabled;  // recorded sensors only
-  } channels[] = {{"hub_angle", &ss.hub_angle, nullptr},
-                  {"hub_rate", &ss.hub_rate, nullptr},
-                  {"strain_gauge", &ss.strain_gauge, &ss.strain_gauge.enabled},
-                  {"tip_accelerometer", &ss.tip_accelerometer, &ss.tip_accelerometer.enabled},
-                  {"tip_position", &ss.tip_position, &ss.tip_position.enabled},
-                  {"hub_torque", &ss.hub_torque, nullptr},
-                  {"tip_deflection", &ss.tip_deflection, nullptr},
-                  {"pressure_a", &ss.pressure_a, nullptr},
-                  {"pressure_b", &ss.pressure_b, nullptr}};
-  for (const auto& [name, ch, enabled] : channels) {
-    auto c = sensors.child(name);
-    c.optional("resolution", ch->resolution);
-    c.optional("noise", ch->noise);
-    c.optional("delay", ch->delay);
-    c.optional("rate", ch->rate);
-    if (enabled) c.optional("enabled", *enabled);
-    if (ch == &ss.strain_gauge) c.optional("joint", ss.strain_gauge.joint);
+  for (const auto& [name, unit, ch, recorded] : channels(s.sensors)) {
+    auto c = read_block(sensors, name, channel_fields(unit), *ch);
+    if (recorded) read_unchecked(c, kRecordedFields, *recorded);
+    if (ch == &s.sensors.strain_gauge) read_unchecked(c, kStrainGaugeFields, s.sensors.strain_gauge);
     c.finish();
   }
   sensors.finish();
 
-  auto fr = top.child("friction");
-  fr.optional("viscous", s.friction.viscous);
-  fr.optional("coulomb", s.friction.coulomb);
-  fr.optional("stiction", s.friction.stiction);
-  fr.optional("stribeck_velocity", s.friction.stribeck_velocity);
-  fr.optional("smoothing", s.friction.smoothing);
-  fr.optional("model", s.friction.model);
-  fr.optional("bristle_stiffness", s.friction.bristle_stiffness);
-  fr.optional("bristle_damping", s.friction.bristle_damping);
-  fr.finish();
+  read_block(top, "friction", kFrictionFields, s.friction).finish();
 
-  auto hy = top.child("hydraulics");
-  auto& h = s.hydraulics;
-  hy.optional("enabled", h.enabled);
-  for (const Field<HydraulicSpec>& f : hydraulic_fields()) hy.optional(f.key, h.*std::get<double HydraulicSpec::*>(f.member));
-  check_hydraulic_forms(hy, h);
+  auto hy = read_block(top, "hydraulics", kHydraulicEnabledFields, s.hydraulics);
+  read_unchecked(hy, hydraulic_fields(), s.hydraulics);
+  check_hydraulic_forms(hy, s.hydraulics);
   hy.finish();
 
-  auto dr = top.child("drive");
-  auto& d = s.drive;
-  dr.optional("enabled", d.enabled);
-  dr.optional("inertia", d.inertia);
-  dr.optional("ratio", d.ratio);
-  dr.optional("efficiency", d.efficiency);
-  dr.optional("stiffness", d.stiffness);
-  dr.optional("cubic_stiffness", d.cubic_stiffness);
-  dr.optional("damping", d.damping);
-  dr.optional("backlash", d.backlash);
-  dr.finish();
+  read_block(top, "drive", kDriveFields, s.drive).finish();
 
-  auto traj = top.child("trajectory");
-  traj.optional("move_time", s.trajectory.move_time);
+  auto traj = read_block(top, "trajectory", kTrajectoryFields, s.trajectory);
   for (auto& mv : traj.sequence("moves")) {
-    MoveSpec m;
-    mv.required("target", m.target);
-    mv.optional("hold", m.hold);
+    read_unchecked(mv, kMoveFields, s.trajectory.moves.emplace_back());
     mv.finish();
-    s.trajectory.moves.push_back(m);
   }
   traj.finish();
 
-  auto sim = top.child("simulation");
-  sim.optional("duration", s.simulation.duration);
-  s.simulation.integrator = parse_integrator(sim);
-  sim.optional("substeps", s.simulation.substeps);
-  sim.optional("rtol", s.simulation.rtol);
-  sim.optional("atol", s.simulation.atol);
-  double seed = 1;
-  sim.optional("seed", seed);
+  SimulationBlock sim_block;
+  auto sim = read_block(top, "simulation", kSimulationFields, sim_block);
+  s.simulation = sim_block;
+  bool known = false;
+  for (auto i : {Integrator::kRk4, Integrator::kSdirk2, Integrator::kCvodeDense, Integrator::kCvodeKlu,
+                 Integrator::kMidpoint})
+    if (sim_block.integrator_name == integrator_name(i)) s.simulation.integrator = i, known = true;
+  if (!known)
+    sim.fail("integrator", "unknown integrator '" + sim_block.integrator_name +
+                               "' (rk4, sdirk2, cvode_dense, cvode_klu, midpoint)");
+  const double seed = sim_block.seed_number;
   if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) sim.fail("seed", "must be a whole number >= 0");
   s.simulation.seed = static_cast<std::uint64_t>(seed);
   sim.finish();
@@ -241,6 +284,40 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
 }
 
 }  // namespace
+
+std::vector<KeyDoc> rig_model_keys() {
+  std::vector<KeyDoc> out;
+  add_keys(out, "beam.", kBeamFields);
+  add_keys(out, "", kTopFields);
+  add_keys(out, "joints.", kJointFields);
+  add_keys(out, "hub.", kHubFields);
+  add_keys(out, "payload.", kPayloadFields);
+  add_keys(out, "payload.events[i].", kEventFields);
+  add_keys(out, "controller.", kControllerFields);
+  add_keys(out, "notch.", kNotchFields);
+  static const NotchSpec notch{};
+  for (const auto& p : kNotchPairs) {
+    const double* x = notch.*p.member;
+    out.push_back({std::string("notch.") + p.key, p.unit, "no",
+                   p.fallback ? p.fallback : "[" + format_key_number(x[0]) + ", " + format_key_number(x[1]) + "]"});
+  }
+  add_keys(out, "shaper.", kShaperFields);
+  SensorSpec sensors;
+  for (const auto& [name, unit, ch, recorded] : channels(sensors)) {
+    const std::string prefix = std::string("sensors.") + name + ".";
+    add_keys(out, prefix, channel_fields(unit));
+    if (recorded) add_keys(out, prefix, kRecordedFields);
+    if (ch == &sensors.strain_gauge) add_keys(out, prefix, kStrainGaugeFields);
+  }
+  add_keys(out, "friction.", kFrictionFields);
+  add_keys(out, "hydraulics.", kHydraulicEnabledFields);
+  add_keys(out, "hydraulics.", hydraulic_fields());
+  add_keys(out, "drive.", kDriveFields);
+  add_keys(out, "trajectory.", kTrajectoryFields);
+  add_keys(out, "trajectory.moves[i].", kMoveFields);
+  add_keys(out, "simulation.", kSimulationFields);
+  return out;
+}
 
 Model parse_model(const YAML::Node& doc, const std::string& source) {
   LineMap lines;

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include "common/field_table.hpp"
 #include "kernel/model.hpp"
@@ -17,6 +18,9 @@ Model parse_model(const YAML::Node& doc, const std::string& source);
 Model load_model(const std::string& path);
 
 const char* integrator_name(Integrator i);
+
+// The reference rig's model keys, from its readers' field tables (docs/formats.md, "Model").
+std::vector<KeyDoc> rig_model_keys();
 
 // The hydraulic actuator's keys (kernel/model.hpp HydraulicSpec), one table for the rig's
 // `hydraulics:` block (which reads them without bounds: make_model checks them, explain_hydraulic_fault)

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/errors.hpp"
+#include "tests/docs_tables.hpp"
 #include "tests/temp_dir.hpp"
 
 namespace {
@@ -592,4 +593,10 @@ TEST(ModelIo, NestedKeyWrittenTwiceNamesItsFullPath) {
     EXPECT_EQ(e.key(), "extra.a[0].b") << e.what();
     EXPECT_EQ(e.line(), static_cast<int>(lines.size()));
   }
+}
+
+// ---- docs/formats.md ---------------------------------------------------------------------
+
+TEST(ModelIo, DocsListEveryKeyWithTheReadersUnitRequirementAndDefault) {
+  ff::test::expect_documented("Model (`configs/fbtb.yaml`)", ff::rig_model_keys());
 }
