@@ -114,8 +114,9 @@ TEST(ArmHydraulics, TheClosedLoopModesHoldTheOilSpringAndTheLinearisationPredict
   // The loop closed (K = 5, a PD on the valve's command): its slowest oscillatory mode against the
   // simulated ringing after a small kick (zero crossings of q; the decay from successive peaks).
   ArmModel loop = arm_from(hydraulic_rotor(J, "{kp: 2.0e5, kd: 2.0e4}", "{leakage: 0}", "{duration: 3}"));
+  const std::vector<TreeMode> loop_modes = calc_arm_closed_loop_modes(loop, loop.q0);  // kept: `ring` points into it
   const TreeMode* ring = nullptr;
-  for (const TreeMode& md : calc_arm_closed_loop_modes(loop, loop.q0))
+  for (const TreeMode& md : loop_modes)
     if (md.oscillatory && md.zeta < 0.5 && !ring) ring = &md;
   ASSERT_NE(ring, nullptr);
   const double w = ring->omega_n, z = ring->zeta, wd = w * std::sqrt(1.0 - z * z);
