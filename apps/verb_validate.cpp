@@ -45,6 +45,23 @@ ReplayMode mode_of(const std::string& name) {
   }
 }
 
+// What diagnose and calibrate read: the model's source (a rig's or an arm's) and the record, read as
+// that model needs it. An arm is fitted in closed loop only.
+struct FitInputs {
+  bool arm = false;
+  ModelSource src;
+  Record record;
+};
+FitInputs read_fit_inputs(const std::string& model, const std::vector<std::string>& sets, const std::string& data,
+                          ReplayMode mode, const std::string& verb) {
+  FitInputs in;
+  in.arm = is_arm_model_file(model);
+  if (in.arm && mode != ReplayMode::kClosedLoop) throw ExitError("--mode: an arm model is " + verb + " in closed loop only", 2);
+  in.src = in.arm ? load_arm_source(model, sets) : load_model_source(model, sets);
+  in.record = read_record_csv(data, in.arm ? std::vector<std::string>{} : replay_inputs(mode));
+  return in;
+}
+
 }  // namespace
 
 void add_diagnose_verb(CLI::App& app) {
@@ -75,10 +92,7 @@ void add_diagnose_verb(CLI::App& app) {
     opt.refit = split_list(a->refit);
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
-    const bool arm = is_arm_model_file(a->model);
-    if (arm && opt.mode != ReplayMode::kClosedLoop) throw ExitError("--mode: an arm model is diagnosed in closed loop only", 2);
-    const ModelSource src = arm ? load_arm_source(a->model, a->sets) : load_model_source(a->model, a->sets);
-    const Record r = read_record_csv(a->data, arm ? std::vector<std::string>{} : replay_inputs(opt.mode));
+    const auto [arm, src, r] = read_fit_inputs(a->model, a->sets, a->data, opt.mode, "diagnosed");
     std::fprintf(stderr, "diagnosing %s against %s (%s, %zu samples)...\n", a->model.c_str(), a->data.c_str(),
                  a->mode.c_str(), r.size());
     const Diagnosis d = arm ? diagnose_arm(src, r, opt) : diagnose(src, r, opt);
@@ -113,10 +127,7 @@ void add_calibrate_verb(CLI::App& app) {
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
     opt.refit = split_list(a->refit);
-    const bool arm = is_arm_model_file(a->model);
-    if (arm && opt.mode != ReplayMode::kClosedLoop) throw ExitError("--mode: an arm model is calibrated in closed loop only", 2);
-    const ModelSource src = arm ? load_arm_source(a->model, a->sets) : load_model_source(a->model, a->sets);
-    const Record r = read_record_csv(a->data, arm ? std::vector<std::string>{} : replay_inputs(opt.mode));
+    const auto [arm, src, r] = read_fit_inputs(a->model, a->sets, a->data, opt.mode, "calibrated");
     if (arm) {
       const ArmModel base = build_arm(src);
       check_arm_record(r, base);

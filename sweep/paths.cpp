@@ -216,6 +216,12 @@ bool is_arm_model_file(const std::string& path) {
   }
 }
 
+YAML::Node apply_overrides(const ModelSource& src) {
+  YAML::Node doc = YAML::Clone(src.doc);
+  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+  return doc;
+}
+
 Model build_model(const ModelSource& src, const std::vector<Assignment>& extra) {
   std::vector<Assignment> all = src.set;
   all.insert(all.end(), extra.begin(), extra.end());

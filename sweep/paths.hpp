@@ -49,6 +49,8 @@ struct ModelSource {
   std::vector<Assignment> set;  // --set overrides, applied first
 };
 ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets);
+// The source's document (a copy) with its --set overrides applied.
+YAML::Node apply_overrides(const ModelSource& src);
 // The model of a source, with `extra` assignments after its own.
 Model build_model(const ModelSource& src, const std::vector<Assignment>& extra = {});
 

@@ -64,29 +64,28 @@ class ArmFamily : public FitFamily {
   int base_substeps_;
 };
 
-// What each actuated joint's candidates scale with: its torque and rate on the record (the larger of the
-// base model's closed-loop torque and the record's, the record's rate) and its inertia at the start (the mass matrix's diagonal).
-struct JointScales {
-  EffectScales torque;
-  double inertia = 1.0;  // kg m^2 (kg)
-};
-
-JointScales make_joint_scales(const ArmModel& base, const ArmReplay& replay, const Record& r, const ActuatedJoint& a) {
-  JointScales s;
-  // The larger of the model's and the record's torque: an effect the model lacks may be most of what the
-  // record's torque holds (a load torque on a wrist the model balances with almost nothing).
-  s.torque.torque_rms = s.torque.torque_max = 0.0;
+// What a joint's candidates scale with: its torque and rate on the record. The torque's is the larger of
+// the base model's closed-loop torque and the record's: an effect the model lacks may be most of what
+// the record's torque holds (a load torque on a wrist the model balances with almost nothing).
+EffectScales make_torque_scales(const ArmReplay& replay, const Record& r, const ActuatedJoint& a) {
+  EffectScales s;
+  s.torque_rms = s.torque_max = 0.0;
   for (const std::vector<double>* tau : {&replay.at_record.at(a.name + ".torque"), r.has(a.name + ".torque") ? &r.at(a.name + ".torque") : nullptr}) {
     if (!tau) continue;
-    s.torque.torque_rms = std::max(s.torque.torque_rms, calc_rms(*tau));
-    for (double x : *tau) s.torque.torque_max = std::max(s.torque.torque_max, std::abs(x));
+    s.torque_rms = std::max(s.torque_rms, calc_rms(*tau));
+    for (double x : *tau) s.torque_max = std::max(s.torque_max, std::abs(x));
   }
-  s.torque.rate_rms = calc_rms(r.has(a.name + ".rate") ? r.at(a.name + ".rate") : time_derivative(r.t, r.at(a.name + ".angle")));
+  s.rate_rms = calc_rms(r.has(a.name + ".rate") ? r.at(a.name + ".rate") : time_derivative(r.t, r.at(a.name + ".angle")));
+  return s;
+}
+
+// The diagonal of the arm's mass matrix at its start, kg m^2 (kg): each joint's inertia, what its drive's
+// and armature's candidates scale with.
+Eigen::VectorXd calc_start_inertia(const ArmModel& base) {
   TreeWorkspace ws(base.tree);
   Eigen::MatrixXd M(base.tree.nv(), base.tree.nv());
   calc_mass_matrix(base.tree, base.q0, M, ws);
-  s.inertia = M(a.dof, a.dof);
-  return s;
+  return M.diagonal();
 }
 
 // The inline tree's body entry named `name` (tree YAML `bodies`), or a null node.
@@ -116,10 +115,10 @@ double number_at(const YAML::Node& doc, const std::string& path, double fallback
 }
 
 std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& doc, const ActuatedJoint& a,
-                                       const JointScales& js) {
+                                       const EffectScales& sc, double inertia) {
   const std::string j = "joints." + a.name + ".";
-  const double tau = std::max(js.torque.torque_rms, 1e-6), w = std::max(js.torque.rate_rms, 1e-6);
-  const double peak = std::max(js.torque.torque_max, 1e-6), kp = std::max(a.control.kp, 1e-6);
+  const double tau = std::max(sc.torque_rms, 1e-6), w = std::max(sc.rate_rms, 1e-6);
+  const double peak = std::max(sc.torque_max, 1e-6), kp = std::max(a.control.kp, 1e-6);
   const FrictionSpec& f = a.control.friction;
   std::vector<Effect> out;
   const EffectParam coulomb = make_positive_param(j + "friction.coulomb", f.coulomb, 0.05 * tau, 1e-3 * tau, 2.0 * tau);
@@ -134,7 +133,7 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
                   make_positive_param(j + "friction.stribeck_velocity", f.stribeck_velocity, 0.05 * w, 1e-3 * w, w), smoothing},
                  "", {}, false, "coulomb_friction@" + a.name});
   out.push_back({"torque_offset@" + a.name, "a constant load torque on " + a.name + " (cable drag, an unbalanced axis)",
-                 {}, {make_effect_param(j + "torque_offset", a.control.torque_offset, js.torque)}, "", {}, false, ""});
+                 {}, {make_effect_param(j + "torque_offset", a.control.torque_offset, sc)}, "", {}, false, ""});
   // The drive train: its spring from the loop's own to a thousand times it, its damper's time constant
   // c/k from 1e-6 to 0.1 s, the rotor from a thousandth of the joint's inertia to all of it. (Not on a
   // hydraulic joint: the two do not go together.)
@@ -145,7 +144,7 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
                  {make_positive_param(j + "drive.stiffness", k0, 200.0 * kp, kp, 1e3 * kp),
                   make_positive_param(j + "drive.damping", number_at(doc, j + "drive.damping", 0.0), 1e-3 * k0, 1e-6 * kp, 1e2 * kp),
                   make_positive_param(j + "drive.rotor_inertia", number_at(doc, j + "drive.rotor_inertia", 0.0),
-                                      0.1 * js.inertia, 1e-3 * js.inertia, js.inertia)},
+                                      0.1 * inertia, 1e-3 * inertia, inertia)},
                  "", {}, false, ""});
   // A hydraulic joint's oil spring 4 beta D^2 / V (the rig's hydraulic_compressibility): the bulk modulus
   // (entrained air lowers it by decades) and the chamber volume.
@@ -172,9 +171,9 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   if (const std::string body = body_of_joint(doc, a.name); !body.empty()) {
     const std::string path = "bodies[" + body + "].joint.armature";
     const double now = number_at(doc, path, 0.0);
-    const double lo = now > 0 ? now / 10.0 : 1e-3 * js.inertia, hi = now > 0 ? now * 30.0 : js.inertia;
+    const double lo = now > 0 ? now / 10.0 : 1e-3 * inertia, hi = now > 0 ? now * 30.0 : inertia;
     out.push_back({"armature@" + a.name, a.name + "'s rotor inertia (armature; a re-fit, no new physics)", {},
-                   {make_positive_param(path, now, 0.1 * js.inertia, lo, hi)}, "", {}, false, ""});
+                   {make_positive_param(path, now, 0.1 * inertia, lo, hi)}, "", {}, false, ""});
   }
   return out;
 }
@@ -214,8 +213,9 @@ void check_closed_loop(const DiagnoseOptions& opt) {
 
 std::vector<Effect> make_candidates(const ArmModel& base, const YAML::Node& doc, const Record& r, const ArmReplay& replay) {
   std::vector<Effect> out;
+  const Eigen::VectorXd inertia = calc_start_inertia(base);
   for (const ActuatedJoint& a : base.actuated) {
-    auto e = make_joint_effects(base, doc, a, make_joint_scales(base, replay, r, a));
+    auto e = make_joint_effects(base, doc, a, make_torque_scales(replay, r, a), inertia[a.dof]);
     out.insert(out.end(), e.begin(), e.end());
   }
   for (const LinkTip& l : base.links)
@@ -267,7 +267,7 @@ Diagnosis diagnose_arm(const ModelSource& src, const Record& r, const DiagnoseOp
             p.sensitive.end())
           p.sensitive.emplace_back(q.path, number_at(p.doc, q.path, 0.0));
   // The ranges of named re-fits: the first joint's torque scales (signed offsets are within twice its torque).
-  p.scales = make_joint_scales(base, replay, r, base.actuated.front()).torque;
+  p.scales = make_torque_scales(replay, r, base.actuated.front());
   return diagnose_problem(p, opt);
 }
 

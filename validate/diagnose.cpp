@@ -848,12 +848,6 @@ std::vector<Assignment> EffectFit::assignments() const {
   return a;
 }
 
-YAML::Node apply_overrides(const ModelSource& src) {
-  YAML::Node doc = YAML::Clone(src.doc);
-  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
-  return doc;
-}
-
 EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& name) {
   DiagnoseOptions o = opt;
   o.only = {name};

@@ -151,9 +151,6 @@ struct DiagnoseProblem {
 };
 Diagnosis diagnose_problem(const DiagnoseProblem& p, const DiagnoseOptions& opt);
 
-// The source's document with its --set overrides applied.
-YAML::Node apply_overrides(const ModelSource& src);
-
 // One effect fitted alone (what `calibrate --add` uses).
 EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& effect);
 

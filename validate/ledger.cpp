@@ -12,8 +12,7 @@
 namespace ff {
 
 std::string format_calibrated_model(const ModelSource& src, const EffectFit& fit, const std::string& record_path) {
-  YAML::Node doc = YAML::Clone(src.doc);
-  for (const auto& a : src.set) set_path(doc, a.path, a.value, "--set");
+  YAML::Node doc = apply_overrides(src);
   for (const auto& a : fit.assignments()) set_path(doc, a.path, a.value, "calibrate");
   std::string head = "# " + src.path + " with " + fit.effect + " (" + fit.physics + ") added by flexfarm calibrate,\n";
   head += "# fitted to " + record_path + ":";
