@@ -56,8 +56,19 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
     throw ConfigError(src, 0, key + "friction.stiction", "must be >= friction.coulomb (or 0 for no Stribeck peak)");
   positive(f.stribeck_velocity, "friction.stribeck_velocity");
   positive(f.smoothing, "friction.smoothing");
-  if (f.model != "static")
-    throw ConfigError(src, 0, key + "friction.model", "an arm joint has the static map only, got '" + f.model + "'");
+  if (f.model != "static" && f.model != "lugre")
+    throw ConfigError(src, 0, key + "friction.model", "unknown friction model '" + f.model + "' (static, lugre)");
+  if (f.model == "lugre") {
+    positive(f.coulomb, "friction.coulomb");
+    positive(f.bristle_stiffness, "friction.bristle_stiffness");
+    non_negative(f.bristle_damping, "friction.bristle_damping");
+  }
+  if (c.drive) {
+    non_negative(c.train.cubic_stiffness, "drive.cubic_stiffness");
+    non_negative(c.train.backlash, "drive.backlash");
+    if (!(c.train.efficiency > 0.0 && c.train.efficiency <= 1.0))
+      throw ConfigError(src, 0, key + "drive.efficiency", "must be in (0, 1], got " + std::to_string(c.train.efficiency));
+  }
   if (!std::isfinite(c.torque_offset)) throw ConfigError(src, 0, key + "torque_offset", "must be finite");
   if (c.hydraulics.enabled) {
     if (c.drive)
@@ -93,13 +104,18 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
 //   backward-Euler implicit and follows at h rate <= 250 (the rig's bound, kernel/drive.cpp); SDIRK2
 //   and CVODE need nothing;
 // - a hydraulic actuator (every fixed-step method, h rate <= 1, as the rig's hub drive:
-//   calc_hydraulic_rate): spool, torque loop, relief valves, the oil spring on J_eff.
-// 0 without either.
+//   calc_hydraulic_rate): spool, torque loop, relief valves, the oil spring on J_eff;
+// - LuGre friction (every fixed-step method, h rate <= 1, as the rig's, kernel/drive.cpp
+//   calc_drive_rate): the stuck bristles' spring and damper on J_eff, sqrt(sigma0 / J_eff) and
+//   sigma1 / J_eff, and their relaxation at 1 rad/s, sigma0 / Fc (the bristle state itself is solved
+//   exactly in each implicit stage, its torque acts explicitly).
+// 0 without any.
 double calc_joint_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator integ) {
   const bool friction_counts = integ == Integrator::kRk4 || integ == Integrator::kMidpoint;
   bool any = false;
   for (const ActuatedJoint& a : m.actuated)
-    any = any || a.control.hydraulics.enabled || (friction_counts && is_friction_on(make_friction_map(a.control.friction)));
+    any = any || a.control.hydraulics.enabled || a.control.friction.model == "lugre" ||
+          (friction_counts && is_friction_on(make_friction_map(a.control.friction)));
   if (!any) return 0.0;
   const int n = m.tree.nv();
   Eigen::MatrixXd M(n, n);
@@ -109,7 +125,11 @@ double calc_joint_rate(const ArmModel& m, const Eigen::VectorXd& q, Integrator i
   double rate = 0.0;
   for (const ActuatedJoint& a : m.actuated) {
     const FrictionSpec& f = a.control.friction;
-    if (friction_counts && is_friction_on(make_friction_map(f))) {
+    if (f.model == "lugre") {
+      const double inv_j = Minv(a.dof, a.dof);
+      rate = std::max({rate, std::sqrt(f.bristle_stiffness * inv_j), f.bristle_damping * inv_j,
+                       f.bristle_stiffness / f.coulomb});
+    } else if (friction_counts && is_friction_on(make_friction_map(f))) {
       const double slope = (f.viscous + std::max(f.coulomb, f.stiction) / f.smoothing) * Minv(a.dof, a.dof);
       rate = std::max(rate, integ == Integrator::kRk4 ? slope / 2.5 : slope / 250.0);
     }

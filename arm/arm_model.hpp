@@ -44,14 +44,16 @@ struct JointControlSpec {
   NotchSpec notch;             // on this joint's reference or feedback; omega_z 0 = this joint's resonances
   ShaperSpec shaper;           // on this joint's reference; frequency 0 = the arm's first resonance
   // The joint's plant and sensors (the reference rig's hub blocks, per joint):
-  FrictionSpec friction;       // the static map (kernel/friction.hpp) on this joint, in the plant, at every
-                               // integrator stage (multibody/lane_integrators.hpp); off by default
+  FrictionSpec friction;       // the static map or LuGre's bristles (kernel/friction.hpp) on this joint, in
+                               // the plant, at every integrator stage (multibody/lane_integrators.hpp); off
+                               // by default
   double torque_offset = 0.0;  // a constant load torque the drive must supply, N·m (N): the joint gets
                                // tau - torque_offset (the rig's hub_torque_offset)
   ChannelSpec angle_sensor;    // what the controller measures of q (sensors.angle), rad (m)
   ChannelSpec rate_sensor;     // and of qd (sensors.rate), rad/s (m/s)
   bool drive = false;          // a compliant drive train (`drive:`): the tree holds the joint's rotor and
                                // its twist "<joint>.twist" (insert_drive_train); the joint is the rotor's
+  DriveTrain train;            // with `drive:`, its values; the lanes apply its nonlinear law at the twist
   // A hydraulic rotary actuator behind a servo valve (`hydraulics:`, the rig's, kernel/drive.hpp;
   // enabled by the block's presence): the joint then gets D (p_a - p_b) from the actuator's states,
   // the controller's torque is the valve loop's command, the chamber flows take the joint's rate, the

@@ -47,7 +47,9 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
   for (std::size_t j = 0; j < a.actuated.size(); ++j)
     if (a.actuated[j].dof != b.actuated[j].dof || a.actuated[j].notch.size() != b.actuated[j].notch.size() ||
         a.actuated[j].notch_on_feedback != b.actuated[j].notch_on_feedback ||
-        a.actuated[j].control.hydraulics.enabled != b.actuated[j].control.hydraulics.enabled)
+        a.actuated[j].control.hydraulics.enabled != b.actuated[j].control.hydraulics.enabled ||
+        a.actuated[j].control.drive != b.actuated[j].control.drive ||
+        (a.actuated[j].control.friction.model == "lugre") != (b.actuated[j].control.friction.model == "lugre"))
       return "joint " + a.actuated[j].name + "'s control differs in shape";
   if (a.links.size() != b.links.size()) return "the flexible links differ";
   if (a.control_period != b.control_period || a.duration != b.duration || a.substeps != b.substeps ||
@@ -118,11 +120,29 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   std::vector<Tree> trees;
   for (const ArmModel& m : lanes) trees.push_back(m.tree);
   TreeLanes tl = make_tree_lanes(trees);
-  // Each actuated joint's friction, in the plant (every integrator stage, CVODE's right-hand side).
+  // Each actuated joint's friction, in the plant (every integrator stage, CVODE's right-hand side): the
+  // static map, or LuGre's bristles (a state each, after the actuators'); and a drive train's nonlinear
+  // law at its twist, in every lane when one lane's drive there is nonlinear.
   for (int j = 0; j < na; ++j) {
+    const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
     std::vector<FrictionSpec> f;
-    for (const ArmModel& m : lanes) f.push_back(m.actuated[static_cast<std::size_t>(j)].control.friction);
-    set_tree_lanes_friction(tl, m0.actuated[static_cast<std::size_t>(j)].dof, f);
+    std::vector<LaneDrive> law;
+    bool nonlinear = false;
+    for (const ArmModel& m : lanes) {
+      const JointControlSpec& c = m.actuated[static_cast<std::size_t>(j)].control;
+      f.push_back(c.friction);
+      LaneDrive p;
+      p.k = c.train.stiffness;
+      p.k3 = c.train.cubic_stiffness;
+      p.c = c.train.damping;
+      p.b = 0.5 * c.train.backlash;
+      p.eta = c.train.efficiency;
+      law.push_back(p);
+      nonlinear = nonlinear || (c.drive && is_nonlinear_drive(c.train));
+    }
+    if (a0.control.friction.model == "lugre") add_tree_lanes_lugre(tl, a0.dof, f);
+    else set_tree_lanes_friction(tl, a0.dof, f);
+    if (nonlinear) add_tree_lanes_transmission(tl, m0.spec.tree.dof_index.at(a0.name + ".twist"), a0.dof, law);
   }
   // Each hydraulic joint's actuator (its states after the tree's, in joint order), its torque offset the
   // constant load on the joint; the chambers holding the joint's static load, the spool centred.

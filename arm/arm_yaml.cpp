@@ -68,13 +68,18 @@ const std::array<Field<JointControlSpec>, 1> kJointFields{{
     {.key = "torque_offset", .member = &JointControlSpec::torque_offset, .unit = "N·m (N)"},
 }};
 
-const std::array<Field<FrictionSpec>, 5> kFrictionFields{{
+const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
     {.key = "viscous", .member = &FrictionSpec::viscous, .unit = "N·m·s/rad (N·s/m)", .bound = Bound::kNonNegative},
     {.key = "coulomb", .member = &FrictionSpec::coulomb, .unit = "N·m (N)", .bound = Bound::kNonNegative},
     {.key = "stiction", .member = &FrictionSpec::stiction, .unit = "N·m (N)", .bound = Bound::kNonNegative,
      .fallback = "0: no Stribeck peak"},
     {.key = "stribeck_velocity", .member = &FrictionSpec::stribeck_velocity, .unit = "rad/s (m/s)", .bound = Bound::kPositive},
     {.key = "smoothing", .member = &FrictionSpec::smoothing, .unit = "rad/s (m/s)", .bound = Bound::kPositive},
+    {.key = "model", .member = &FrictionSpec::model},
+    {.key = "bristle_stiffness", .member = &FrictionSpec::bristle_stiffness, .unit = "N·m/rad (N/m)",
+     .bound = Bound::kPositive},
+    {.key = "bristle_damping", .member = &FrictionSpec::bristle_damping, .unit = "N·m·s/rad (N·s/m)",
+     .bound = Bound::kNonNegative},
 }};
 
 const std::array<Field<ChannelSpec>, 4> kAngleSensorFields{{
@@ -96,11 +101,16 @@ const std::array<Field<ChannelSpec>, 4> kRateSensorFields{{
 }};
 
 // A drive train on the joint (description/tree_description.hpp, DriveTrain), output-side units.
-const std::array<Field<DriveTrain>, 4> kDriveFields{{
+const std::array<Field<DriveTrain>, 7> kDriveFields{{
     {.key = "rotor_inertia", .member = &DriveTrain::rotor_inertia, .unit = "kg·m² (kg)", .bound = Bound::kNonNegative},
     {.key = "ratio", .member = &DriveTrain::ratio, .bound = Bound::kPositive},
     {.key = "stiffness", .member = &DriveTrain::stiffness, .unit = "N·m/rad (N/m)", .bound = Bound::kPositive},
     {.key = "damping", .member = &DriveTrain::damping, .unit = "N·m·s/rad (N·s/m)", .bound = Bound::kNonNegative},
+    {.key = "cubic_stiffness", .member = &DriveTrain::cubic_stiffness, .unit = "N·m/rad³ (N/m³)",
+     .bound = Bound::kNonNegative},
+    {.key = "backlash", .member = &DriveTrain::backlash, .unit = "rad (m)", .bound = Bound::kNonNegative,
+     .fallback = "0: none"},
+    {.key = "efficiency", .member = &DriveTrain::efficiency, .bound = Bound::kPositive},
 }};
 
 struct TrajectoryBlock {
@@ -228,6 +238,10 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       read_present(friction, kFrictionFields, c.friction);
       if (c.friction.stiction > 0 && c.friction.stiction < c.friction.coulomb)
         friction.fail("stiction", "must be >= coulomb (or 0 for no Stribeck peak)");
+      if (c.friction.model != "static" && c.friction.model != "lugre")
+        friction.fail("model", "unknown friction model '" + c.friction.model + "' (static, lugre)");
+      if (c.friction.model == "lugre" && !(c.friction.coulomb > 0))
+        friction.fail("coulomb", "LuGre friction needs coulomb > 0 (the bristles' steady-state level)");
       friction.finish();
       YamlReader sensors = one.child("sensors");
       YamlReader angle = sensors.child("angle");
@@ -263,8 +277,11 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       c.drive = one.has("drive");
       s.joints.push_back(c);
       // A compliant drive: the joint's rotor and the twist to its link (insert_drive_train).
-      if (one.has("drive"))
+      if (one.has("drive")) {
+        if (train.efficiency > 1.0) drive.fail("efficiency", "must be in (0, 1], got " + std::to_string(train.efficiency));
         if (const std::string fault = insert_drive_train(s.tree, name, train); !fault.empty()) one.fail("drive", fault);
+        s.joints.back().train = train;
+      }
     }
     jr.finish();
   }

@@ -123,6 +123,9 @@ std::string insert_drive_train(TreeDescription& d, const std::string& joint, con
   if (!(drive.rotor_inertia >= 0.0) || !(drive.ratio > 0.0) || !(drive.stiffness > 0.0) || !(drive.damping >= 0.0) ||
       !std::isfinite(drive.rotor_inertia + drive.ratio + drive.stiffness + drive.damping))
     return "a drive needs rotor_inertia >= 0, ratio > 0, stiffness > 0 and damping >= 0, all finite";
+  if (!(drive.cubic_stiffness >= 0.0) || !(drive.backlash >= 0.0) || !(drive.efficiency > 0.0 && drive.efficiency <= 1.0) ||
+      !std::isfinite(drive.cubic_stiffness + drive.backlash))
+    return "a drive needs cubic_stiffness >= 0, backlash >= 0 and efficiency in (0, 1], all finite";
   int body = -1;
   for (std::size_t i = 0; i < d.joints.size(); ++i)
     if (d.joints[i].name == joint) body = static_cast<int>(i);

@@ -59,7 +59,19 @@ struct DriveTrain {
   double ratio = 1.0;          // n = motor angle / output angle
   double stiffness = 2.0e7;    // k, the drive's torsional (axial) stiffness at the output, N·m/rad (N/m)
   double damping = 2.0e3;      // c, N·m·s/rad (N·s/m)
+  // The nonlinear part of the law (the reference rig's, kernel/drive.hpp calc_transmission_torque and
+  // calc_efficiency_factor), which the tree cannot hold: the arm's lanes apply it at the twist
+  // (multibody/lanes.hpp, add_tree_lanes_transmission). The tree's twist keeps the linear k and c, what
+  // the modes and statics take (the teeth in contact).
+  double cubic_stiffness = 0.0;  // k3, hardening, N·m/rad³ (N/m³)
+  double backlash = 0.0;         // total free play 2b at the output, rad (m)
+  double efficiency = 1.0;       // eta in (0, 1]
 };
+
+// Whether the drive's law is more than the linear spring and damper.
+inline bool is_nonlinear_drive(const DriveTrain& d) {
+  return d.cubic_stiffness != 0.0 || d.backlash != 0.0 || d.efficiency != 1.0;
+}
 
 // Splits the moving joint `joint` into the drive's two: a massless rotor body "<body>.rotor" inserted
 // between the parent and the body, carrying the joint (its name, type, axis, placement, limits and

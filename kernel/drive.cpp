@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "kernel/dynamics.hpp"
+#include "kernel/friction.hpp"
 
 namespace ff {
 
@@ -87,6 +88,17 @@ double calc_transmission_torque(const LaneDrive& p, double d, double dd) {
   if (e == 0.0) return 0.0;
   const double t = (p.k + p.k3 * e * e) * e + p.c * dd;
   return e > 0.0 ? std::max(t, 0.0) : std::min(t, 0.0);
+}
+
+TransmissionTangent calc_transmission_tangent(const LaneDrive& p, double d, double dd) {
+  const double e = p.b == 0.0 ? d : (d > p.b ? d - p.b : (d < -p.b ? d + p.b : 0.0));
+  if (p.b != 0.0 && (e == 0.0 || calc_transmission_torque(p, d, dd) == 0.0)) return {};
+  return {p.k + 3.0 * p.k3 * e * e, p.c};
+}
+
+double calc_efficiency_factor(double eta, double power) {
+  const double driving = 0.5 * (1.0 + std::tanh(power));
+  return driving / eta + (1.0 - driving) * eta;
 }
 
 double calc_hydraulic_damping(const HydraulicSpec& h) {
@@ -301,9 +313,8 @@ double lane_drive(const BatchModel& bm, int l, const double* q, const double* v,
   if (L.shaft >= 0) {
     // Gear n, free play and compliance between shaft and hub; efficiency loses power in either direction.
     const double ts = calc_transmission_torque(p, th_p / p.n - th_h, w_p / p.n - w_h);
-    // s = 1/2 (1 + tanh(P / 1 W)), P = tau_s w_p / n the power to the load: 1 driving, 0 driven, 1/2 at rest.
-    const double driving = 0.5 * (1.0 + std::tanh(ts * w_p / p.n));
-    const double reaction = ts / p.n * (driving / p.eta + (1.0 - driving) * p.eta);
+    // P = tau_s w_p / n the power to the load.
+    const double reaction = ts / p.n * calc_efficiency_factor(p.eta, ts * w_p / p.n);
     set(L.shaft, w_p);
     set(L.shaft + 1, (tau_p - reaction) / p.ja);
     tau_hub = ts;
@@ -312,12 +323,11 @@ double lane_drive(const BatchModel& bm, int l, const double* q, const double* v,
 
   // Friction at the hub: the LuGre bristles or the static map.
   if (L.bristle >= 0) {
-    const double fc = bm.fric_c[l], x = w_h * bm.fric_inv_vs[l];
-    const double g = fc + bm.fric_s[l] * std::exp(-x * x);
+    const FrictionMap f{bm.fric_b[l], bm.fric_c[l], bm.fric_s[l], bm.fric_inv_vs[l], bm.fric_inv_eps[l]};
     const double zb = Z(L.bristle);
-    const double zd = w_h - p.sigma0 * std::abs(w_h) * zb / g;
+    const double zd = calc_lugre_bristle_rate(f, p.sigma0, w_h, zb);
     set(L.bristle, zd);
-    tau_hub -= p.sigma0 * zb + p.sigma1 * zd + bm.fric_b[l] * w_h;
+    tau_hub += calc_lugre_torque(f, p.sigma0, p.sigma1, w_h, zb, zd);
   } else {
     tau_hub += calc_hub_friction(bm, l, w_h);
   }

@@ -123,6 +123,18 @@ double calc_displacement(const HydraulicSpec& h);
 // Transmitted torque of the drive train at output twist d (rad) and twist rate dd (rad/s), N·m.
 double calc_transmission_torque(const LaneDrive& p, double d, double dd);
 
+// Its tangent there: dT/dd (N·m/rad) and dT/d(dd) (N·m·s/rad); both 0 inside the free play and
+// where the teeth would pull (the torque clipped at 0). What a linearly implicit stage takes.
+struct TransmissionTangent {
+  double stiffness = 0.0, damping = 0.0;
+};
+TransmissionTangent calc_transmission_tangent(const LaneDrive& p, double d, double dd);
+
+// The factor on the transmitted torque the driving side feels with efficiency eta, given the power
+// P (W) the drive passes to the load: s / eta + (1 - s) eta, s = (1 + tanh(P / 1 W)) / 2 (1 driving,
+// 0 driven, 1/2 at rest; docs/formats.md, drive.efficiency).
+double calc_efficiency_factor(double eta, double power);
+
 // The fastest rate (1/s) of the drive's dynamics a fixed step must resolve (h rate <= 1): the
 // spool, the torque loop, relief valves, the oil spring and drive train on the hub's own inertia,
 // the static friction map's slope at rest, the LuGre bristles. Used to choose substeps; 0 without

@@ -55,4 +55,26 @@ inline double calc_coulomb_friction_damping(const FrictionMap& f, double w) {
   return std::max(0.0, dg * th + g * (1.0 - th * th) * f.inv_eps);
 }
 
+// LuGre bristles (Canudas de Wit, Olsson, Astrom & Lischinsky, IEEE TAC 40, 1995) on the map's
+// coefficients (b, Fc, Fs - Fc, vs; the tanh smoothing unused): with g(w) = Fc + (Fs - Fc) exp(-(w/vs)^2),
+//   dz/dt = w - sigma0 |w| z / g(w),   tau_f = -(sigma0 z + sigma1 dz/dt + b w).
+// Needs Fc > 0. The reference rig's hub (kernel/drive.cpp) and the arm joints (multibody/lanes.hpp)
+// call these two.
+inline double calc_lugre_bristle_rate(const FrictionMap& f, double sigma0, double w, double z) {
+  const double x = w * f.inv_vs;
+  const double g = f.fc + f.fs * std::exp(-x * x);
+  return w - sigma0 * std::abs(w) * z / g;
+}
+// An implicit stage of the bristles at a held rate w: z = zpre + gh dz/dt(w, z), linear in z, so
+// z = (zpre + gh w) / (1 + gh sigma0 |w| / g(w)) exactly (0 < the denominator's inverse <= 1: stable
+// at any gh).
+inline double solve_lugre_stage(const FrictionMap& f, double sigma0, double w, double zpre, double gh) {
+  const double x = w * f.inv_vs;
+  const double g = f.fc + f.fs * std::exp(-x * x);
+  return (zpre + gh * w) / (1.0 + gh * sigma0 * std::abs(w) / g);
+}
+inline double calc_lugre_torque(const FrictionMap& f, double sigma0, double sigma1, double w, double z, double zd) {
+  return -(sigma0 * z + sigma1 * zd + f.b * w);
+}
+
 }  // namespace ff

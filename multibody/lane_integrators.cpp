@@ -25,17 +25,30 @@ void set_armature(const TreeLanes& tl, TreeStepWorkspace& ws, double gh) {
 // D_c(w) (calc_coulomb_friction_damping, >= 0) takes gf D_c, gf the stage's gh (SDIRK2) or h for the
 // midpoint rule (backward Euler on the steep tanh: the midpoint rule is not L-stable, and a stuck
 // joint's rate would flip sign every step), so a small smoothing is stable at the step the arm needs.
-// Rewrites only the friction dofs' entries, base armature included; runs before every stage.
-void set_friction_armature(const TreeLanes& tl, TreeStepWorkspace& ws, const double* w, double gh, double gf) {
+// The nonlinear drive trains (TreeLanes::transmissions) likewise: their law is evaluated at the
+// stage's spring state (q, w) and its tangent (calc_transmission_tangent: k + 3 k3 e^2 and c in
+// contact, 0 in the free play) goes on the twist's diagonal as gh C_t + gh^2 K_t, a spring's armature.
+// Rewrites only those dofs' entries, base armature included; runs before every stage.
+void set_stage_armature(const TreeLanes& tl, TreeStepWorkspace& ws, const double* q, const double* w, double gh,
+                        double gf) {
   const std::size_t W = static_cast<std::size_t>(tl.W);
+  const auto base = [&](std::size_t j) { return gh * tl.damping[j] + gh * gh * tl.stiffness[j]; };  // set_armature's
   for (std::size_t f = 0; f < tl.friction_dofs.size(); ++f) {
     const std::size_t o = static_cast<std::size_t>(tl.friction_dofs[f]) * W;
     const FrictionMap* fm = tl.friction.data() + f * W;
     for (std::size_t l = 0; l < W; ++l) {
       const std::size_t j = o + l;
-      const double base = gh * tl.damping[j] + gh * gh * tl.stiffness[j];  // set_armature's
       ws.armature[j] =
-          is_friction_on(fm[l]) ? base + gh * fm[l].b + gf * calc_coulomb_friction_damping(fm[l], w[j]) : base;
+          is_friction_on(fm[l]) ? base(j) + gh * fm[l].b + gf * calc_coulomb_friction_damping(fm[l], w[j]) : base(j);
+    }
+  }
+  for (std::size_t d = 0; d < tl.transmission_dofs.size(); ++d) {
+    const std::size_t o = static_cast<std::size_t>(tl.transmission_dofs[d]) * W;
+    const LaneDrive* p = tl.transmissions.data() + d * W;
+    for (std::size_t l = 0; l < W; ++l) {
+      const std::size_t j = o + l;
+      const TransmissionTangent t = calc_transmission_tangent(p[l], q[j], w[j]);  // T odd: the same at -q_t
+      ws.armature[j] = base(j) + gh * t.damping + gh * gh * t.stiffness;
     }
   }
 }
@@ -45,14 +58,15 @@ std::size_t z_size_of(const TreeLanes& tl) { return static_cast<std::size_t>(tl.
 // states z at (q, qd) (their rates into zdot when given).
 const double* stage_force(const TreeLanes& tl, const double* q, const double* qd, const double* z,
                           const double* tau_applied, TreeStepWorkspace& ws, double* zdot) {
-  if (tl.hydraulic_dofs.empty()) return tau_applied;
+  if (tl.nz() == 0) return tau_applied;
   compute_tree_actuator_forces(tl, q, qd, z, tau_applied, ws.tau_act.data(), zdot);
   return ws.tau_act.data();
 }
 
-// Every actuator's implicit stage Z = zpre + gh f(Z) (solve_hydraulic_stage), each lane's joint held at
-// (q, qd), its command tau_applied at the joint (0 when null).
-void solve_hydraulic_stages(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,
+// Every state's implicit stage Z = zpre + gh f(Z), each lane's joint held at (q, qd): the hydraulic
+// actuators' by simplified Newton (solve_hydraulic_stage), their command tau_applied at the joint (0
+// when null); the LuGre bristles' exactly (solve_lugre_stage).
+void solve_state_stages(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,
                             const double* zpre, double gh, double* Z) {
   const std::size_t W = static_cast<std::size_t>(tl.W);
   for (std::size_t a = 0; a < tl.hydraulic_dofs.size(); ++a) {
@@ -64,6 +78,12 @@ void solve_hydraulic_stages(const TreeLanes& tl, const double* q, const double* 
                             gh, X);
       for (int k = 0; k < kHydraulicStates; ++k) Z[zo + k * W + l] = X[k];
     }
+  }
+  for (std::size_t b = 0; b < tl.lugre_dofs.size(); ++b) {
+    const std::size_t o = static_cast<std::size_t>(tl.lugre_dofs[b]) * W;
+    const std::size_t zo = static_cast<std::size_t>(tl.bristle_row(b)) * W;
+    for (std::size_t l = 0; l < W; ++l)
+      Z[zo + l] = solve_lugre_stage(tl.lugre[b * W + l], tl.bristle_stiffness[b * W + l], qd[o + l], zpre[zo + l], gh);
   }
 }
 }  // namespace
@@ -81,7 +101,7 @@ TreeStepWorkspace::TreeStepWorkspace(const TreeLanes& tl) : aba(tl) {
   const std::size_t n = size_of(tl);
   for (auto* v : {&q1, &qd1, &tau, &armature}) v->assign(n, 0.0);
   for (int k = 0; k < 4; ++k) kq[k].assign(n, 0.0), kv[k].assign(n, 0.0);
-  if (tl.hydraulic_dofs.empty()) return;
+  if (tl.nz() == 0) return;
   tau_act.assign(n, 0.0);
   const std::size_t nz = z_size_of(tl);
   z1.assign(nz, 0.0);
@@ -135,12 +155,12 @@ void step_tree_midpoint(const TreeLanes& tl, const double* tau_applied, TreeLane
   const double* force = tau_applied;
   if (const std::size_t nz = z_size_of(tl); nz > 0) {
     double *z = s.z.data(), *Z = ws.z1.data();
-    solve_hydraulic_stages(tl, qs, vk, tau_applied, z, gh, Z);
+    solve_state_stages(tl, qs, vk, tau_applied, z, gh, Z);
     force = stage_force(tl, qs, vk, Z, tau_applied, ws, nullptr);
     for (std::size_t j = 0; j < nz; ++j) z[j] = 2.0 * Z[j] - z[j];
   }
   compute_tree_passive_forces(tl, qs, qd, force, tau);
-  set_friction_armature(tl, ws, qd, gh, h);
+  set_stage_armature(tl, ws, qs, qd, gh, h);
   compute_tree_forward_dynamics(tl, qs, vk, tau, ws.armature.data(), A, ws.aba);
   midpoint_finish(n, A, h, gh, q, qd, a_prev);
 }
@@ -161,10 +181,10 @@ void step_tree_sdirk2(const TreeLanes& tl, const double* tau_applied, TreeLanesS
   // The actuators' stages (implicit, the joints at the spring state), then their torques.
   const std::size_t nz = z_size_of(tl);
   double *z = s.z.data(), *Z1 = ws.z1.data(), *Z2 = nz ? ws.kz[0].data() : nullptr, *zpre = nz ? ws.kz[1].data() : nullptr;
-  if (nz) solve_hydraulic_stages(tl, qk, vk, tau_applied, z, gh, Z1);
+  if (nz) solve_state_stages(tl, qk, vk, tau_applied, z, gh, Z1);
   const double* force = stage_force(tl, qk, vk, Z1, tau_applied, ws, nullptr);
   compute_tree_passive_forces(tl, qs, vs, force, tau);
-  set_friction_armature(tl, ws, vs, gh, gh);
+  set_stage_armature(tl, ws, qs, vs, gh, gh);
   compute_tree_forward_dynamics(tl, qk, vk, tau, ws.armature.data(), A1, ws.aba);
   // Stage 2 (t + h): Q2 = q + (1-g) h V1 + gh V2, V2 = qd + (1-g) h A1 + gh A2.
   const double b1 = (1.0 - g) * h;
@@ -172,12 +192,12 @@ void step_tree_sdirk2(const TreeLanes& tl, const double* tau_applied, TreeLanesS
   // Actuators: Z2 = z + (1-g) h F1 + gh f(Z2), F1 = (Z1 - z) / gh from the first stage.
   if (nz) {
     for (std::size_t j = 0; j < nz; ++j) zpre[j] = z[j] + b1 * (Z1[j] - z[j]) / gh;
-    solve_hydraulic_stages(tl, qk, vk, tau_applied, zpre, gh, Z2);
+    solve_state_stages(tl, qk, vk, tau_applied, zpre, gh, Z2);
     std::copy(Z2, Z2 + nz, z);
   }
   force = stage_force(tl, qk, vk, z, tau_applied, ws, nullptr);
   compute_tree_passive_forces(tl, qs, vs, force, tau);
-  set_friction_armature(tl, ws, vs, gh, gh);
+  set_stage_armature(tl, ws, qs, vs, gh, gh);
   compute_tree_forward_dynamics(tl, qk, vk, tau, ws.armature.data(), A2, ws.aba);
   // The second stage is the new state (stiffly accurate).
   sdirk2_finish(n, qpre, vpre, A2, gh, q, qd, a_prev);

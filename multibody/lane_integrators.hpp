@@ -31,6 +31,12 @@
 // D (p_a - p_b) from Z then acts in the stage's dynamics (SDIRK2's second stage from
 // zpre = z + (1 - g) h F1; the midpoint rule's z_new = 2 Z - z). The substeps must resolve the
 // actuators' rates (calc_hydraulic_rate) for accuracy.
+// LuGre bristles (TreeLanes::lugre_dofs, one state z each after the actuators') are solved per stage
+// as the rig's (kernel/friction.hpp, solve_lugre_stage: exact for the implicit stage at the joint's
+// stage rate), their torque sigma0 z + sigma1 zdot acting in that stage's dynamics; in RK4 they are
+// one more rate of the tableau. A nonlinear drive train (TreeLanes::transmissions: free play, cubic
+// stiffness, efficiency) acts at its twist at every stage, its tangent (kernel/drive.hpp,
+// calc_transmission_tangent) on the implicit pair's diagonal as a spring and damper's gh c + (gh)^2 k.
 #pragma once
 
 #include <vector>

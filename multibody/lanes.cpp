@@ -1,6 +1,7 @@
 #include "multibody/lanes.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -444,6 +445,19 @@ void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const dou
     for (std::size_t l = 0; l < W; ++l)
       if (is_friction_on(fm[l])) tau[o + l] += calc_friction_torque(fm[l], qd[o + l]);
   }
+  // The nonlinear drive trains: the twist q_t = body - rotor, so the rotor drives the body with
+  // T_t = T(-q_t, -qd_t) = -T(q_t, qd_t) (T odd); the body's coordinate is q_rotor + q_t, so the twist
+  // gets T_t and the rotor, which feels T_t x factor (efficiency), T_t (1 - factor).
+  for (std::size_t d = 0; d < tl.transmission_dofs.size(); ++d) {
+    const std::size_t o = static_cast<std::size_t>(tl.transmission_dofs[d]) * W;
+    const std::size_t r = static_cast<std::size_t>(tl.transmission_rotor_dofs[d]) * W;
+    const LaneDrive* p = tl.transmissions.data() + d * W;
+    for (std::size_t l = 0; l < W; ++l) {
+      const double tt = -calc_transmission_torque(p[l], q[o + l], qd[o + l]);
+      tau[o + l] += tt;
+      if (p[l].eta != 1.0) tau[r + l] += tt * (1.0 - calc_efficiency_factor(p[l].eta, tt * qd[r + l]));
+    }
+  }
 }
 
 void set_tree_lanes_friction(TreeLanes& tl, int dof, std::span<const FrictionSpec> per_lane) {
@@ -494,6 +508,84 @@ void add_tree_lanes_hydraulics(TreeLanes& tl, int dof, std::span<const LaneDrive
   tl.hydraulic_load.insert(tl.hydraulic_load.end(), load.begin(), load.end());
 }
 
+TreeLanes extract_tree_lane(const TreeLanes& tl, int l) {
+  if (l < 0 || l >= tl.W) throw std::invalid_argument("extract_tree_lane: lane " + std::to_string(l) + " out of range");
+  const std::size_t W = static_cast<std::size_t>(tl.W), L = static_cast<std::size_t>(l);
+  TreeLanes one = make_tree_lanes(std::span<const Tree>(&tl.trees[L], 1));
+  // Every (rows x W) array's column l.
+  const auto column = [&](const std::vector<double>& from, std::vector<double>& to) {
+    to.resize(from.size() / W);
+    for (std::size_t r = 0; r < to.size(); ++r) to[r] = from[r * W + L];
+  };
+  column(tl.armature, one.armature);
+  column(tl.stiffness, one.stiffness);
+  column(tl.damping, one.damping);
+  column(tl.spring_reference, one.spring_reference);
+  column(tl.gravity, one.gravity);
+  column(tl.hydraulic_load, one.hydraulic_load);
+  column(tl.bristle_stiffness, one.bristle_stiffness);
+  column(tl.bristle_damping, one.bristle_damping);
+  const auto laws = [&](const auto& from, auto& to) {
+    to.clear();
+    for (std::size_t r = 0; r < from.size() / W; ++r) to.push_back(from[r * W + L]);
+  };
+  laws(tl.friction, one.friction);
+  laws(tl.hydraulics, one.hydraulics);
+  laws(tl.lugre, one.lugre);
+  laws(tl.transmissions, one.transmissions);
+  one.friction_dofs = tl.friction_dofs;
+  one.hydraulic_dofs = tl.hydraulic_dofs;
+  one.lugre_dofs = tl.lugre_dofs;
+  one.transmission_dofs = tl.transmission_dofs;
+  one.transmission_rotor_dofs = tl.transmission_rotor_dofs;
+  return one;
+}
+
+void add_tree_lanes_lugre(TreeLanes& tl, int dof, std::span<const FrictionSpec> per_lane) {
+  const std::string me = "add_tree_lanes_lugre: dof " + std::to_string(dof);
+  if (dof < 0 || dof >= tl.nv) throw std::invalid_argument(me + " out of range");
+  if (std::find(tl.lugre_dofs.begin(), tl.lugre_dofs.end(), dof) != tl.lugre_dofs.end())
+    throw std::invalid_argument(me + " has LuGre friction already");
+  if (per_lane.size() != static_cast<std::size_t>(tl.W))
+    throw std::invalid_argument(me + ": " + std::to_string(per_lane.size()) + " maps for " + std::to_string(tl.W) + " lanes");
+  for (std::size_t l = 0; l < per_lane.size(); ++l) {
+    const FrictionSpec& f = per_lane[l];
+    if (!(f.viscous >= 0.0) || !(f.coulomb > 0.0) || !(f.stiction >= 0.0) || (f.stiction > 0.0 && f.stiction < f.coulomb) ||
+        !(f.stribeck_velocity > 0.0) || !(f.bristle_stiffness > 0.0) || !(f.bristle_damping >= 0.0) ||
+        !std::isfinite(f.bristle_stiffness) || !std::isfinite(f.bristle_damping))
+      throw std::invalid_argument(me + ", lane " + std::to_string(l) + ": not a physical LuGre model");
+  }
+  set_tree_lanes_friction(tl, dof, std::vector<FrictionSpec>(per_lane.size()));  // no static map there
+  tl.lugre_dofs.push_back(dof);
+  for (const FrictionSpec& f : per_lane) {
+    tl.lugre.push_back(make_friction_map(f));
+    tl.bristle_stiffness.push_back(f.bristle_stiffness);
+    tl.bristle_damping.push_back(f.bristle_damping);
+  }
+}
+
+void add_tree_lanes_transmission(TreeLanes& tl, int twist, int rotor, std::span<const LaneDrive> per_lane) {
+  const std::string me = "add_tree_lanes_transmission: twist dof " + std::to_string(twist);
+  if (twist < 0 || twist >= tl.nv || rotor < 0 || rotor >= tl.nv || rotor == twist)
+    throw std::invalid_argument(me + " or rotor dof " + std::to_string(rotor) + " out of range");
+  if (std::find(tl.transmission_dofs.begin(), tl.transmission_dofs.end(), twist) != tl.transmission_dofs.end())
+    throw std::invalid_argument(me + " has a drive train already");
+  if (per_lane.size() != static_cast<std::size_t>(tl.W))
+    throw std::invalid_argument(me + ": " + std::to_string(per_lane.size()) + " laws for " + std::to_string(tl.W) + " lanes");
+  for (std::size_t l = 0; l < per_lane.size(); ++l) {
+    const LaneDrive& p = per_lane[l];
+    if (!(p.k > 0.0) || !(p.k3 >= 0.0) || !(p.c >= 0.0) || !(p.b >= 0.0) || !(p.eta > 0.0 && p.eta <= 1.0) ||
+        !std::isfinite(p.k) || !std::isfinite(p.k3) || !std::isfinite(p.c) || !std::isfinite(p.b))
+      throw std::invalid_argument(me + ", lane " + std::to_string(l) + ": not a physical drive train");
+  }
+  const std::size_t W = static_cast<std::size_t>(tl.W), o = static_cast<std::size_t>(twist) * W;
+  std::fill_n(tl.stiffness.begin() + static_cast<std::ptrdiff_t>(o), W, 0.0);
+  std::fill_n(tl.damping.begin() + static_cast<std::ptrdiff_t>(o), W, 0.0);
+  tl.transmission_dofs.push_back(twist);
+  tl.transmission_rotor_dofs.push_back(rotor);
+  tl.transmissions.insert(tl.transmissions.end(), per_lane.begin(), per_lane.end());
+}
+
 void compute_tree_actuator_forces(const TreeLanes& tl, const double* q, const double* qd, const double* z,
                                   const double* tau_applied, double* tau_act, double* zdot) {
   const std::size_t W = static_cast<std::size_t>(tl.W), n = static_cast<std::size_t>(tl.nv) * W;
@@ -506,6 +598,17 @@ void compute_tree_actuator_forces(const TreeLanes& tl, const double* q, const do
       tau_act[o + l] = eval_hydraulic_actuator(tl.hydraulics[a * W + l], cmd, q[o + l], qd[o + l], z + zo + l, W,
                                                zdot ? zdot + zo + l : nullptr) -
                        tl.hydraulic_load[a * W + l];
+    }
+  }
+  for (std::size_t b = 0; b < tl.lugre_dofs.size(); ++b) {
+    const std::size_t o = static_cast<std::size_t>(tl.lugre_dofs[b]) * W;
+    const std::size_t zo = static_cast<std::size_t>(tl.bristle_row(b)) * W;
+    for (std::size_t l = 0; l < W; ++l) {
+      const std::size_t i = b * W + l;
+      const double w = qd[o + l], zb = z[zo + l];
+      const double zd = calc_lugre_bristle_rate(tl.lugre[i], tl.bristle_stiffness[i], w, zb);
+      if (zdot) zdot[zo + l] = zd;
+      tau_act[o + l] += calc_lugre_torque(tl.lugre[i], tl.bristle_stiffness[i], tl.bristle_damping[i], w, zb, zd);
     }
   }
 }

@@ -47,7 +47,25 @@ struct TreeLanes {
   std::vector<int> hydraulic_dofs;
   std::vector<LaneDrive> hydraulics;
   std::vector<double> hydraulic_load;
-  int nz() const { return kHydraulicStates * static_cast<int>(hydraulic_dofs.size()); }
+  // LuGre friction (kernel/friction.hpp, calc_lugre_bristle_rate; none from make_tree_lanes,
+  // add_tree_lanes_lugre adds it) in place of the static map at its dofs: the dofs, in the order added,
+  // and per dof b and lane l its map (b, Fc, Fs - Fc, vs) and bristle stiffness and damping at
+  // [b * W + l]. Each has one state, its bristle deflection z (rad or m), row bristle_row(b) of
+  // TreeLanesState::z, after the hydraulic actuators'. compute_tree_actuator_forces adds its torque.
+  std::vector<int> lugre_dofs;
+  std::vector<FrictionMap> lugre;
+  std::vector<double> bristle_stiffness, bristle_damping;
+  // Drive trains with a nonlinear law (kernel/drive.hpp, calc_transmission_torque: free play, cubic
+  // stiffness; calc_efficiency_factor: efficiency; none from make_tree_lanes, add_tree_lanes_transmission
+  // adds them) on a joint's twist (description/tree_description.hpp, insert_drive_train): per drive d the
+  // twist's dof, the rotor's (the joint's) dof, and per lane l its law at [d * W + l] (k, k3, c, b, eta
+  // in output units, n = 1). At such a twist the law replaces the linear spring and damper; the body
+  // gets T(-q_t, -qd_t), the rotor T (1 - factor) (compute_tree_passive_forces).
+  std::vector<int> transmission_dofs, transmission_rotor_dofs;
+  std::vector<LaneDrive> transmissions;
+  int hydraulic_states() const { return kHydraulicStates * static_cast<int>(hydraulic_dofs.size()); }
+  int bristle_row(std::size_t b) const { return hydraulic_states() + static_cast<int>(b); }
+  int nz() const { return hydraulic_states() + static_cast<int>(lugre_dofs.size()); }
 };
 
 // Gathers trees of one topology (the same number of bodies, parents and joint types) into lanes.
@@ -55,6 +73,10 @@ struct TreeLanes {
 // or more than kMaxTreeLanes.
 inline constexpr int kMaxTreeLanes = 256;
 TreeLanes make_tree_lanes(std::span<const Tree> trees);
+
+// Lane l of tl alone (W = 1): its tree, parameters and every law TreeLanes holds for it (friction,
+// hydraulic actuators, LuGre, drive trains), as tl has them. For per-lane solvers (multibody/tree_cvode.hpp).
+TreeLanes extract_tree_lane(const TreeLanes& tl, int l);
 
 // Puts friction on joint coordinate `dof` of every lane: per_lane[l] is lane l's (W of them). A dof
 // given again is replaced; one whose maps are all zero is dropped. Throws std::invalid_argument on a dof
@@ -68,9 +90,22 @@ void set_tree_lanes_friction(TreeLanes& tl, int dof, std::span<const FrictionSpe
 void add_tree_lanes_hydraulics(TreeLanes& tl, int dof, std::span<const LaneDrive> per_lane,
                                std::span<const double> load);
 
-// The generalised force the actuators give (nv x W): tau_applied (null: none), at each hydraulic dof
-// replaced by D (p_a - p_b) - load from the actuator's states z (nz x W), its command tau_applied there;
-// the actuators' state rates into zdot (nz x W) when it is not null. Nothing allocated.
+// Puts LuGre friction on joint coordinate `dof` of every lane (per_lane[l]: its FrictionSpec, model
+// "lugre", W of them), in place of any static map there. Throws std::invalid_argument on a dof out of
+// range or with LuGre already, a count other than W, or a map that is not physical (as
+// set_tree_lanes_friction, and Fc > 0, sigma0 > 0, sigma1 >= 0).
+void add_tree_lanes_lugre(TreeLanes& tl, int dof, std::span<const FrictionSpec> per_lane);
+
+// Puts a nonlinear drive-train law on the twist dof `twist` whose rotor turns at dof `rotor`, in every
+// lane (per_lane[l]: k, k3, c, b, eta of LaneDrive; n unused), zeroing the twist's linear spring and
+// damper in the lanes. Throws std::invalid_argument on a dof out of range, a twist given twice, a count
+// other than W, or a law that is not physical (k > 0, c, b, k3 >= 0, eta in (0, 1]).
+void add_tree_lanes_transmission(TreeLanes& tl, int twist, int rotor, std::span<const LaneDrive> per_lane);
+
+// The generalised force the states z give (nv x W): tau_applied (null: none), at each hydraulic dof
+// replaced by D (p_a - p_b) - load from the actuator's states z (nz x W), its command tau_applied there,
+// and at each LuGre dof the bristles' friction added; the states' rates into zdot (nz x W) when it is
+// not null. Nothing allocated.
 void compute_tree_actuator_forces(const TreeLanes& tl, const double* q, const double* qd, const double* z,
                                   const double* tau_applied, double* tau_act, double* zdot);
 
@@ -96,8 +131,8 @@ void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const d
                                    const double* extra_armature, double* qdd, TreeLanesWorkspace& ws);
 
 // tau = tau_applied - k (q - q0) - c qd + tau_f(qd) in every lane and dof (calc_passive_forces plus a
-// given force, plus the joint friction of TreeLanes::friction at the rate qd; tau_applied may be null
-// for none). (nv x W) each.
+// given force, plus the joint friction of TreeLanes::friction at the rate qd, plus the nonlinear drive
+// trains of TreeLanes::transmissions; tau_applied may be null for none). (nv x W) each.
 void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,
                                  double* tau);
 

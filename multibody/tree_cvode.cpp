@@ -31,28 +31,20 @@ using Eigen::VectorXd;
 struct Lane {
   Tree tree;                // the lane's own copy
   TreeWorkspace ws;
+  TreeLanes one;            // the lane alone (extract_tree_lane): its passive laws and states z
   int nv = 0;
-  VectorXd tau_held;        // (nv) the applied force over the current advance
-  VectorXd tau;             // (nv) scratch: applied + passive + friction
-  std::vector<std::pair<int, FrictionMap>> friction;  // the lane's joint friction (TreeLanes::friction)
-  // The lane's hydraulic actuators (TreeLanes::hydraulic_dofs): their states follow q and qd in y.
-  struct Actuator {
-    int dof;
-    LaneDrive p;
-    double load;  // constant load on the joint, N·m (N)
-    double cmd;   // the held torque command over the current advance, N·m (N)
-  };
-  std::vector<Actuator> acts;
-  int nz = 0;               // kHydraulicStates per actuator
-  VectorXd tau_joint;       // (nv) tau_held with the actuators' dofs 0 (their command is Actuator::cmd)
-  std::vector<double> pjac; // (acts x 16) kGmres: each actuator's df/dz at the preconditioner's setup
+  VectorXd tau_held;        // (nv) the applied force over the current advance (an actuator's command at its dof)
+  VectorXd tau_act;         // (nv) scratch: tau_held with the states' forces (compute_tree_actuator_forces)
+  VectorXd tau;             // (nv) scratch: that plus the passive forces
+  int nz = 0;               // the states z after q and qd in y (TreeLanes::nz)
+  std::vector<double> pjac; // (actuators x 16) kGmres: each actuator's df/dz at the preconditioner's setup
   VectorXd ypert, fpert;    // (2 nv + nz) the finite-difference Jacobian's perturbed state and rate
   long fd_rhs_evals = 0;    // right-hand sides of our own Jacobian since the last ReInit
 
-  // kGmres's preconditioner: the lane's tree as one lane without gravity, its ABA with armature.
+  // kGmres's preconditioner: the lane as one lane without gravity, its ABA with armature.
   TreeLanes pre;
   TreeLanesWorkspace pre_ws;
-  std::vector<double> k, c;             // (nv) the joint springs and dampers
+  std::vector<double> k, c;             // (nv) scratch: the springs and dampers of the current solve
   std::vector<double> zero, D, w, out;  // (nv) qd = 0, gamma c + gamma^2 k, right-hand side, solution
 
   // Where the last successful advance ended, for continuing without ReInit.
@@ -92,19 +84,17 @@ struct Lane {
   }
 };
 
-// f = [qd; qdd](y). Returns false when anything is not finite.
+// f = [qd; qdd; z'](y). Returns false when anything is not finite.
 bool eval(Lane& L, const double* y, double* f) {
   const int n = L.nv;
   const Map<const VectorXd> q(y, n), qd(y + n, n);
   Map<VectorXd> qdd(f + n, n);
-  calc_passive_forces(L.tree, q, qd, L.tau);
-  L.tau += L.tau_joint;
-  for (const auto& [d, fm] : L.friction) L.tau[d] += calc_friction_torque(fm, qd[d]);
-  for (std::size_t a = 0; a < L.acts.size(); ++a) {  // y and f hold the actuators' states after q and qd
-    const Lane::Actuator& A = L.acts[a];
-    const std::size_t o = 2 * static_cast<std::size_t>(n) + kHydraulicStates * a;
-    L.tau[A.dof] += eval_hydraulic_actuator(A.p, A.cmd, q[A.dof], qd[A.dof], y + o, 1, f + o) - A.load;
+  const double* force = L.tau_held.data();
+  if (L.nz > 0) {  // y and f hold the states z after q and qd
+    compute_tree_actuator_forces(L.one, y, y + n, y + 2 * n, force, L.tau_act.data(), f + 2 * n);
+    force = L.tau_act.data();
   }
+  compute_tree_passive_forces(L.one, y, y + n, force, L.tau.data());
   calc_forward_dynamics(L.tree, q, qd, L.tau, qdd, L.ws);
   std::copy(y + n, y + 2 * n, f);
   for (int i = 0; i < 2 * n + L.nz; ++i)
@@ -168,25 +158,27 @@ int jac_klu(sunrealtype /*t*/, N_Vector y, N_Vector fy, SUNMatrix A, void* user_
 }
 
 // kGmres's preconditioner P = I - gamma [[0, I], [-M^-1 K, -M^-1 C]] (K, C: the joint springs and
-// dampers, the stiff part of the Jacobian; gravity, velocity products and dM/dq left out). P z = r:
+// dampers, the stiff part of the Jacobian, with the joint friction's slope and the drive trains'
+// tangents at y; gravity, velocity products and dM/dq left out). P z = r:
 //   (M + D) w = -D r_v - gamma K r_q,  z_v = r_v + w,  z_q = r_q + gamma z_v,  D = gamma C + gamma^2 K,
-// one ABA pass with D as extra armature (no gravity, qd = 0), O(nv). The actuators' states (block
-// Jacobi): (I - gamma dz'/dz) z_z = r_z per actuator, dz'/dz by forward differences at the setup's y
-// with its joint held (calc_hydraulic_jacobian), a 4 x 4 solve.
+// one ABA pass with D as extra armature (no gravity, qd = 0), O(nv). The states z (block Jacobi):
+// (I - gamma dz'/dz) z_z = r_z per actuator, dz'/dz by forward differences at the setup's y with its
+// joint held (calc_hydraulic_jacobian), a 4 x 4 solve; per LuGre bristle the 1 x 1 block, its rate
+// being linear in z.
 int psetup(sunrealtype, N_Vector y, N_Vector, sunbooleantype jok, sunbooleantype* jcur, sunrealtype, void* user_data) {
   Lane& L = *static_cast<Lane*>(user_data);
   *jcur = SUNTRUE;
-  if (jok && !L.acts.empty()) {
+  if (jok && !L.one.hydraulic_dofs.empty()) {
     *jcur = SUNFALSE;
     return 0;
   }
   const double* yd = N_VGetArrayPointer(y);
   const int n = L.nv;
-  for (std::size_t a = 0; a < L.acts.size(); ++a) {
-    const Lane::Actuator& A = L.acts[a];
+  for (std::size_t a = 0; a < L.one.hydraulic_dofs.size(); ++a) {
+    const int dof = L.one.hydraulic_dofs[a];
     double f0[kHydraulicStates];
-    calc_hydraulic_jacobian(A.p, A.cmd, yd[A.dof], yd[n + A.dof], yd + 2 * n + kHydraulicStates * a, f0,
-                            L.pjac.data() + kHydraulicStates * kHydraulicStates * a);
+    calc_hydraulic_jacobian(L.one.hydraulics[a], L.tau_held[dof], yd[dof], yd[n + dof], yd + 2 * n + kHydraulicStates * a,
+                            f0, L.pjac.data() + kHydraulicStates * kHydraulicStates * a);
   }
   return 0;
 }
@@ -194,32 +186,50 @@ int psetup(sunrealtype, N_Vector y, N_Vector, sunbooleantype jok, sunbooleantype
 int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector z, sunrealtype gamma,
            sunrealtype /*delta*/, int /*lr*/, void* user_data) {
   Lane& L = *static_cast<Lane*>(user_data);
+  const TreeLanes& one = L.one;
   const int n = L.nv;
   const double* yd = N_VGetArrayPointer(y);
   const double* rd = N_VGetArrayPointer(r);
   double* zd = N_VGetArrayPointer(z);
-  for (int i = 0; i < n; ++i) {
-    const double gk = gamma * L.k[static_cast<std::size_t>(i)];
-    L.D[static_cast<std::size_t>(i)] = gamma * L.c[static_cast<std::size_t>(i)] + gamma * gk;
+  L.k = one.stiffness;
+  L.c = one.damping;
+  // The joint friction's slope at the current rate, a damper like C; the drive trains' tangents.
+  for (std::size_t f = 0; f < one.friction_dofs.size(); ++f)
+    if (is_friction_on(one.friction[f])) {
+      const int d = one.friction_dofs[f];
+      L.c[static_cast<std::size_t>(d)] += calc_friction_damping(one.friction[f], yd[n + d]);
+    }
+  for (std::size_t t = 0; t < one.transmission_dofs.size(); ++t) {
+    const int d = one.transmission_dofs[t];
+    const TransmissionTangent tan = calc_transmission_tangent(one.transmissions[t], yd[d], yd[n + d]);
+    L.k[static_cast<std::size_t>(d)] += tan.stiffness;
+    L.c[static_cast<std::size_t>(d)] += tan.damping;
   }
-  // The joint friction's slope at the current rate, a damper like C.
-  for (const auto& [d, fm] : L.friction)
-    L.D[static_cast<std::size_t>(d)] += gamma * calc_friction_damping(fm, yd[n + d]);
-  for (int i = 0; i < n; ++i)
-    L.w[static_cast<std::size_t>(i)] = -L.D[static_cast<std::size_t>(i)] * rd[n + i] - gamma * L.k[static_cast<std::size_t>(i)] * rd[i];
+  for (int i = 0; i < n; ++i) {
+    const std::size_t j = static_cast<std::size_t>(i);
+    L.D[j] = gamma * L.c[j] + gamma * gamma * L.k[j];
+    L.w[j] = -L.D[j] * rd[n + i] - gamma * L.k[j] * rd[i];
+  }
   compute_tree_forward_dynamics(L.pre, yd, L.zero.data(), L.w.data(), L.D.data(), L.out.data(), L.pre_ws);
   for (int i = 0; i < n; ++i) {
     zd[n + i] = rd[n + i] + L.out[static_cast<std::size_t>(i)];
     zd[i] = rd[i] + gamma * zd[n + i];
   }
   constexpr int m = kHydraulicStates;
-  for (std::size_t a = 0; a < L.acts.size(); ++a) {
+  for (std::size_t a = 0; a < one.hydraulic_dofs.size(); ++a) {
     const std::size_t o = 2 * static_cast<std::size_t>(n) + m * a;
     const double* J = L.pjac.data() + m * m * a;
     double P[m * m];
     for (int i = 0; i < m * m; ++i) P[i] = (i % (m + 1) == 0 ? 1.0 : 0.0) - gamma * J[i];
     std::copy(rd + o, rd + o + m, zd + o);
     solve_small_system(m, P, zd + o);
+  }
+  for (std::size_t b = 0; b < one.lugre_dofs.size(); ++b) {
+    const std::size_t o = 2 * static_cast<std::size_t>(n) + static_cast<std::size_t>(one.bristle_row(b));
+    const double w = yd[n + one.lugre_dofs[b]];
+    const double dzdz = calc_lugre_bristle_rate(one.lugre[b], one.bristle_stiffness[b], w, 1.0) -
+                        calc_lugre_bristle_rate(one.lugre[b], one.bristle_stiffness[b], w, 0.0);
+    zd[o] = rd[o] / (1.0 - gamma * dzdz);
   }
   for (int i = 0; i < 2 * n + L.nz; ++i)
     if (!std::isfinite(zd[i])) return 1;  // recoverable
@@ -237,23 +247,16 @@ std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptio
   auto L = std::make_unique<Lane>();
   L->tree = tl.trees[static_cast<std::size_t>(l)];
   L->ws = TreeWorkspace(L->tree);
-  const std::size_t W = static_cast<std::size_t>(tl.W);
-  for (std::size_t a = 0; a < tl.hydraulic_dofs.size(); ++a)
-    L->acts.push_back({tl.hydraulic_dofs[a], tl.hydraulics[a * W + static_cast<std::size_t>(l)],
-                       tl.hydraulic_load[a * W + static_cast<std::size_t>(l)], 0.0});
+  L->one = extract_tree_lane(tl, l);
   L->nz = tl.nz();
-  L->pjac.assign(L->acts.size() * kHydraulicStates * kHydraulicStates, 0.0);
+  L->pjac.assign(tl.hydraulic_dofs.size() * kHydraulicStates * kHydraulicStates, 0.0);
   const int n = tl.nv, ny = 2 * n + L->nz;
   L->nv = n;
-  L->tau_joint = VectorXd::Zero(n);
   L->tau_held = VectorXd::Zero(n);
+  L->tau_act = VectorXd::Zero(n);
   L->tau = VectorXd::Zero(n);
   L->tau_end = VectorXd::Zero(n);
   L->ypert = VectorXd::Zero(ny);
-  for (std::size_t f = 0; f < tl.friction_dofs.size(); ++f) {
-    const FrictionMap& fm = tl.friction[f * static_cast<std::size_t>(tl.W) + static_cast<std::size_t>(l)];
-    if (is_friction_on(fm)) L->friction.emplace_back(tl.friction_dofs[f], fm);
-  }
   L->fpert = VectorXd::Zero(ny);
 
   if (SUNContext_Create(nullptr, &L->ctx) != 0) fail("SUNContext_Create", l);
@@ -277,13 +280,10 @@ std::unique_ptr<Lane> make_lane(const TreeLanes& tl, int l, const TreeCvodeOptio
     if (CVodeSetLinearSolver(L->mem, L->ls, L->A) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
     if (CVodeSetJacFn(L->mem, jac_klu) != CV_SUCCESS) fail("CVodeSetJacFn", l);
   } else if (opt.solver == TreeCvodeSolver::kGmres) {
-    const Tree* one = &L->tree;
-    L->pre = make_tree_lanes(std::span<const Tree>(one, 1));
+    L->pre = L->one;
     std::fill(L->pre.gravity.begin(), L->pre.gravity.end(), 0.0);
     L->pre_ws = TreeLanesWorkspace(L->pre);
-    L->k = L->pre.stiffness;
-    L->c = L->pre.damping;
-    for (auto* v : {&L->zero, &L->D, &L->w, &L->out}) v->assign(static_cast<std::size_t>(n), 0.0);
+    for (auto* v : {&L->k, &L->c, &L->zero, &L->D, &L->w, &L->out}) v->assign(static_cast<std::size_t>(n), 0.0);
     L->ls = SUNLinSol_SPGMR(L->y, SUN_PREC_LEFT, 0, L->ctx);
     if (!L->ls) fail("SUNLinSol_SPGMR", l);
     if (CVodeSetLinearSolver(L->mem, L->ls, nullptr) != CV_SUCCESS) fail("CVodeSetLinearSolver", l);
@@ -354,12 +354,6 @@ void TreeCvode::advance(const TreeLanes& tl, const double* tau_applied, TreeLane
       const std::size_t k = static_cast<std::size_t>(i) * W + l;
       same = same && s.z[k] == y[2 * n + i];
       y[2 * n + i] = s.z[k];
-    }
-    // At an actuator's dof the held force is its command; the joint gets the actuator's torque.
-    L.tau_joint = L.tau_held;
-    for (Lane::Actuator& A : L.acts) {
-      A.cmd = L.tau_held[A.dof];
-      L.tau_joint[A.dof] = 0.0;
     }
     int flag = CV_SUCCESS;
     if (!same) {

@@ -4,12 +4,13 @@
 // held (the controller's zero-order hold), the joints' springs and dampers acting as well.
 //
 // Each lane is an independent ODE y = [q; qd] (2 nv), ydot = [qd; qdd] with
-// qdd = calc_forward_dynamics(tree_l, q, qd, tau_applied_l + calc_passive_forces(tree_l, q, qd) + the
-// joint friction of TreeLanes::friction at qd, kernel/friction.hpp): the
-// scalar ABA of multibody/algorithms.hpp on the lane's own tree. With hydraulic actuators
-// (TreeLanes::hydraulic_dofs) their states follow: y = [q; qd; z] (2 nv + 4 per actuator), their rates
-// from kernel/drive.hpp's eval_hydraulic_actuator, their torque D (p_a - p_b) - load at their dofs,
-// where the held force is their command. Each lane owns its SUNContext, vector,
+// qdd = calc_forward_dynamics(tree_l, q, qd, tau) with tau the lane's own compute_tree_actuator_forces
+// and compute_tree_passive_forces (multibody/lanes.hpp, on extract_tree_lane's one-lane copy: springs,
+// dampers, joint friction, nonlinear drive trains): the scalar ABA of multibody/algorithms.hpp on the
+// lane's own tree. With actuator states (TreeLanes::nz: hydraulic actuators, 4 each, then LuGre
+// bristles, 1 each) they follow: y = [q; qd; z], their rates from kernel/drive.hpp's
+// eval_hydraulic_actuator and kernel/friction.hpp's calc_lugre_bristle_rate, their torque at their
+// dofs (a hydraulic dof's held force is its command). Each lane owns its SUNContext, vector,
 // matrix, linear solver, CVODE memory, tree copy and workspace, so a lane's result depends on its own
 // inputs and history only: the same bits alone or in a batch, in any position.
 //
@@ -34,7 +35,8 @@
 //           fixed-step implicit pair's trick, multibody/lane_integrators.hpp; the joint friction's
 //           slope at the current rate added to C), gravity and qd off. No
 //           Jacobian evaluations, no factorisation. Actuator states: block Jacobi, each actuator's
-//           I - gamma dz'/dz (4 x 4, forward differences at the preconditioner's setup).
+//           I - gamma dz'/dz (4 x 4, forward differences at the preconditioner's setup; a bristle 1 x 1).
+//           A nonlinear drive's tangent joins K and C.
 // Honest note on KLU: the reduced (joint-space) ODE has no sparse Jacobian -- M(q)^-1 couples every
 // joint of a chain, so dqdd/dq and dqdd/dqd are full nv x nv blocks whatever the topology -- and KLU
 // cannot gain from sparsity in the usual sense. What it gains is the ordering: eliminating the

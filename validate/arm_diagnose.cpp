@@ -139,13 +139,22 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   // hydraulic joint: the two do not go together.)
   const HydraulicSpec& hyd = a.control.hydraulics;
   const double k0 = number_at(doc, j + "drive.stiffness", 200.0 * kp);
-  if (!hyd.enabled)
-    out.push_back({"drive_compliance@" + a.name, "a compliant drive train between " + a.name + "'s actuator and its link", {},
-                 {make_positive_param(j + "drive.stiffness", k0, 200.0 * kp, kp, 1e3 * kp),
-                  make_positive_param(j + "drive.damping", number_at(doc, j + "drive.damping", 0.0), 1e-3 * k0, 1e-6 * kp, 1e2 * kp),
-                  make_positive_param(j + "drive.rotor_inertia", number_at(doc, j + "drive.rotor_inertia", 0.0),
-                                      0.1 * inertia, 1e-3 * inertia, inertia)},
-                 "", {}, false, ""});
+  // Free play in that drive (the rig's backlash, per joint): 10 urad to 30 mrad, with the drive's own
+  // three fitted beside it; it extends the compliant drive.
+  if (!hyd.enabled) {
+    const std::vector<EffectParam> drive{
+        make_positive_param(j + "drive.stiffness", k0, 200.0 * kp, kp, 1e3 * kp),
+        make_positive_param(j + "drive.damping", number_at(doc, j + "drive.damping", 0.0), 1e-3 * k0, 1e-6 * kp, 1e2 * kp),
+        make_positive_param(j + "drive.rotor_inertia", number_at(doc, j + "drive.rotor_inertia", 0.0), 0.1 * inertia,
+                            1e-3 * inertia, inertia)};
+    out.push_back({"drive_compliance@" + a.name, "a compliant drive train between " + a.name + "'s actuator and its link",
+                   {}, drive, "", {}, false, ""});
+    std::vector<EffectParam> play{make_positive_param(j + "drive.backlash", number_at(doc, j + "drive.backlash", 0.0), 1e-3,
+                                                      1e-5, 3e-2)};
+    play.insert(play.end(), drive.begin(), drive.end());
+    out.push_back({"backlash@" + a.name, "free play in " + a.name + "'s drive train", {}, play, "", {}, false,
+                   "drive_compliance@" + a.name});
+  }
   // A hydraulic joint's oil spring 4 beta D^2 / V (the rig's hydraulic_compressibility): the bulk modulus
   // (entrained air lowers it by decades) and the chamber volume.
   if (hyd.enabled)

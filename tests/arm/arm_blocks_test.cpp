@@ -14,6 +14,7 @@
 #include "arm/arm_simulate.hpp"
 #include "arm/arm_yaml.hpp"
 #include "common/errors.hpp"
+#include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "multibody/modes.hpp"
 #include "common/random.hpp"
@@ -361,6 +362,199 @@ TEST(ArmDrive, ABadDriveIsNamedAtItsKey) {
   text.replace(text.find("ratio: 100"), 10, "ratio: 0");
   const std::string error = test::arm_error(text);
   EXPECT_EQ(error.rfind("arm.yaml:12: joints.arm.drive.ratio: must be > 0", 0), 0u) << error;
+}
+
+}  // namespace
+}  // namespace ff
+
+namespace ff {
+namespace {
+
+// drive_arm with the drive's law given (and damped), run for `duration` with `integ`.
+std::string nonlinear_drive_arm(const std::string& drive, const char* integ, double duration) {
+  std::string text = drive_arm();
+  text.replace(text.find("    drive: {"), std::string::npos,
+               "    drive: {rotor_inertia: 0.01, ratio: 100, stiffness: 2.0e4, damping: 100" + drive + "}\n"
+               "tool: {body: arm, point: [1.0, 0, 0]}\n"
+               "simulation: " + sim_with(integ, "duration: " + std::to_string(duration)) + "\n");
+  return text;
+}
+
+// The link's angle from the tool point (1 m out along the link's x, hinge about y: x = cos, z = -sin).
+double link_angle(const ArmTrace& tr, std::size_t k) { return std::atan2(-tr.column("tool.z")[k], tr.column("tool.x")[k]); }
+
+TEST(ArmDrive, ALinearLawThroughTheTransmissionFollowsTheTreesOwnSpring) {
+  // A lane beside one with backlash takes the transmission's law (b = 0, k3 = 0, eta = 1): T = k e + c ė
+  // at the twist instead of the tree's spring and damper, another code path to the same motion.
+  for (const char* integ : {"rk4", "midpoint", "sdirk2", "cvode_dense"}) {
+    std::vector<ArmModel> lanes{arm_from(nonlinear_drive_arm("", integ, 0.5)),
+                                arm_from(nonlinear_drive_arm(", backlash: 1.0e-3", integ, 0.5))};
+    // A move, so that the twist works both ways.
+    for (ArmModel& m : lanes) m.qd0[static_cast<std::size_t>(m.actuated[0].dof)] = 0.5;
+    const ArmRun both = simulate_arms(lanes), alone = run_one(lanes[0]);
+    ASSERT_EQ(both.status[0], LaneStatus::kOk) << integ;
+    double err = 0.0;
+    for (std::size_t k = 0; k < alone.traces[0].t().size(); ++k)
+      err = std::max(err, std::abs(link_angle(both.traces[0], k) - link_angle(alone.traces[0], k)));
+    RecordProperty(std::string(integ) + "_link_angle_difference", fmt(err));
+    EXPECT_LT(err, std::string(integ).starts_with("cvode") ? 1e-9 : 1e-12) << integ;
+    EXPECT_GT(std::abs(link_angle(both.traces[1], alone.traces[0].t().size() - 1) -
+                       link_angle(alone.traces[0], alone.traces[0].t().size() - 1)), 1e-4) << integ;
+  }
+}
+
+TEST(ArmDrive, AHeldLoadSitsHalfTheBacklashFurtherTwisted) {
+  // The rotor held at 0 by the PD with gravity compensation; the link hangs on the teeth: in contact at
+  // e = t - b, k e = m g l cos(q_r + t) (b = backlash / 2 = 5 mrad; without backlash t = 4.9 mrad).
+  const double k = 2.0e4, mgl = 2.0 * 9.81 * 0.5, b = 5.0e-3;
+  for (const char* integ : {"rk4", "midpoint", "sdirk2", "cvode_dense"}) {
+    const ArmModel m = arm_from(nonlinear_drive_arm(", backlash: 1.0e-2", integ, 2.0));
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const ArmTrace& tr = run.traces[0];
+    const std::size_t end = tr.t().size() - 1;
+    const double qr = tr.column("arm.q")[end], t = link_angle(tr, end) - qr;
+    RecordProperty(std::string(integ) + "_twist", fmt(t));
+    EXPECT_NEAR(k * (t - b), mgl * std::cos(qr + t), 1e-6 * mgl) << integ;
+    EXPECT_NEAR(t, b + mgl / k, 1e-4 * b) << integ;
+  }
+}
+
+TEST(ArmDrive, AHeldLoadCostsTheRotorTheMeanOfOneOverEtaAndEta) {
+  // At rest the rotor feels the link's torque times (1/eta + eta)/2 (docs/formats.md, drive.efficiency):
+  // the PD, its gravity compensation holding the load once, supplies the rest: kp q_r = (f - 1) m g l cos q.
+  const double kp = 4.0e4, mgl = 2.0 * 9.81 * 0.5, eta = 0.6, f = 0.5 * (1.0 / eta + eta);
+  for (const char* integ : {"rk4", "midpoint", "sdirk2", "cvode_dense"}) {
+    const ArmModel m = arm_from(nonlinear_drive_arm(", efficiency: 0.6", integ, 2.0));
+    const ArmRun run = run_one(m);
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const ArmTrace& tr = run.traces[0];
+    const std::size_t end = tr.t().size() - 1;
+    const double qr = tr.column("arm.q")[end];
+    RecordProperty(std::string(integ) + "_rotor_angle", fmt(qr));
+    EXPECT_NEAR(kp * qr, (f - 1.0) * mgl * std::cos(link_angle(tr, end)), 1e-4 * (f - 1.0) * mgl) << integ;
+  }
+}
+
+TEST(ArmDrive, EfficiencyOnlyTakesEnergyOutsideTheSmoothingBand) {
+  // The power into the drive, P (1 - factor(P)) with P the power the rotor passes on: a loss wherever
+  // |P| > 1 W, and at most (P* ... 0) of a gain inside, where the smoothed factor crosses 1
+  // (s = eta / (1 + eta): P* = atanh(2 s - 1) W).
+  for (const double eta : {0.3, 0.6, 0.9, 1.0}) {
+    double gain = 0.0;
+    for (double P = -20.0; P <= 20.0; P += 1e-3) {
+      const double into = P * (1.0 - calc_efficiency_factor(eta, P));
+      if (std::abs(P) > 1.0) EXPECT_LE(into, 0.0) << eta << " " << P;
+      gain = std::max(gain, into);
+    }
+    const double p_star = std::atanh(2.0 * eta / (1.0 + eta) - 1.0);
+    EXPECT_LE(gain, -p_star * (1.0 - eta)) << eta;
+  }
+}
+
+TEST(ArmDrive, CubicStiffnessHardensTheSag) {
+  // k e + k3 e^3 = m g l cos(q): with k3 = 1e11 the twist sags less than with k alone, to the cubic's root.
+  const double k = 2.0e4, k3 = 1.0e11, mgl = 2.0 * 9.81 * 0.5;
+  for (const char* integ : {"sdirk2", "cvode_dense"}) {
+    const ArmRun run = run_one(arm_from(nonlinear_drive_arm(", cubic_stiffness: 1.0e11", integ, 2.0)));
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const ArmTrace& tr = run.traces[0];
+    const std::size_t end = tr.t().size() - 1;
+    const double qr = tr.column("arm.q")[end], e = link_angle(tr, end) - qr;
+    EXPECT_NEAR(k * e + k3 * e * e * e, mgl * std::cos(qr + e), 1e-6 * mgl) << integ;
+    EXPECT_LT(e, 0.9 * mgl / k) << integ;
+  }
+}
+
+TEST(ArmFriction, ALugreJointSticksBelowCoulombAndSlipsAboveIt) {
+  // A torque offset below Fc, taken up monotonically (bristles overdamped), bends the bristles to
+  // z = offset / sigma0 and stops; on the way dz/dq = 1 - sigma0 z / Fc (Fs = Fc), so the joint rests at
+  // q = -(Fc / sigma0) ln(1 - offset / Fc) (the offset opposes the drive: q < 0). Above Fc it slides,
+  // and once the bristles are at Fc / sigma0 it accelerates at (offset - Fc) / J (b = 0).
+  const double fc = 0.5, sigma0 = 1.0e4;
+  for (const char* integ : kIntegrators) {
+    for (const double offset : {0.4, 0.6}) {
+      const ArmModel m = arm_from(rotor("{controller: {}, torque_offset: " + std::to_string(offset) +
+                                            ", friction: {model: lugre, coulomb: 0.5, bristle_stiffness: 1.0e4, bristle_damping: 300}}",
+                                        sim_with(integ, "duration: 1.0")));
+      const ArmRun run = run_one(m);
+      ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+      const ArmTrace& tr = run.traces[0];
+      const std::vector<double>&q = tr.column("arm.q"), &w = tr.column("arm.qd");
+      if (offset < fc) {
+        const double rest = fc / sigma0 * std::log(1.0 - offset / fc);
+        RecordProperty(std::string(integ) + "_stick_angle", fmt(q.back()));
+        EXPECT_NEAR(q.back(), rest, 1e-4 * std::abs(rest)) << integ;
+        EXPECT_LT(std::abs(w.back()), 1e-9) << integ;
+        for (double x : w) EXPECT_LE(x, 1e-12) << integ;  // monotonic
+      } else {
+        const std::size_t half = q.size() / 2;
+        const double accel = (w.back() - w[half]) / (tr.t().back() - tr.t()[half]);
+        RecordProperty(std::string(integ) + "_slip_acceleration", fmt(accel));
+        EXPECT_NEAR(accel, -(offset - fc) / kJ, 1e-6 * (offset - fc) / kJ) << integ;
+      }
+    }
+  }
+}
+
+TEST(ArmFriction, ALugreJointTracksTheSameUnderCvodeAndTheFixedStepMethods) {
+  // A PD move through stick, slip and presliding reversal: the fixed-step traces within their error
+  // of CVODE's at rtol 1e-11.
+  auto arm = [](const char* integ) {
+    return arm_from(rotor("{controller: {kp: 20, kd: 2}, friction: {model: lugre, viscous: 0.05, coulomb: 0.5, stiction: 0.7, "
+                          "stribeck_velocity: 0.05, bristle_stiffness: 1.0e4, bristle_damping: 20}}",
+                          sim_with(integ, "duration: 2.0") +
+                              "\ntrajectory:\n  waypoints:\n    - {time: 0.5, joints: {arm: 0.2}}\n    - {time: 1.0, joints: {arm: 0.0}}"));
+  };
+  const ArmRun ref = run_one(arm("cvode_dense"));
+  ASSERT_EQ(ref.status[0], LaneStatus::kOk);
+  const std::vector<double>& q_ref = ref.traces[0].column("arm.q");
+  double travel = 0.0;
+  for (double x : q_ref) travel = std::max(travel, std::abs(x));
+  EXPECT_GT(travel, 0.1);
+  for (const char* integ : {"rk4", "midpoint", "sdirk2", "cvode_klu"}) {
+    const ArmRun run = run_one(arm(integ));
+    ASSERT_EQ(run.status[0], LaneStatus::kOk) << integ;
+    const std::vector<double>& q = run.traces[0].column("arm.q");
+    double err = 0.0;
+    for (std::size_t k = 0; k < q.size(); ++k) err = std::max(err, std::abs(q[k] - q_ref[k]));
+    RecordProperty(std::string(integ) + "_angle_error", fmt(err));
+    EXPECT_LT(err, 1e-4 * travel) << integ;
+  }
+}
+
+TEST(ArmSimulate, ALugreJointAndANonlinearDriveGiveTheSameBitsAloneAndInAnyLane) {
+  for (const char* integ : {"rk4", "sdirk2", "cvode_dense"}) {
+    std::vector<ArmModel> lanes;
+    for (const char* drive : {", backlash: 2.0e-3, efficiency: 0.8", ", cubic_stiffness: 1.0e8", ""}) {
+      std::string text = nonlinear_drive_arm(drive, integ, 0.3);
+      text.replace(text.find("    drive:"), 0, "    friction: {model: lugre, coulomb: 0.5, bristle_stiffness: 1.0e4}\n");
+      lanes.push_back(arm_from(text));
+    }
+    const ArmRun together = simulate_arms(lanes);
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      const ArmRun alone = run_one(lanes[l]);
+      EXPECT_EQ(alone.traces[0].columns, together.traces[l].columns) << integ << " lane " << l;
+    }
+    std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
+    const ArmRun back = simulate_arms(reversed);
+    for (std::size_t l = 0; l < lanes.size(); ++l)
+      EXPECT_EQ(back.traces[lanes.size() - 1 - l].columns, together.traces[l].columns) << integ << " lane " << l;
+  }
+}
+
+TEST(ArmYaml, ABadDriveLawOrFrictionModelIsNamedAtItsKey) {
+  const std::string eta = arm_error(nonlinear_drive_arm(", efficiency: 1.2", "rk4", 1.0));
+  EXPECT_NE(eta.find("joints.arm.drive.efficiency: must be in (0, 1]"), std::string::npos) << eta;
+  const std::string play = arm_error(nonlinear_drive_arm(", backlash: -1.0e-3", "rk4", 1.0));
+  EXPECT_NE(play.find("joints.arm.drive.backlash"), std::string::npos) << play;
+  const std::string model = arm_error(rotor("{controller: {}, friction: {model: dahl, coulomb: 0.5}}", "{duration: 1}"));
+  EXPECT_NE(model.find("arm.yaml:11: joints.arm.friction.model: unknown friction model 'dahl'"), std::string::npos) << model;
+  const std::string no_fc = arm_error(rotor("{controller: {}, friction: {model: lugre}}", "{duration: 1}"));
+  EXPECT_NE(no_fc.find("joints.arm.friction"), std::string::npos) << no_fc;
+  const std::string sigma = arm_error(rotor("{controller: {}, friction: {model: lugre, coulomb: 0.5, bristle_stiffness: 0}}",
+                                            "{duration: 1}"));
+  EXPECT_NE(sigma.find("joints.arm.friction.bristle_stiffness"), std::string::npos) << sigma;
 }
 
 }  // namespace

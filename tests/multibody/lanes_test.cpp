@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "multibody/algorithms.hpp"
+#include "kernel/drive.hpp"
+#include "kernel/friction.hpp"
 #include "multibody/flexible_link.hpp"
 #include "tests/multibody/test_support.hpp"
 
@@ -214,6 +216,83 @@ TEST(TreeLanes, JointFrictionAddsTheStaticMapAtTheRateToThePassiveForcesOfItsDof
   f[1].coulomb = 1.0, f[1].stiction = 0.5;
   EXPECT_THROW(set_tree_lanes_friction(tl, d, f), std::invalid_argument);
   EXPECT_THROW(set_tree_lanes_friction(tl, tl.nv, std::vector<FrictionSpec>(3)), std::invalid_argument);
+}
+
+TEST(TreeLanes, ADriveLawAtATwistReplacesItsSpringAndLoadsItsRotorByTheEfficiency) {
+  // The twist dof gets -T(q_t, qd_t) (kernel/drive.hpp, the rig's law) in place of -k (q - q0) - c qd;
+  // the rotor dof T_t (1 - factor(eta, T_t qd_r)); every other dof as before.
+  test::Rng rng(5);
+  const std::vector<Tree> trees = random_lanes(rng, 6, 3);
+  TreeLanes tl = make_tree_lanes(trees);
+  std::vector<VectorXd> q, qd;
+  for (const Tree& t : trees) q.push_back(test::random_q(rng, t)), qd.push_back(test::random_vector(rng, t.nv(), -1, 1));
+  const int twist = tl.nv - 1, rotor = 0;
+  ASSERT_GT(twist, rotor);
+  q[1][twist] = 0.02;  // lane 1 inside its free play (b = 0.05)
+  std::vector<double> Q = gather(q), QD = gather(qd);
+  std::vector<double> plain(Q.size()), with(Q.size());
+  compute_tree_passive_forces(tl, Q.data(), QD.data(), nullptr, plain.data());
+  std::vector<LaneDrive> laws(3);
+  for (int l = 0; l < 3; ++l) {
+    laws[static_cast<std::size_t>(l)].k = 100.0 + 10.0 * l;
+    laws[static_cast<std::size_t>(l)].c = 0.5;
+  }
+  laws[1].b = 0.05, laws[1].k3 = 1e4;
+  laws[2].eta = 0.7, laws[2].k3 = 2e3;
+  add_tree_lanes_transmission(tl, twist, rotor, laws);
+  compute_tree_passive_forces(tl, Q.data(), QD.data(), nullptr, with.data());
+  for (int l = 0; l < tl.W; ++l) {
+    const Tree& t = trees[static_cast<std::size_t>(l)];
+    const LaneDrive& p = laws[static_cast<std::size_t>(l)];
+    const std::size_t o = static_cast<std::size_t>(twist * tl.W + l), r = static_cast<std::size_t>(rotor * tl.W + l);
+    const double spring = -t.body(twist).stiffness * (Q[o] - t.body(twist).spring_reference) - t.body(twist).damping * QD[o];
+    const double tt = -calc_transmission_torque(p, Q[o], QD[o]);
+    EXPECT_NEAR(with[o], plain[o] - spring + tt, 1e-12 * (1.0 + std::abs(plain[o]))) << "lane " << l;
+    const double rotor_share = p.eta == 1.0 ? 0.0 : tt * (1.0 - calc_efficiency_factor(p.eta, tt * QD[r]));
+    EXPECT_EQ(with[r], plain[r] + rotor_share) << "lane " << l;
+    for (int j = 1; j < twist; ++j)
+      EXPECT_EQ(with[static_cast<std::size_t>(j * tl.W + l)], plain[static_cast<std::size_t>(j * tl.W + l)]) << j;
+  }
+  // Inside the free play nothing is transmitted; the linear law with k3 = 0 is the spring.
+  EXPECT_NEAR(with[static_cast<std::size_t>(twist * tl.W + 1)] -
+                (plain[static_cast<std::size_t>(twist * tl.W + 1)] + trees[1].body(twist).stiffness *
+                     (Q[static_cast<std::size_t>(twist * tl.W + 1)] - trees[1].body(twist).spring_reference) +
+                 trees[1].body(twist).damping * QD[static_cast<std::size_t>(twist * tl.W + 1)]),
+            0.0, 1e-13);
+  EXPECT_NEAR(-calc_transmission_torque(LaneDrive{.k = 100.0, .c = 0.5}, 0.3, -2.0), -(100.0 * 0.3 - 0.5 * 2.0), 1e-14);
+  // A twist given twice, a count other than W, an efficiency above 1 are refused.
+  EXPECT_THROW(add_tree_lanes_transmission(tl, twist, rotor, laws), std::invalid_argument);
+  TreeLanes fresh = make_tree_lanes(trees);
+  EXPECT_THROW(add_tree_lanes_transmission(fresh, twist, rotor, std::vector<LaneDrive>(2)), std::invalid_argument);
+  laws[0].eta = 1.2;
+  EXPECT_THROW(add_tree_lanes_transmission(fresh, twist, rotor, laws), std::invalid_argument);
+}
+
+TEST(TreeLanes, LugreBristlesAddSigma0ZPlusSigma1ZdotPlusBwAndTheirRate) {
+  // tau_f = -(sigma0 z + sigma1 zdot + b w), zdot = w - sigma0 |w| z / g(w), g = Fc + (Fs - Fc) e^-(w/vs)^2.
+  test::Rng rng(6);
+  const std::vector<Tree> trees = random_lanes(rng, 4, 2);
+  TreeLanes tl = make_tree_lanes(trees);
+  const int d = 1;
+  std::vector<FrictionSpec> f(2);
+  for (FrictionSpec& x : f) x.model = "lugre", x.coulomb = 0.5, x.stiction = 0.8, x.stribeck_velocity = 0.1, x.viscous = 0.05;
+  f[1].bristle_stiffness = 2.0e4, f[1].bristle_damping = 50.0;
+  add_tree_lanes_lugre(tl, d, f);
+  ASSERT_EQ(tl.nz(), 1);
+  const std::vector<double> q(static_cast<std::size_t>(tl.nv * tl.W), 0.0);
+  std::vector<double> qd(q.size(), 0.0), z{3.0e-5, -1.0e-5}, tau(q.size()), zdot(2);
+  qd[static_cast<std::size_t>(d * tl.W)] = 0.07, qd[static_cast<std::size_t>(d * tl.W + 1)] = -0.3;
+  compute_tree_actuator_forces(tl, q.data(), qd.data(), z.data(), nullptr, tau.data(), zdot.data());
+  for (int l = 0; l < 2; ++l) {
+    const FrictionSpec& x = f[static_cast<std::size_t>(l)];
+    const double w = qd[static_cast<std::size_t>(d * tl.W + l)];
+    const double g = x.coulomb + (x.stiction - x.coulomb) * std::exp(-(w / 0.1) * (w / 0.1));
+    const double zd = w - x.bristle_stiffness * std::abs(w) * z[static_cast<std::size_t>(l)] / g;
+    EXPECT_NEAR(zdot[static_cast<std::size_t>(l)], zd, 1e-14) << l;
+    EXPECT_NEAR(tau[static_cast<std::size_t>(d * tl.W + l)],
+                -(x.bristle_stiffness * z[static_cast<std::size_t>(l)] + x.bristle_damping * zd + x.viscous * w), 1e-12) << l;
+    EXPECT_EQ(tau[static_cast<std::size_t>(l)], 0.0);  // other dofs: nothing
+  }
 }
 
 TEST(TreeLanes, TreesOfAnotherTopologyAreRejectedNamingTheLaneAndBody) {

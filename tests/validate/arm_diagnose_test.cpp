@@ -31,12 +31,12 @@ ArmRecordNoise rig_noise() {
 // The diagnosis, over `effects`, of the model `path` (with `base`) on a record of it with `hidden` set too.
 Diagnosis diagnose_hidden(const std::string& path, const std::vector<std::string>& base,
                           const std::vector<std::string>& hidden, const std::vector<std::string>& effects,
-                          std::uint64_t seed) {
+                          std::uint64_t seed, int iterations = 12) {
   std::vector<std::string> truth = base;
   truth.insert(truth.end(), hidden.begin(), hidden.end());
   const Record r = make_arm_record(load_arm_with(path, truth), rig_noise(), seed);
   DiagnoseOptions opt;
-  opt.max_iterations = 12;
+  opt.max_iterations = iterations;
   opt.only = effects;
   return diagnose_arm(load_arm_source(path, base), r, opt);
 }
@@ -61,6 +61,21 @@ TEST(ArmHiddenEffect, CoulombFrictionHiddenAtTheElbowIsFoundAtTheElbowWithItsLev
   EXPECT_TRUE(f.explained);
   // The same friction at the other joint explains a little of it at most.
   EXPECT_GT(ranked(d, "coulomb_friction@shoulder").delta_bic, 0.1 * f.delta_bic);
+}
+
+TEST(ArmHiddenEffect, FreePlayInTheElbowsDriveIsItsBacklash) {
+  // The model has the elbow's compliant drive (200 kp, a rotor a ninth of its inertia); the record's
+  // drive has 20 mrad of free play besides. The free play, not a softer drive, explains it.
+  std::vector<std::string> base = kShort;
+  for (const char* s : {"joints.elbow.drive.stiffness=1140", "joints.elbow.drive.damping=1.0", "joints.elbow.drive.rotor_inertia=0.01"})
+    base.push_back(s);
+  const Diagnosis d = diagnose_hidden(kTwoLink, base, {"joints.elbow.drive.backlash=0.02"},
+                                      {"backlash@elbow", "drive_compliance@elbow", "coulomb_friction@elbow",
+                                       "sensor_delay.elbow_angle"},
+                                      12, 40);
+  EXPECT_EQ(d.verdict, "backlash@elbow") << format_diagnosis_text(d);
+  EXPECT_NEAR(ranked(d, "backlash@elbow").params.at("joints.elbow.drive.backlash"), 0.02, 0.02 * 0.1)
+      << format_diagnosis_text(d);
 }
 
 TEST(ArmHiddenEffect, ALateShoulderEncoderIsTheShoulderAngleDelayOfItsSamples) {
@@ -120,7 +135,7 @@ TEST(ArmDiagnose, CandidatesAreNamedAfterTheJointOrLinkTheyActAt) {
   std::vector<std::string> names;
   for (const Effect& e : make_arm_candidate_effects(m, apply_overrides(src), r)) names.push_back(e.name);
   for (const char* n : {"coulomb_friction@shoulder", "viscous_friction@elbow", "stribeck_friction@elbow",
-                        "torque_offset@shoulder", "drive_compliance@elbow", "torque_saturation@shoulder",
+                        "torque_offset@shoulder", "drive_compliance@elbow", "backlash@shoulder", "torque_saturation@shoulder",
                         "sensor_delay.elbow_angle", "sensor_delay.shoulder_rate", "sensor_quantization@elbow",
                         "armature@shoulder", "link_stiffness@upper_arm", "link_damping@forearm", "extra_mode@forearm",
                         "payload@upper_arm", "payload@forearm"})
@@ -140,7 +155,7 @@ TEST(ArmDiagnose, CandidatesAreNamedAfterTheJointOrLinkTheyActAt) {
   for (const Effect& e : make_arm_candidate_effects(mh, apply_overrides(hyd), make_arm_record(mh, {}, 1))) names.push_back(e.name);
   for (const char* n : {"hydraulic_compressibility@shoulder", "drive_compliance@elbow"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
-  for (const char* n : {"hydraulic_compressibility@elbow", "drive_compliance@shoulder"})
+  for (const char* n : {"hydraulic_compressibility@elbow", "drive_compliance@shoulder", "backlash@shoulder"})
     EXPECT_EQ(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 
