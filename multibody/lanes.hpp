@@ -26,8 +26,9 @@ struct TreeLanes {
   std::vector<int> parent;      // (nb) parent body, -1 = the base
   std::vector<int> dof;         // (nb) the body's joint coordinate, -1 when fixed
   std::vector<JointType> joint; // (nb)
-  std::vector<double> axis;     // K = 3: the unit joint axis
-  std::vector<double> X_tree;   // K = 12: joint frame X parent: E row-major (9), then r (3), m
+  // The ABA works in each body's joint frame: the body's coordinates turned (per lane) so that its joint
+  // axis is z (multibody/lanes.cpp, joint_frame); X_tree and inertia are in those frames.
+  std::vector<double> X_tree;   // K = 12: joint frame X parent's joint frame: E row-major (9), then r (3), m
   std::vector<double> inertia;  // K = 10: mass (kg), h = m c (3, kg·m), I about the body origin
                                 //   (xx, xy, xz, yy, yz, zz, kg·m²): the spatial inertia's blocks
   std::vector<double> armature, stiffness, damping, spring_reference;  // (nv x W), Body's units
@@ -79,11 +80,12 @@ struct TreeLanesWorkspace {
   TreeLanesWorkspace() = default;
   explicit TreeLanesWorkspace(const TreeLanes& tl);
   int W = 0, nb = 0, nv = 0;
+  // All in the bodies' joint frames (TreeLanes).
   std::vector<double> Xup;      // K = 12: i X_parent(i) = X_J(q_i) X_tree,i
-  std::vector<double> v, c, a;  // K = 6: velocity, velocity-product acceleration, acceleration
+  std::vector<double> v, a;     // K = 6: velocity, acceleration
+  std::vector<double> c;        // K = 4: velocity-product acceleration v × S qd, x and y of [w; v] (z is 0)
   std::vector<double> IA;       // K = 21: articulated inertia [A B; B^T C]: A (sym 6), B (9), C (sym 6)
   std::vector<double> pA;       // K = 6: articulated bias force
-  std::vector<double> U;        // K = 6: I^A S
   std::vector<double> d, u;     // K = 1: S^T I^A S + armature, tau - S^T p^A
   std::vector<double> zeros;    // (nv x W) the extra armature when none is given
 };
