@@ -27,7 +27,6 @@ namespace {
 #define FF_STORE3(base, k, v) \
   base[(k) * sW + l] = v##0, base[((k) + 1) * sW + l] = v##1, base[((k) + 2) * sW + l] = v##2
 #define FF_CROSS(o, a, b) FF_V3(o, a##1 * b##2 - a##2 * b##1, a##2 * b##0 - a##0 * b##2, a##0 * b##1 - a##1 * b##0)
-#define FF_DOT(a, b) (a##0 * b##0 + a##1 * b##1 + a##2 * b##2)
 // o = M x and o = M^T x
 #define FF_MV(o, M, x) \
   FF_V3(o, M##0 * x##0 + M##1 * x##1 + M##2 * x##2, M##3 * x##0 + M##4 * x##1 + M##5 * x##2, \
@@ -35,7 +34,7 @@ namespace {
 #define FF_MTV(o, M, x) \
   FF_V3(o, M##0 * x##0 + M##3 * x##1 + M##6 * x##2, M##1 * x##0 + M##4 * x##1 + M##7 * x##2, \
         M##2 * x##0 + M##5 * x##1 + M##8 * x##2)
-// 3x3 matrices: declare from nine values, load and store nine components, products A B, A^T B, A B^T.
+// 3x3 matrices: declare from nine values, products A B and A^T B.
 #define FF_M3(o, e0, e1, e2, e3, e4, e5, e6, e7, e8) \
   [[maybe_unused]] double o##0 = (e0), o##1 = (e1), o##2 = (e2), o##3 = (e3), o##4 = (e4), o##5 = (e5), o##6 = (e6), \
          o##7 = (e7), o##8 = (e8)
@@ -52,71 +51,94 @@ namespace {
         A##1 * B##1 + A##4 * B##4 + A##7 * B##7, A##1 * B##2 + A##4 * B##5 + A##7 * B##8, \
         A##2 * B##0 + A##5 * B##3 + A##8 * B##6, A##2 * B##1 + A##5 * B##4 + A##8 * B##7, \
         A##2 * B##2 + A##5 * B##5 + A##8 * B##8)
-#define FF_MMT(o, A, B) \
-  FF_M3(o, A##0 * B##0 + A##1 * B##1 + A##2 * B##2, A##0 * B##3 + A##1 * B##4 + A##2 * B##5, \
-        A##0 * B##6 + A##1 * B##7 + A##2 * B##8, A##3 * B##0 + A##4 * B##1 + A##5 * B##2, \
-        A##3 * B##3 + A##4 * B##4 + A##5 * B##5, A##3 * B##6 + A##4 * B##7 + A##5 * B##8, \
-        A##6 * B##0 + A##7 * B##1 + A##8 * B##2, A##6 * B##3 + A##7 * B##4 + A##8 * B##5, \
-        A##6 * B##6 + A##7 * B##7 + A##8 * B##8)
-// M -= x y^T s
-#define FF_SUB_OUTER(M, x, y, s) \
-  M##0 -= x##0 * s * y##0, M##1 -= x##0 * s * y##1, M##2 -= x##0 * s * y##2, M##3 -= x##1 * s * y##0, \
-  M##4 -= x##1 * s * y##1, M##5 -= x##1 * s * y##2, M##6 -= x##2 * s * y##0, M##7 -= x##2 * s * y##1, \
-  M##8 -= x##2 * s * y##2
-// A symmetric 3x3 stored packed (xx, xy, xz, yy, yz, zz) at components k.. of a block, as a full M0..M8.
-#define FF_LOAD_SYM(o, base, k)                                                                              \
-  [[maybe_unused]] const double o##p0 = base[(k) * sW + l], o##p1 = base[((k) + 1) * sW + l], o##p2 = base[((k) + 2) * sW + l], \
-               o##p3 = base[((k) + 3) * sW + l], o##p4 = base[((k) + 4) * sW + l],                            \
-               o##p5 = base[((k) + 5) * sW + l];                                                              \
-  FF_M3(o, o##p0, o##p1, o##p2, o##p1, o##p3, o##p4, o##p2, o##p4, o##p5)
+// Nine components k.. of a block as a 3x3 M0..M8.
 #define FF_LOAD9(o, base, k)                                                                                  \
   FF_M3(o, base[(k) * sW + l], base[((k) + 1) * sW + l], base[((k) + 2) * sW + l], base[((k) + 3) * sW + l], \
         base[((k) + 4) * sW + l], base[((k) + 5) * sW + l], base[((k) + 6) * sW + l], base[((k) + 7) * sW + l], \
         base[((k) + 8) * sW + l])
 
 // Component k of body i's K-vector block in lane l is at blk(v, i, K)[k * W + l].
-FF_INLINE double* blk(std::vector<double>& v, int i, int K, std::size_t W) {
-  return v.data() + static_cast<std::size_t>(i) * K * W;
+// (On 64-byte boundaries, LaneArray: said to the compiler, which then neither peels nor checks.)
+FF_INLINE double* blk(LaneArray& v, int i, int K, std::size_t W) {
+  return static_cast<double*>(__builtin_assume_aligned(v.data(), 64)) + static_cast<std::size_t>(i) * K * W;
 }
-FF_INLINE const double* blk(const std::vector<double>& v, int i, int K, std::size_t W) {
-  return v.data() + static_cast<std::size_t>(i) * K * W;
+FF_INLINE const double* blk(const LaneArray& v, int i, int K, std::size_t W) {
+  return static_cast<const double*>(__builtin_assume_aligned(v.data(), 64)) + static_cast<std::size_t>(i) * K * W;
 }
 
-// Pass 1 of the ABA for body i, root to tip, in every lane: the joint transform Xup = X_J(q) X_tree,
-// the velocity v = Xup v_parent + S qd, c = v × S qd, and the rigid body's inertia and bias force
-// p = v ×* I v as the start of the articulated quantities (RBDA Table 7.1, first loop).
-template <JointType J, bool kRoot>
-void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, TreeLanesWorkspace& ws) {
-  const std::size_t sW = static_cast<std::size_t>(tl.W);
-  const int W = tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
-  const double *axb = blk(tl.axis, i, 3, sW), *Xtb = blk(tl.X_tree, i, 12, sW), *Inb = blk(tl.inertia, i, 10, sW);
+// Packed symmetric 3x3 (xx, xy, xz, yy, yz, zz) as o0..o5, loaded from components k.., and the full
+// matrix M0..M8 (entry (r, c) at 3r + c) of such a packed o.
+#define FF_LOAD_PACKED(o, base, k)                                                                         \
+  [[maybe_unused]] double o##0 = base[(k) * sW + l], o##1 = base[((k) + 1) * sW + l],                     \
+                          o##2 = base[((k) + 2) * sW + l], o##3 = base[((k) + 3) * sW + l],               \
+                          o##4 = base[((k) + 4) * sW + l], o##5 = base[((k) + 5) * sW + l]
+#define FF_FULL(M, o) FF_M3(M, o##0, o##1, o##2, o##1, o##3, o##4, o##2, o##4, o##5)
+// o = E^T N, packed: only the upper triangle of a product known to be symmetric (E^T S E).
+#define FF_MTM_SYM(o, E, N)                                                                                     \
+  [[maybe_unused]] const double o##0 = E##0 * N##0 + E##3 * N##3 + E##6 * N##6,                                \
+                                o##1 = E##0 * N##1 + E##3 * N##4 + E##6 * N##7,                                \
+                                o##2 = E##0 * N##2 + E##3 * N##5 + E##6 * N##8,                                \
+                                o##3 = E##1 * N##1 + E##4 * N##4 + E##7 * N##7,                                \
+                                o##4 = E##1 * N##2 + E##4 * N##5 + E##7 * N##8,                                \
+                                o##5 = E##2 * N##2 + E##5 * N##5 + E##8 * N##8
+// o = r× M (rows: r × each column of M)
+#define FF_RX_M(o, r, M)                                                                                       \
+  FF_M3(o, r##1 * M##6 - r##2 * M##3, r##1 * M##7 - r##2 * M##4, r##1 * M##8 - r##2 * M##5,                  \
+        r##2 * M##0 - r##0 * M##6, r##2 * M##1 - r##0 * M##7, r##2 * M##2 - r##0 * M##8,                      \
+        r##0 * M##3 - r##1 * M##0, r##0 * M##4 - r##1 * M##1, r##0 * M##5 - r##1 * M##2)
+// (ow, ov) = X m = [E w; E (v - r × w)] (RBDA eq. 2.24) for the motion vector m at components 0..5 of mb.
+#define FF_XMOTION(ow, ov, E, r, mb)                                                                          \
+  FF_LOAD3(ow##_w, mb, 0);                                                                                    \
+  FF_CROSS(ow##_rw, r, ow##_w);                                                                               \
+  FF_V3(ow##_vr, mb[3 * sW + l] - ow##_rw0, mb[4 * sW + l] - ow##_rw1, mb[5 * sW + l] - ow##_rw2);           \
+  FF_MV(ow, E, ow##_w);                                                                                       \
+  FF_MV(ov, E, ow##_vr)
+// o_i = (row i of M) × r (left = 0) or r × (row i of M) (left = 1), i = 0, 1, 2, as o0.., o1.., o2..
+#define FF_ROW_CROSS(o, x, r, left) \
+  FF_V3(o, left ? r##1 * x##2 - r##2 * x##1 : x##1 * r##2 - x##2 * r##1, \
+        left ? r##2 * x##0 - r##0 * x##2 : x##2 * r##0 - x##0 * r##2, left ? r##0 * x##1 - r##1 * x##0 : x##0 * r##1 - x##1 * r##0)
+#define FF_ROWS_CROSS(o, M, r, left)                       \
+  FF_V3(o##_m0, M##0, M##1, M##2);                         \
+  FF_V3(o##_m1, M##3, M##4, M##5);                         \
+  FF_V3(o##_m2, M##6, M##7, M##8);                         \
+  FF_ROW_CROSS(o##0, o##_m0, r, left);                     \
+  FF_ROW_CROSS(o##1, o##_m1, r, left);                     \
+  FF_ROW_CROSS(o##2, o##_m2, r, left)
+// M -= x y^T
+#define FF_SUB_XYT(M, x, y)                                                                                    \
+  M##0 -= x##0 * y##0, M##1 -= x##0 * y##1, M##2 -= x##0 * y##2, M##3 -= x##1 * y##0, M##4 -= x##1 * y##1,     \
+  M##5 -= x##1 * y##2, M##6 -= x##2 * y##0, M##7 -= x##2 * y##1, M##8 -= x##2 * y##2
+
+// Pass 1 of the ABA for body i, root to tip, in every lane, in the body's joint frame (its joint axis
+// z, TreeLanes): the joint transform Xup = X_J(q) X_tree, the velocity v = Xup v_parent + S qd,
+// c = v × S qd, and the rigid body's inertia and bias force p = v ×* I v as the start of the
+// articulated quantities (RBDA Table 7.1, first loop).
+template <JointType J, bool kRoot, int kW>
+FF_INLINE void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, TreeLanesWorkspace& ws) {
+  const std::size_t sW = static_cast<std::size_t>(kW > 0 ? kW : tl.W);
+  const int W = kW > 0 ? kW : tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
+  const double *Xtb = blk(tl.X_tree, i, 12, sW), *Inb = blk(tl.inertia, i, 10, sW);
   const double* vpb = blk(ws.v, p, 6, sW);
-  double *Xb = blk(ws.Xup, i, 12, sW), *vb = blk(ws.v, i, 6, sW), *cb = blk(ws.c, i, 6, sW);
+  double *Xb = blk(ws.Xup, i, 12, sW), *vb = blk(ws.v, i, 6, sW), *cb = blk(ws.c, i, 4, sW);
   double *IAb = blk(ws.IA, i, 21, sW), *pAb = blk(ws.pA, i, 6, sW);
   const double *qj = q + j * sW, *qdj = qd + j * sW;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    FF_LOAD3(a, axb, 0);
-    FF_LOAD9(Et, Xtb, 0);
+    FF_LOAD9(E, Xtb, 0);
     FF_LOAD3(r, Xtb, 9);
-    // Joint transform. Revolute: E_J = R(a, q)^T = c 1 - s [a]× + (1 - c) a a^T (Rodrigues), r_J = 0;
-    // prismatic: E_J = 1, r_J = a q. Composition: E = E_J E_tree, r = r_tree + E_tree^T r_J.
-    FF_M3(E, Et0, Et1, Et2, Et3, Et4, Et5, Et6, Et7, Et8);
+    // Joint transform about z. Revolute: E = E_J E_tree with E_J = rz(q) = [c s 0; -s c 0; 0 0 1]
+    // (RBDA Table 2.2): rows 0 and 1 of E_tree turn, row 2 stays; prismatic: r = r_tree + E_tree^T [0 0 q].
     double qdl = 0.0;
     if constexpr (J == JointType::kRevolute) {
       double s, co;
       calc_sincos(qj[l], s, co);
-      const double t = 1.0 - co;
-      FF_M3(EJ, co + t * a0 * a0, s * a2 + t * a0 * a1, -s * a1 + t * a0 * a2, -s * a2 + t * a1 * a0,
-            co + t * a1 * a1, s * a0 + t * a1 * a2, s * a1 + t * a2 * a0, -s * a0 + t * a2 * a1, co + t * a2 * a2);
-      FF_MM(En, EJ, Et);
-      E0 = En0, E1 = En1, E2 = En2, E3 = En3, E4 = En4, E5 = En5, E6 = En6, E7 = En7, E8 = En8;
+      const double e0 = co * E0 + s * E3, e1 = co * E1 + s * E4, e2 = co * E2 + s * E5;
+      E3 = co * E3 - s * E0, E4 = co * E4 - s * E1, E5 = co * E5 - s * E2;
+      E0 = e0, E1 = e1, E2 = e2;
       qdl = qdj[l];
     } else if constexpr (J == JointType::kPrismatic) {
       const double ql = qj[l];
-      FF_V3(rJ, a0 * ql, a1 * ql, a2 * ql);
-      FF_MTV(dr, Et, rJ);
-      r0 += dr0, r1 += dr1, r2 += dr2;
+      r0 += E6 * ql, r1 += E7 * ql, r2 += E8 * ql;
       qdl = qdj[l];
     }
     Xb[0 * sW + l] = E0, Xb[1 * sW + l] = E1, Xb[2 * sW + l] = E2, Xb[3 * sW + l] = E3, Xb[4 * sW + l] = E4;
@@ -126,37 +148,27 @@ void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, Tr
     FF_V3(w, 0.0, 0.0, 0.0);
     FF_V3(vl, 0.0, 0.0, 0.0);
     if constexpr (!kRoot) {
-      FF_LOAD3(wp, vpb, 0);
-      FF_CROSS(rw, r, wp);
-      FF_V3(vr, vpb[3 * sW + l] - rw0, vpb[4 * sW + l] - rw1, vpb[5 * sW + l] - rw2);
-      FF_MV(Ew, E, wp);
-      FF_MV(Ev, E, vr);
+      FF_XMOTION(Ew, Ev, E, r, vpb);
       w0 = Ew0, w1 = Ew1, w2 = Ew2, vl0 = Ev0, vl1 = Ev1, vl2 = Ev2;
     }
-    FF_V3(aq, a0 * qdl, a1 * qdl, a2 * qdl);  // the joint's rate along its axis
-    FF_V3(cw, 0.0, 0.0, 0.0);
-    FF_V3(cv, 0.0, 0.0, 0.0);
+    // c = v × S qd, S qd = [0 0 qd 0 0 0] or [0 0 0 0 0 qd]: its z components are zero, the rest kept
+    // as (c_wx, c_wy, c_vx, c_vy). Revolute: [w × z qd; vl × z qd]; prismatic: [0; w × z qd].
     if constexpr (J == JointType::kRevolute) {
-      w0 += aq0, w1 += aq1, w2 += aq2;
-      // c = v × [aq; 0] = [w × aq; vl × aq]
-      FF_CROSS(x, w, aq);
-      FF_CROSS(y, vl, aq);
-      cw0 = x0, cw1 = x1, cw2 = x2, cv0 = y0, cv1 = y1, cv2 = y2;
+      w2 += qdl;
+      cb[0 * sW + l] = w1 * qdl, cb[1 * sW + l] = -(w0 * qdl);
+      cb[2 * sW + l] = vl1 * qdl, cb[3 * sW + l] = -(vl0 * qdl);
     } else if constexpr (J == JointType::kPrismatic) {
-      vl0 += aq0, vl1 += aq1, vl2 += aq2;
-      // c = v × [0; aq] = [0; w × aq]
-      FF_CROSS(y, w, aq);
-      cv0 = y0, cv1 = y1, cv2 = y2;
+      vl2 += qdl;
+      cb[2 * sW + l] = w1 * qdl, cb[3 * sW + l] = -(w0 * qdl);
     }
     FF_STORE3(vb, 0, w);
     FF_STORE3(vb, 3, vl);
-    FF_STORE3(cb, 0, cw);
-    FF_STORE3(cb, 3, cv);
     // The rigid inertia I = [Ibar, [h]×; [h]×^T, m 1] (RBDA eq. 2.63) and p = v ×* (I v):
     // I v = [Ibar w + h × vl; m vl - h × w],  v ×* [n; f] = [w × n + vl × f; w × f].
     const double m = Inb[0 * sW + l];
     FF_LOAD3(h, Inb, 1);
-    FF_LOAD_SYM(Ib, Inb, 4);
+    FF_LOAD_PACKED(Ibp, Inb, 4);
+    FF_FULL(Ib, Ibp);
     FF_MV(Iw, Ib, w);
     FF_CROSS(hv, h, vl);
     FF_CROSS(hw, h, w);
@@ -179,92 +191,100 @@ void aba_pass1(const TreeLanes& tl, int i, const double* q, const double* qd, Tr
   }
 }
 
-// Pass 2 for body i, tip to root: U = I^A S, d = S^T U + armature, u = tau - S^T p^A; then the
-// articulated inertia and bias force handed to the parent, I^a = I^A - U U^T / d and
-// p^a = p^A + I^a c + U u / d, carried to its coordinates by X^T I^a X and X^T p^a (RBDA Table 7.1).
-// X^T [A B; B^T C] X with X = rot(E) xlt(r): first A' = E^T A E (likewise B', C'), then
-//   A'' = A' + r× B'^T - B' r× - r× C' r×,  B'' = B' + r× C',  C'' = C'.
-template <JointType J, bool kRoot>
-void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extra, TreeLanesWorkspace& ws) {
-  const std::size_t sW = static_cast<std::size_t>(tl.W);
-  const int W = tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
-  const double* axb = blk(tl.axis, i, 3, sW);
-  double *IAb = blk(ws.IA, i, 21, sW), *pAb = blk(ws.pA, i, 6, sW), *Ub = blk(ws.U, i, 6, sW);
-  const double *cb = blk(ws.c, i, 6, sW), *Xb = blk(ws.Xup, i, 12, sW);
+// Pass 2 for body i, tip to root (RBDA Table 7.1, second loop). The joint's column of I^A = [A B; B^T C]
+// is U = I^A S: [A_z; B_z row] (revolute) or [B_z col; C_z] (prismatic), no product; d = U_z + armature,
+// u = tau - S^T p^A. Then the articulated inertia and bias force handed to the parent,
+// I^a = I^A - U U^T / d (symmetric: 21 entries) and p^a = p^A + I^a c + U u / d, carried to its
+// coordinates by X^T I^a X and X^T p^a. X^T [A B; B^T C] X with X = rot(E) xlt(r) (RBDA eq. 2.66):
+// first A' = E^T A E (likewise B', C'; A', C' symmetric), then with B'' = B' + r× C'
+//   A'' = A' - B' r× + r× B''^T  (= A' + r× B'^T - B' r× - r× C' r×),  C'' = C'.
+template <JointType J, bool kRoot, int kW>
+FF_INLINE void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extra, TreeLanesWorkspace& ws) {
+  const std::size_t sW = static_cast<std::size_t>(kW > 0 ? kW : tl.W);
+  const int W = kW > 0 ? kW : tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
+  const double *IAb = blk(ws.IA, i, 21, sW), *pAb = blk(ws.pA, i, 6, sW);
+  const double *cb = blk(ws.c, i, 4, sW), *Xb = blk(ws.Xup, i, 12, sW);
   double *IApb = blk(ws.IA, p, 21, sW), *pApb = blk(ws.pA, p, 6, sW);
   double* d = ws.d.data() + static_cast<std::size_t>(i) * sW;
   double* u = ws.u.data() + static_cast<std::size_t>(i) * sW;
   const double *arm = tl.armature.data() + j * sW, *xarm = extra + j * sW, *tj = tau + j * sW;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    FF_LOAD_SYM(A, IAb, 0);
+    FF_LOAD_PACKED(A, IAb, 0);
     FF_LOAD9(B, IAb, 6);
-    FF_LOAD_SYM(C, IAb, 15);
+    FF_LOAD_PACKED(C, IAb, 15);
     FF_LOAD3(pt, pAb, 0);
     FF_LOAD3(pb, pAb, 3);
     if constexpr (J != JointType::kFixed) {
-      FF_LOAD3(a, axb, 0);
-      // U = [A a; B^T a] (revolute) or [B a; C a] (prismatic)
       FF_V3(Ut, 0.0, 0.0, 0.0);
       FF_V3(Uq, 0.0, 0.0, 0.0);
-      double uj;
+      double dl, ul;
       if constexpr (J == JointType::kRevolute) {
-        FF_MV(x, A, a);
-        FF_MTV(y, B, a);
-        Ut0 = x0, Ut1 = x1, Ut2 = x2, Uq0 = y0, Uq1 = y1, Uq2 = y2;
-        d[l] = FF_DOT(a, Ut) + arm[l];
-        uj = tj[l] - FF_DOT(a, pt);
+        Ut0 = A2, Ut1 = A4, Ut2 = A5, Uq0 = B6, Uq1 = B7, Uq2 = B8;
+        dl = A5 + arm[l];
+        ul = tj[l] - pt2;
       } else {
-        FF_MV(x, B, a);
-        FF_MV(y, C, a);
-        Ut0 = x0, Ut1 = x1, Ut2 = x2, Uq0 = y0, Uq1 = y1, Uq2 = y2;
-        d[l] = FF_DOT(a, Uq) + arm[l];
-        uj = tj[l] - FF_DOT(a, pb);
+        Ut0 = B2, Ut1 = B5, Ut2 = B8, Uq0 = C2, Uq1 = C4, Uq2 = C5;
+        dl = C5 + arm[l];
+        ul = tj[l] - pb2;
       }
-      d[l] += xarm[l];
-      u[l] = uj;
-      FF_STORE3(Ub, 0, Ut);
-      FF_STORE3(Ub, 3, Uq);
+      dl += xarm[l];
+      d[l] = dl;
+      u[l] = ul;
       if constexpr (!kRoot) {
-        const double dinv = 1.0 / d[l];
-        FF_SUB_OUTER(A, Ut, Ut, dinv);
-        FF_SUB_OUTER(B, Ut, Uq, dinv);
-        FF_SUB_OUTER(C, Uq, Uq, dinv);
-        // p^a = p^A + I^a c + U u / d
-        FF_LOAD3(cw, cb, 0);
-        FF_LOAD3(cv, cb, 3);
-        FF_MV(t0, A, cw);
-        FF_MV(t1, B, cv);
-        FF_MTV(t2, B, cw);
-        FF_MV(t3, C, cv);
-        const double ud = uj * dinv;
-        pt0 += t00 + t10 + Ut0 * ud, pt1 += t01 + t11 + Ut1 * ud, pt2 += t02 + t12 + Ut2 * ud;
-        pb0 += t20 + t30 + Uq0 * ud, pb1 += t21 + t31 + Uq1 * ud, pb2 += t22 + t32 + Uq2 * ud;
+        const double dinv = 1.0 / dl, ud = ul * dinv;
+        FF_V3(wt, Ut0 * dinv, Ut1 * dinv, Ut2 * dinv);
+        FF_V3(wq, Uq0 * dinv, Uq1 * dinv, Uq2 * dinv);
+        A0 -= wt0 * Ut0, A1 -= wt0 * Ut1, A2 -= wt0 * Ut2, A3 -= wt1 * Ut1, A4 -= wt1 * Ut2, A5 -= wt2 * Ut2;
+        FF_SUB_XYT(B, wt, Uq);
+        C0 -= wq0 * Uq0, C1 -= wq0 * Uq1, C2 -= wq0 * Uq2, C3 -= wq1 * Uq1, C4 -= wq1 * Uq2, C5 -= wq2 * Uq2;
+        // p^a = p^A + I^a c + U u / d over c's x and y components (A, C packed: (r, c) of A at
+        // 0 1 2 / 1 3 4 / 2 4 5).
+        const double cv0 = cb[2 * sW + l], cv1 = cb[3 * sW + l];
+        if constexpr (J == JointType::kRevolute) {
+          const double cw0 = cb[0 * sW + l], cw1 = cb[1 * sW + l];
+          pt0 += A0 * cw0 + A1 * cw1 + B0 * cv0 + B1 * cv1 + Ut0 * ud;
+          pt1 += A1 * cw0 + A3 * cw1 + B3 * cv0 + B4 * cv1 + Ut1 * ud;
+          pt2 += A2 * cw0 + A4 * cw1 + B6 * cv0 + B7 * cv1 + Ut2 * ud;
+          pb0 += B0 * cw0 + B3 * cw1 + C0 * cv0 + C1 * cv1 + Uq0 * ud;
+          pb1 += B1 * cw0 + B4 * cw1 + C1 * cv0 + C3 * cv1 + Uq1 * ud;
+          pb2 += B2 * cw0 + B5 * cw1 + C2 * cv0 + C4 * cv1 + Uq2 * ud;
+        } else {
+          pt0 += B0 * cv0 + B1 * cv1 + Ut0 * ud;
+          pt1 += B3 * cv0 + B4 * cv1 + Ut1 * ud;
+          pt2 += B6 * cv0 + B7 * cv1 + Ut2 * ud;
+          pb0 += C0 * cv0 + C1 * cv1 + Uq0 * ud;
+          pb1 += C1 * cv0 + C3 * cv1 + Uq1 * ud;
+          pb2 += C2 * cv0 + C4 * cv1 + Uq2 * ud;
+        }
       }
     }
     if constexpr (!kRoot) {
       FF_LOAD9(E, Xb, 0);
       FF_LOAD3(r, Xb, 9);
-      FF_MM(AE, A, E);
-      FF_MTM(A1, E, AE);
+      FF_FULL(Af, A);
+      FF_FULL(Cf, C);
+      FF_MM(AE, Af, E);
+      FF_MTM_SYM(A1p, E, AE);
       FF_MM(BE, B, E);
       FF_MTM(B1, E, BE);
-      FF_MM(CE, C, E);
-      FF_MTM(C1, E, CE);
-      FF_M3(R, 0.0, -r2, r1, r2, 0.0, -r0, -r1, r0, 0.0);
-      FF_MM(RC, R, C1);
-      FF_MMT(RBt, R, B1);
-      FF_MM(BR, B1, R);
-      FF_MM(RCR, RC, R);
-      // Accumulate into the parent: packed A (entries 0, 1, 2, 4, 5, 8 of the full), full B, packed C.
-      IApb[0 * sW + l] += A10 + RBt0 - BR0 - RCR0, IApb[1 * sW + l] += A11 + RBt1 - BR1 - RCR1;
-      IApb[2 * sW + l] += A12 + RBt2 - BR2 - RCR2, IApb[3 * sW + l] += A14 + RBt4 - BR4 - RCR4;
-      IApb[4 * sW + l] += A15 + RBt5 - BR5 - RCR5, IApb[5 * sW + l] += A18 + RBt8 - BR8 - RCR8;
-      IApb[6 * sW + l] += B10 + RC0, IApb[7 * sW + l] += B11 + RC1, IApb[8 * sW + l] += B12 + RC2;
-      IApb[9 * sW + l] += B13 + RC3, IApb[10 * sW + l] += B14 + RC4, IApb[11 * sW + l] += B15 + RC5;
-      IApb[12 * sW + l] += B16 + RC6, IApb[13 * sW + l] += B17 + RC7, IApb[14 * sW + l] += B18 + RC8;
-      IApb[15 * sW + l] += C10, IApb[16 * sW + l] += C11, IApb[17 * sW + l] += C12;
-      IApb[18 * sW + l] += C14, IApb[19 * sW + l] += C15, IApb[20 * sW + l] += C18;
+      FF_MM(CE, Cf, E);
+      FF_MTM_SYM(C1p, E, CE);
+      FF_FULL(C1, C1p);
+      FF_RX_M(RC, r, C1);
+      FF_M3(B2, B10 + RC0, B11 + RC1, B12 + RC2, B13 + RC3, B14 + RC4, B15 + RC5, B16 + RC6, B17 + RC7, B18 + RC8);
+      // Row r of B' r× is (row r of B') × r = X_r; column c of r× B''^T is r × (row c of B'') = Y_c.
+      FF_ROWS_CROSS(X, B1, r, 0);
+      FF_ROWS_CROSS(Y, B2, r, 1);
+      // Accumulate into the parent: packed A'' (entry (r, c) is A' - X_r[c] + Y_c[r]), full B'', packed C'.
+      IApb[0 * sW + l] += A1p0 - X00 + Y00, IApb[1 * sW + l] += A1p1 - X01 + Y10;
+      IApb[2 * sW + l] += A1p2 - X02 + Y20, IApb[3 * sW + l] += A1p3 - X11 + Y11;
+      IApb[4 * sW + l] += A1p4 - X12 + Y21, IApb[5 * sW + l] += A1p5 - X22 + Y22;
+      IApb[6 * sW + l] += B20, IApb[7 * sW + l] += B21, IApb[8 * sW + l] += B22;
+      IApb[9 * sW + l] += B23, IApb[10 * sW + l] += B24, IApb[11 * sW + l] += B25;
+      IApb[12 * sW + l] += B26, IApb[13 * sW + l] += B27, IApb[14 * sW + l] += B28;
+      IApb[15 * sW + l] += C1p0, IApb[16 * sW + l] += C1p1, IApb[17 * sW + l] += C1p2;
+      IApb[18 * sW + l] += C1p3, IApb[19 * sW + l] += C1p4, IApb[20 * sW + l] += C1p5;
       // X^T [n; f] = [E^T n + r × E^T f; E^T f]
       FF_MTV(n1, E, pt);
       FF_MTV(f1, E, pb);
@@ -276,13 +296,13 @@ void aba_pass2(const TreeLanes& tl, int i, const double* tau, const double* extr
 }
 
 // Pass 3 for body i, root to tip: a = Xup a_parent + c (the base's a_0 = [0; -gravity]),
-// qdd = (u - U . a) / d, a += S qdd.
-template <JointType J, bool kRoot>
-void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) {
-  const std::size_t sW = static_cast<std::size_t>(tl.W);
-  const int W = tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
-  const double *axb = blk(tl.axis, i, 3, sW), *Xb = blk(ws.Xup, i, 12, sW), *cb = blk(ws.c, i, 6, sW);
-  const double *Ub = blk(ws.U, i, 6, sW), *apb = blk(ws.a, p, 6, sW), *gb = tl.gravity.data();
+// qdd = (u - U . a) / d with U the joint's column of I^A (pass 2), a += S qdd (RBDA Table 7.1, third loop).
+template <JointType J, bool kRoot, int kW>
+FF_INLINE void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) {
+  const std::size_t sW = static_cast<std::size_t>(kW > 0 ? kW : tl.W);
+  const int W = kW > 0 ? kW : tl.W, p = kRoot ? 0 : tl.parent[i], j = tl.dof[i] < 0 ? 0 : tl.dof[i];
+  const double *Xb = blk(ws.Xup, i, 12, sW), *cb = blk(ws.c, i, 4, sW), *IAb = blk(ws.IA, i, 21, sW);
+  const double *apb = blk(ws.a, p, 6, sW), *gb = tl.gravity.data();
   double* ab = blk(ws.a, i, 6, sW);
   const double* d = ws.d.data() + static_cast<std::size_t>(i) * sW;
   const double* u = ws.u.data() + static_cast<std::size_t>(i) * sW;
@@ -290,55 +310,91 @@ void aba_pass3(const TreeLanes& tl, int i, double* qdd, TreeLanesWorkspace& ws) 
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     FF_LOAD9(E, Xb, 0);
-    FF_LOAD3(r, Xb, 9);
-    FF_V3(wp, 0.0, 0.0, 0.0);
-    FF_V3(vp, 0.0, 0.0, 0.0);
+    FF_V3(aw, 0.0, 0.0, 0.0);
+    FF_V3(av, 0.0, 0.0, 0.0);
     if constexpr (kRoot) {
-      vp0 = -gb[0 * sW + l], vp1 = -gb[1 * sW + l], vp2 = -gb[2 * sW + l];
+      FF_V3(g, -gb[0 * sW + l], -gb[1 * sW + l], -gb[2 * sW + l]);
+      FF_MV(Eg, E, g);
+      av0 = Eg0, av1 = Eg1, av2 = Eg2;
     } else {
-      wp0 = apb[0 * sW + l], wp1 = apb[1 * sW + l], wp2 = apb[2 * sW + l];
-      vp0 = apb[3 * sW + l], vp1 = apb[4 * sW + l], vp2 = apb[5 * sW + l];
+      FF_LOAD3(r, Xb, 9);
+      FF_XMOTION(Ew, Ev, E, r, apb);
+      aw0 = Ew0, aw1 = Ew1, aw2 = Ew2, av0 = Ev0, av1 = Ev1, av2 = Ev2;
     }
-    FF_CROSS(rw, r, wp);
-    FF_V3(vr, vp0 - rw0, vp1 - rw1, vp2 - rw2);
-    FF_MV(aw, E, wp);
-    FF_MV(av, E, vr);
-    aw0 += cb[0 * sW + l], aw1 += cb[1 * sW + l], aw2 += cb[2 * sW + l];
-    av0 += cb[3 * sW + l], av1 += cb[4 * sW + l], av2 += cb[5 * sW + l];
     if constexpr (J != JointType::kFixed) {
-      FF_LOAD3(Ut, Ub, 0);
-      FF_LOAD3(Uq, Ub, 3);
-      const double x = (u[l] - (FF_DOT(Ut, aw) + FF_DOT(Uq, av))) / d[l];
+      constexpr bool kRev = J == JointType::kRevolute;
+      if constexpr (kRev) aw0 += cb[0 * sW + l], aw1 += cb[1 * sW + l];
+      av0 += cb[2 * sW + l], av1 += cb[3 * sW + l];
+      // U = [A_z; B row z] (IA components 2, 4, 5, 12, 13, 14) or [B col z; C_z] (8, 11, 14, 17, 19, 20)
+      constexpr int k0 = kRev ? 2 : 8, k1 = kRev ? 4 : 11, k2 = kRev ? 5 : 14;
+      constexpr int k3 = kRev ? 12 : 17, k4 = kRev ? 13 : 19, k5 = kRev ? 14 : 20;
+      const double Ua = IAb[k0 * sW + l] * aw0 + IAb[k1 * sW + l] * aw1 + IAb[k2 * sW + l] * aw2 +
+                        IAb[k3 * sW + l] * av0 + IAb[k4 * sW + l] * av1 + IAb[k5 * sW + l] * av2;
+      const double x = (u[l] - Ua) / d[l];
       qj[l] = x;
-      FF_LOAD3(a, axb, 0);
-      if constexpr (J == JointType::kRevolute) {
-        aw0 += a0 * x, aw1 += a1 * x, aw2 += a2 * x;
-      } else {
-        av0 += a0 * x, av1 += a1 * x, av2 += a2 * x;
-      }
+      (kRev ? aw2 : av2) += x;
     }
     FF_STORE3(ab, 0, aw);
     FF_STORE3(ab, 3, av);
   }
 }
 
-template <template <JointType, bool> class F, class... Args>
+// Runs F for body i's joint type. Not always_inline: forced inline (with the passes flattened into the
+// clones anyway) GCC 12 made the rigid arm's ABA 1.6x slower.
+template <template <JointType, bool, int> class F, int kW, class... Args>
 void by_joint(JointType t, bool root, Args&&... args) {
   switch (t) {
     case JointType::kRevolute:
-      root ? F<JointType::kRevolute, true>::run(args...) : F<JointType::kRevolute, false>::run(args...);
+      root ? F<JointType::kRevolute, true, kW>::run(args...) : F<JointType::kRevolute, false, kW>::run(args...);
       break;
     case JointType::kPrismatic:
-      root ? F<JointType::kPrismatic, true>::run(args...) : F<JointType::kPrismatic, false>::run(args...);
+      root ? F<JointType::kPrismatic, true, kW>::run(args...) : F<JointType::kPrismatic, false, kW>::run(args...);
       break;
     case JointType::kFixed:
-      root ? F<JointType::kFixed, true>::run(args...) : F<JointType::kFixed, false>::run(args...);
+      root ? F<JointType::kFixed, true, kW>::run(args...) : F<JointType::kFixed, false, kW>::run(args...);
       break;
   }
 }
-template <JointType J, bool R> struct Pass1 { static void run(auto&&... a) { aba_pass1<J, R>(a...); } };
-template <JointType J, bool R> struct Pass2 { static void run(auto&&... a) { aba_pass2<J, R>(a...); } };
-template <JointType J, bool R> struct Pass3 { static void run(auto&&... a) { aba_pass3<J, R>(a...); } };
+template <JointType J, bool R, int kW> struct Pass1 { static void run(auto&&... a) { aba_pass1<J, R, kW>(a...); } };
+template <JointType J, bool R, int kW> struct Pass2 { static void run(auto&&... a) { aba_pass2<J, R, kW>(a...); } };
+template <JointType J, bool R, int kW> struct Pass3 { static void run(auto&&... a) { aba_pass3<J, R, kW>(a...); } };
+
+// The three passes over every body; kW > 0: W = kW known at compile time (the lane loops' trip count
+// and every component's offset constant), 0: any W.
+template <int kW>
+FF_INLINE void aba_passes(const TreeLanes& tl, const double* q, const double* qd, const double* tau,
+                          const double* extra, double* qdd, TreeLanesWorkspace& ws) {
+  for (int i = 0; i < tl.nb; ++i) by_joint<Pass1, kW>(tl.joint[i], tl.parent[i] < 0, tl, i, q, qd, ws);
+  for (int i = tl.nb - 1; i >= 0; --i) by_joint<Pass2, kW>(tl.joint[i], tl.parent[i] < 0, tl, i, tau, extra, ws);
+  for (int i = 0; i < tl.nb; ++i) by_joint<Pass3, kW>(tl.joint[i], tl.parent[i] < 0, tl, i, qdd, ws);
+}
+
+// The rotation taking body coordinates to the body's joint frame, in which its joint axis is z (so that
+// S is [e_z; 0] or [0; e_z] for every joint): its rows are the frame's axes in body coordinates. A signed
+// permutation (exact) for an axis ±x, ±y, ±z; the identity for a fixed joint.
+Mat3 joint_frame(const Body& b) {
+  Mat3 R = Mat3::Identity();
+  if (b.joint == JointType::kFixed) return R;
+  const Vec3& a = b.axis;
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    if (a[k1] == 0.0 && a[k2] == 0.0 && std::abs(a[k]) == 1.0) {
+      R.setZero();
+      R(0, a[k] > 0.0 ? k1 : k2) = 1.0;
+      R(1, a[k] > 0.0 ? k2 : k1) = 1.0;
+      R(2, k) = a[k];
+      return R;
+    }
+  }
+  int m = 0;  // z' = a, x' = the coordinate axis least along a made orthogonal to it, y' = z' × x'
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(a[k]) < std::abs(a[m])) m = k;
+  const Vec3 x = (Vec3::Unit(m) - a[m] * a).normalized();
+  R.row(0) = x.transpose();
+  R.row(1) = a.cross(x).transpose();
+  R.row(2) = a.transpose();
+  return R;
+}
 
 }  // namespace
 
@@ -360,7 +416,6 @@ TreeLanes make_tree_lanes(std::span<const Tree> trees) {
   }
   const int W = tl.W, nb = tl.nb, nv = tl.nv;
   const auto sz = [W](int n, int K) { return static_cast<std::size_t>(n) * K * W; };
-  tl.axis.assign(sz(nb, 3), 0.0);
   tl.X_tree.assign(sz(nb, 12), 0.0);
   tl.inertia.assign(sz(nb, 10), 0.0);
   for (auto* v : {&tl.armature, &tl.stiffness, &tl.damping, &tl.spring_reference}) v->assign(sz(nv, 1), 0.0);
@@ -376,14 +431,18 @@ TreeLanes make_tree_lanes(std::span<const Tree> trees) {
       if (b.parent != tl.parent[i] || b.joint != tl.joint[i] || b.dof != tl.dof[i])
         throw std::invalid_argument("make_tree_lanes: lane " + std::to_string(l) + ", body " + std::to_string(i) +
                                     " (" + b.name + "): another parent or joint type than in lane 0");
-      double *ax = blk(tl.axis, i, 3, W), *Xt = blk(tl.X_tree, i, 12, W), *In = blk(tl.inertia, i, 10, W);
+      double *Xt = blk(tl.X_tree, i, 12, W), *In = blk(tl.inertia, i, 10, W);
       const auto at = [W, l](int k) { return static_cast<std::size_t>(k) * W + l; };
-      for (int k = 0; k < 3; ++k) ax[at(k)] = b.axis[k];
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) Xt[at(3 * r + c)] = b.X_tree.E(r, c);
-      for (int k = 0; k < 3; ++k) Xt[at(9 + k)] = b.X_tree.r[k];
-      const Mat3 Ibar = b.inertia.topLeftCorner<3, 3>();
-      const Vec3 h = b.mass * b.com;
+      // In joint frames (R the body's, Rp its parent's, the base's the identity): X_tree' = rot(R) X_tree
+      // rot(Rp)^T = rot(R E Rp^T) xlt(Rp r); the inertia's blocks R Ibar R^T, R h.
+      const Mat3 R = joint_frame(b), Rp = b.parent < 0 ? Mat3::Identity() : joint_frame(t.body(b.parent));
+      const Mat3 E = R * b.X_tree.E * Rp.transpose();
+      const Vec3 r = Rp * b.X_tree.r;
+      for (int r_ = 0; r_ < 3; ++r_)
+        for (int c = 0; c < 3; ++c) Xt[at(3 * r_ + c)] = E(r_, c);
+      for (int k = 0; k < 3; ++k) Xt[at(9 + k)] = r[k];
+      const Mat3 Ibar = R * b.inertia.topLeftCorner<3, 3>() * R.transpose();
+      const Vec3 h = R * (b.mass * b.com);
       In[at(0)] = b.mass;
       for (int k = 0; k < 3; ++k) In[at(1 + k)] = h[k];
       const double packed[6] = {Ibar(0, 0), Ibar(0, 1), Ibar(0, 2), Ibar(1, 1), Ibar(1, 2), Ibar(2, 2)};
@@ -404,11 +463,10 @@ TreeLanesWorkspace::TreeLanesWorkspace(const TreeLanes& tl) : W(tl.W), nb(tl.nb)
   const std::size_t n = static_cast<std::size_t>(tl.nb) * tl.W;
   Xup.assign(12 * n, 0.0);
   v.assign(6 * n, 0.0);
-  c.assign(6 * n, 0.0);
+  c.assign(4 * n, 0.0);
   a.assign(6 * n, 0.0);
   IA.assign(21 * n, 0.0);
   pA.assign(6 * n, 0.0);
-  U.assign(6 * n, 0.0);
   d.assign(n, 1.0);
   u.assign(n, 0.0);
   zeros.assign(static_cast<std::size_t>(tl.nv) * tl.W, 0.0);
@@ -424,9 +482,12 @@ void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const d
   if (ws.W != tl.W || ws.nb != tl.nb)
     throw std::invalid_argument("compute_tree_forward_dynamics: the workspace was made for another batch");
   const double* extra = extra_armature ? extra_armature : ws.zeros.data();
-  for (int i = 0; i < tl.nb; ++i) by_joint<Pass1>(tl.joint[i], tl.parent[i] < 0, tl, i, q, qd, ws);
-  for (int i = tl.nb - 1; i >= 0; --i) by_joint<Pass2>(tl.joint[i], tl.parent[i] < 0, tl, i, tau, extra, ws);
-  for (int i = 0; i < tl.nb; ++i) by_joint<Pass3>(tl.joint[i], tl.parent[i] < 0, tl, i, qdd, ws);
+  switch (tl.W) {  // the usual widths with W known to the compiler (1.4x at W = 8), any other at run time
+    case 4: aba_passes<4>(tl, q, qd, tau, extra, qdd, ws); break;
+    case 8: aba_passes<8>(tl, q, qd, tau, extra, qdd, ws); break;
+    case 16: aba_passes<16>(tl, q, qd, tau, extra, qdd, ws); break;
+    default: aba_passes<0>(tl, q, qd, tau, extra, qdd, ws); break;
+  }
 }
 
 void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,

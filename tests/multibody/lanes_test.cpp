@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -22,7 +23,9 @@ using Eigen::VectorXd;
 
 // W random trees of one random topology (n bodies): parents and joint types drawn once, then
 // every lane its own axes, placements, inertias, armature, springs and gravity.
-std::vector<Tree> random_lanes(test::Rng& rng, int n, int W) {
+// coordinate_axes: each body's axis one of ±x, ±y, ±z (drawn per lane) or, one body in five, a random
+// one, and its rotation the identity half the time (the lane ABA's exact joint frames).
+std::vector<Tree> random_lanes(test::Rng& rng, int n, int W, bool coordinate_axes = false) {
   std::vector<int> parent;
   std::vector<JointType> joint;
   for (int i = 0; i < n; ++i) {
@@ -36,6 +39,10 @@ std::vector<Tree> random_lanes(test::Rng& rng, int n, int W) {
     TreeSpec s;
     for (int i = 0; i < n; ++i) {
       BodySpec b = test::random_body(rng, parent[static_cast<std::size_t>(i)], &joint[static_cast<std::size_t>(i)]);
+      if (coordinate_axes && rng.uniform() < 0.8) {
+        b.axis = Vec3::Unit(rng.index(3)) * (rng.uniform() < 0.5 ? -1.0 : 1.0);
+        if (rng.uniform() < 0.5) b.rotation = Mat3::Identity();
+      }
       b.stiffness = rng.uniform(0.0, 50.0);
       b.damping = rng.uniform(0.0, 2.0);
       b.spring_reference = rng.uniform(-0.3, 0.3);
@@ -61,56 +68,77 @@ VectorXd lane(const std::vector<double>& x, int nv, int W, int l) {
   return v;
 }
 
+// qdd of W lanes of random trees (random_lanes) at random states, springs in tau and an extra armature
+// when with_arm, against the scalar ABA per lane (with tau + passive forces, the armature added to the
+// trees' own): the largest relative difference.
+double lanes_against_scalar(test::Rng& rng, int n, int W, bool coordinate_axes, bool with_arm) {
+  const std::vector<Tree> trees = random_lanes(rng, n, W, coordinate_axes);
+  const TreeLanes tl = make_tree_lanes(trees);
+  const int nv = tl.nv;
+  std::vector<VectorXd> q, qd, tau, arm;
+  for (const Tree& tr : trees) {
+    q.push_back(test::random_q(rng, tr));
+    qd.push_back(test::random_vector(rng, nv, -2.0, 2.0));
+    tau.push_back(test::random_vector(rng, nv, -5.0, 5.0));
+    arm.push_back(test::random_vector(rng, nv, 0.0, 0.5));
+  }
+  const std::vector<double> Q = gather(q), QD = gather(qd), TA = gather(tau), AR = gather(arm);
+  std::vector<double> total(Q.size()), qdd(Q.size());
+  compute_tree_passive_forces(tl, Q.data(), QD.data(), TA.data(), total.data());
+  TreeLanesWorkspace ws(tl);
+  compute_tree_forward_dynamics(tl, Q.data(), QD.data(), total.data(), with_arm ? AR.data() : nullptr, qdd.data(),
+                                ws);
+  double worst = 0.0;
+  for (int l = 0; l < W; ++l) {
+    const Tree& tr = trees[static_cast<std::size_t>(l)];
+    TreeSpec s = test::spec_of(tr);
+    for (BodySpec& b : s.bodies) b.stiffness = b.damping = 0.0;
+    for (int i = 0; i < tr.num_bodies(); ++i)
+      if (with_arm && tr.body(i).dof >= 0)
+        s.bodies[static_cast<std::size_t>(i)].armature += arm[static_cast<std::size_t>(l)][tr.body(i).dof];
+    const Tree oracle = make_tree(s);
+    VectorXd passive(nv), expect(nv);
+    calc_passive_forces(tr, q[static_cast<std::size_t>(l)], qd[static_cast<std::size_t>(l)], passive);
+    TreeWorkspace tws(oracle);
+    calc_forward_dynamics(oracle, q[static_cast<std::size_t>(l)], qd[static_cast<std::size_t>(l)],
+                          passive + tau[static_cast<std::size_t>(l)], expect, tws);
+    worst = std::max(worst, test::rel_diff(lane(qdd, nv, W, l), expect));
+  }
+  return worst;
+}
+
 TEST(TreeLanes, ForwardDynamicsMatchesTheScalarAbaInEveryLaneOfRandomTrees) {
   // 40 random topologies of 1..12 bodies, 5 lanes each with their own parameters and states,
-  // springs in tau, and an extra armature in half of them: qdd within 1e-12 of the scalar ABA
-  // (with tau + passive forces, armature added to the trees' own).
+  // springs in tau, and an extra armature in half of them: qdd within 1e-12 of the scalar ABA.
   test::Rng rng(20261202);
   double worst = 0.0;
   for (int t = 0; t < 40; ++t) {
-    const int n = 1 + t % 12, W = 5;
-    const std::vector<Tree> trees = random_lanes(rng, n, W);
-    const TreeLanes tl = make_tree_lanes(trees);
-    const int nv = tl.nv;
-    std::vector<VectorXd> q, qd, tau, arm;
-    for (const Tree& tr : trees) {
-      q.push_back(test::random_q(rng, tr));
-      qd.push_back(test::random_vector(rng, nv, -2.0, 2.0));
-      tau.push_back(test::random_vector(rng, nv, -5.0, 5.0));
-      arm.push_back(test::random_vector(rng, nv, 0.0, 0.5));
-    }
-    const bool with_arm = t % 2 == 1;
-    const std::vector<double> Q = gather(q), QD = gather(qd), TA = gather(tau), AR = gather(arm);
-    std::vector<double> total(Q.size()), qdd(Q.size());
-    compute_tree_passive_forces(tl, Q.data(), QD.data(), TA.data(), total.data());
-    TreeLanesWorkspace ws(tl);
-    compute_tree_forward_dynamics(tl, Q.data(), QD.data(), total.data(), with_arm ? AR.data() : nullptr, qdd.data(),
-                                  ws);
-    for (int l = 0; l < W; ++l) {
-      // The oracle: the same tree with the extra armature as its own, tau + passive forces.
-      const Tree& tr = trees[static_cast<std::size_t>(l)];
-      TreeSpec s = test::spec_of(tr);
-      for (BodySpec& b : s.bodies) b.stiffness = b.damping = 0.0;
-      for (int i = 0; i < tr.num_bodies(); ++i)
-        if (with_arm && tr.body(i).dof >= 0)
-          s.bodies[static_cast<std::size_t>(i)].armature += arm[static_cast<std::size_t>(l)][tr.body(i).dof];
-      const Tree oracle = make_tree(s);
-      VectorXd passive(nv), expect(nv);
-      calc_passive_forces(tr, q[static_cast<std::size_t>(l)], qd[static_cast<std::size_t>(l)], passive);
-      TreeWorkspace tws(oracle);
-      calc_forward_dynamics(oracle, q[static_cast<std::size_t>(l)], qd[static_cast<std::size_t>(l)],
-                            passive + tau[static_cast<std::size_t>(l)], expect, tws);
-      const double e = test::rel_diff(lane(qdd, nv, W, l), expect);
-      worst = std::max(worst, e);
-      EXPECT_LT(e, 1e-12) << "topology " << t << " lane " << l;
-    }
+    const double e = lanes_against_scalar(rng, 1 + t % 12, 5, false, t % 2 == 1);
+    worst = std::max(worst, e);
+    EXPECT_LT(e, 1e-12) << "topology " << t;
+  }
+  RecordProperty("worst_relative_difference", test::sci(worst));
+}
+
+TEST(TreeLanes, CoordinateAxesAndEveryCompiledWidthMatchTheScalarAba) {
+  // The lane ABA turns each body's coordinates so that its joint axis is z (exactly for ±x, ±y, ±z) and
+  // compiles W = 4, 8, 16 apart: 60 random topologies of 1..12 bodies, every joint type, axes ±x, ±y, ±z
+  // and random ones mixed per lane, identity and random rotations, at W = 4, 8, 16 and 5: within 1e-12.
+  test::Rng rng(20261204);
+  double worst = 0.0;
+  for (int t = 0; t < 60; ++t) {
+    const int W = std::array{4, 8, 16, 5}[static_cast<std::size_t>(t % 4)];
+    const double e = lanes_against_scalar(rng, 1 + t % 12, W, true, t % 3 == 1);
+    worst = std::max(worst, e);
+    EXPECT_LT(e, 1e-12) << "topology " << t << " W " << W;
   }
   RecordProperty("worst_relative_difference", test::sci(worst));
 }
 
 TEST(TreeLanes, AVariantGivesTheSameBitsInAnyLaneAtAnyWidth) {
   // One 3-D flexible link on a revolute-prismatic base (every joint type) at a random state, alone
-  // (W = 1), then in lane 2 of 3, lane 6 of 7 and lane 12 of 13 among other variants: qdd bit for bit.
+  // (W = 1), then in lane 2 of 3, 3 of 4, 6 of 7, 0 and 5 of 8, 12 of 13 and 9 of 16 among other variants
+  // (4, 8 and 16 compiled apart): qdd bit for bit.
   test::Rng rng(7);
   auto make = [](double scale) {
     TreeSpec s;
@@ -158,7 +186,8 @@ TEST(TreeLanes, AVariantGivesTheSameBitsInAnyLaneAtAnyWidth) {
     return lane(qdd, nv, W, at);
   };
   const VectorXd alone = run(1, 0);
-  for (const auto& [W, at] : {std::pair{3, 2}, std::pair{7, 6}, std::pair{13, 12}, std::pair{8, 0}}) {
+  for (const auto& [W, at] : {std::pair{3, 2}, std::pair{4, 3}, std::pair{7, 6}, std::pair{8, 0}, std::pair{8, 5}, std::pair{13, 12},
+                              std::pair{16, 9}}) {
     const VectorXd x = run(W, at);
     for (int j = 0; j < nv; ++j) EXPECT_EQ(x[j], alone[j]) << "W " << W << " lane " << at << " dof " << j;
   }
