@@ -9,6 +9,7 @@
 
 #include "apps/verbs.hpp"
 #include "validate/arm_compare.hpp"
+#include "validate/arm_observer.hpp"
 #include "validate/arm_record.hpp"
 #include "validate/compare.hpp"
 #include "validate/observer.hpp"
@@ -44,20 +45,26 @@ std::vector<std::string> write_report_into(const std::function<std::vector<std::
   }
 }
 
-// An arm model (arm/): the free run on the record's references, every channel scored.
+// An arm model (arm/): the free run on the record's references, with k > 0 the k-step prediction
+// from the arm observer's estimate, every channel scored.
 void compare_arm(const std::string& model, const std::vector<std::string>& sets, const std::string& data,
-                 const std::string& out) {
+                 const std::string& out, int k, const ArmObserverOptions& observer) {
   const ArmModel m = load_arm_with(model, sets);
   const Record r = read_record_csv(data, {});
   check_arm_record(r, m);
-  std::fprintf(stderr, "comparing %s with %s: %zu samples, free run on the record's references\n", model.c_str(),
-               data.c_str(), r.size());
-  const ArmCompareResult result = compare_arm_record(m, r);
+  if (k > 0)
+    std::fprintf(stderr, "comparing %s with %s: %zu samples, free run and k = %d from the observer's estimate\n",
+                 model.c_str(), data.c_str(), r.size(), k);
+  else
+    std::fprintf(stderr, "comparing %s with %s: %zu samples, free run on the record's references\n", model.c_str(),
+                 data.c_str(), r.size());
+  const ArmCompareResult result = compare_arm_record(m, r, {}, k, observer);
   const auto files =
       write_report_into([&](const std::string& dir) { return write_arm_compare_report(result, dir); }, out);
   std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_arm_fit_table(result).c_str(), out.c_str(),
               files.size() - 2);
   if (!result.ok) std::printf("the replay failed numerically: see %s/report.md\n", out.c_str());
+  if (k > 0 && !result.k_ok) std::printf("the k-step prediction failed: see %s/report.md\n", out.c_str());
 }
 
 }  // namespace
@@ -71,6 +78,7 @@ void add_compare_verb(CLI::App& app) {
     std::string model, data, out, mode = "closed-loop";
     int k = 10;
     double process_noise = kDefaultProcessNoise;
+    double relinearise = kDefaultRelinearise;
     std::vector<std::string> sets;
   };
   auto args = std::make_shared<Args>();
@@ -85,19 +93,29 @@ void add_compare_verb(CLI::App& app) {
       ->capture_default_str();
   auto* noise_opt = cmd->add_option("--process-noise", args->process_noise,
                   "the k-step observer's process noise: white acceleration on every joint, rad/s^2 "
-                  "(larger: the estimate follows the measurements more, the model less)")
+                  "(larger: the estimate follows the measurements more, the model less; an arm model's default: 1)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  auto* relin_opt = cmd->add_option("--relinearise", args->relinearise,
+                  "an arm model's k-step observer: seconds between its linearisations at the estimate (its gain "
+                  "re-designed for the pose)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->add_option("--out", args->out, "output directory (created)")->required();
-  cmd->callback([args, k_opt, noise_opt] {
+  cmd->callback([args, k_opt, noise_opt, relin_opt] {
     if (is_arm_model_file(args->model)) {
       if (args->mode != "closed-loop") throw ExitError("--mode: an arm model is compared in closed loop only", 2);
-      if (k_opt->count() > 0 || noise_opt->count() > 0)
-        throw ExitError(std::string(k_opt->count() > 0 ? "--k" : "--process-noise") +
-                            ": an arm model has no k-step prediction yet (free run only)", 2);
-      return compare_arm(args->model, args->sets, args->data, args->out);
+      // The k-step prediction only when asked for (--k): the observer's linearisations cost some runs.
+      if (k_opt->count() == 0 && (noise_opt->count() > 0 || relin_opt->count() > 0))
+        throw ExitError(std::string(noise_opt->count() > 0 ? "--process-noise" : "--relinearise") +
+                            ": the k-step prediction's option: give --k too (an arm model is compared free-run only without it)", 2);
+      ArmObserverOptions observer;
+      if (noise_opt->count() > 0) observer.process_noise = args->process_noise;
+      observer.relinearise = args->relinearise;
+      return compare_arm(args->model, args->sets, args->data, args->out, k_opt->count() > 0 ? args->k : 0, observer);
     }
+    if (relin_opt->count() > 0) throw ExitError("--relinearise: only for an arm model (the rig's observer has one gain)", 2);
     // Every input is checked before anything is written.
     const ReplayMode mode = parse_replay_mode(args->mode);
     const Model m = load_model_with(args->model, args->sets);

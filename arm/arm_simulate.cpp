@@ -60,66 +60,90 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
 
 namespace {
 
-// Per-lane controller state and scratch, structure-of-arrays (joint j, lane l at [j * W + l]).
-struct ControlLanes {
-  int W = 0, na = 0;
-  std::vector<double> integral, tau_held;
-  std::vector<std::vector<double>> coef, state;  // per joint: notch coefficients and state (lanes innermost)
-  std::vector<double> in, out;                   // (W) a notch's input and output
-};
+using std::size_t;
 
-// The lane's tool point and, per flexible link, its tip deflection in the root frame.
-void record_kinematics(const ArmModel& m, const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
-                       std::vector<Pose>& poses, double* out) {
+// The lane's tool point and, per flexible link, its tip deflection in the root frame (out[0..2], then
+// two per link).
+void calc_plant_kinematics(const ArmModel& m, const Eigen::VectorXd& q, std::vector<Pose>& poses, double* out) {
   calc_body_poses(m.tree, q, poses);
-  const Vec3 tool = poses[static_cast<std::size_t>(m.tool_body)].point(m.tool_point);
+  const Vec3 tool = poses[static_cast<size_t>(m.tool_body)].point(m.tool_point);
   out[0] = tool.x(), out[1] = tool.y(), out[2] = tool.z();
-  int k = 6;
+  int k = 3;
   for (const LinkTip& l : m.links) {
-    const Pose& root = poses[static_cast<std::size_t>(l.root_body)];
-    const Vec3 tip = poses[static_cast<std::size_t>(l.tip_body)].point(l.tip_point);
+    const Pose& root = poses[static_cast<size_t>(l.root_body)];
+    const Vec3 tip = poses[static_cast<size_t>(l.tip_body)].point(l.tip_point);
     const Vec3 d = root.rotation.transpose() * (tip - root.position) - l.rigid_tip;
     out[k++] = d.y();
     out[k++] = d.z();
   }
+}
+
+// Where the rigid arm at the reference puts the tool point.
+Vec3 calc_reference_tool(const ArmModel& m, const Eigen::VectorXd& q_ref, std::vector<Pose>& poses) {
   calc_body_poses(m.tree, q_ref, poses);
-  const Vec3 ref = poses[static_cast<std::size_t>(m.tool_body)].point(m.tool_point);
-  out[3] = ref.x(), out[4] = ref.y(), out[5] = ref.z();
+  return poses[static_cast<size_t>(m.tool_body)].point(m.tool_point);
 }
 
 // ---- The replay hook (ArmRunOptions::reference) ----
 // The reference of every actuated joint at controller sample k from the samples, with central differences.
 void eval_replay_reference(const std::vector<std::vector<double>>& ref, long k, double T, double* r, double* rd,
                            double* rdd) {
-  for (std::size_t j = 0; j < ref.size(); ++j) {
+  for (size_t j = 0; j < ref.size(); ++j) {
     const std::vector<double>& x = ref[j];
     const long n = static_cast<long>(x.size());
-    auto at = [&](long i) { return x[static_cast<std::size_t>(std::clamp(i, 0L, n - 1))]; };
+    auto at = [&](long i) { return x[static_cast<size_t>(std::clamp(i, 0L, n - 1))]; };
     r[j] = at(k);
     rd[j] = (at(k + 1) - at(k - 1)) / (2.0 * T);
     rdd[j] = (at(k + 1) - 2.0 * at(k) + at(k - 1)) / (T * T);
   }
 }
 
+// The reference of every lane at sample k (its own trajectory and shapers, or the replay's samples).
+void eval_lane_references(ArmLanes& a, long k) {
+  const size_t na = static_cast<size_t>(a.na);
+  for (int l = 0; l < a.W; ++l) {
+    const size_t o = static_cast<size_t>(l) * na;
+    if (a.reference)  // the replay hook
+      eval_replay_reference(*a.reference, k, a.T, &a.r[o], &a.rd[o], &a.rdd[o]);
+    else
+      eval_arm_reference(a.models[static_cast<size_t>(l)], static_cast<double>(k) * a.T, &a.r[o], &a.rd[o], &a.rdd[o],
+                         a.scratch.data());
+  }
+}
+
+// Trace columns: t, 4 per actuated joint, the kinematics (tool, tool.ref, 2 per link), 2 measured per
+// joint, 2 pressures per hydraulic joint.
+size_t kinematics_column(const ArmLanes& a) { return 1 + 4 * static_cast<size_t>(a.na); }
+size_t pressure_column(const ArmLanes& a) { return a.names.size() - 2 * static_cast<size_t>(a.nh); }
+size_t measured_column(const ArmLanes& a) { return pressure_column(a) - 2 * static_cast<size_t>(a.na); }
+
 }  // namespace
 
-ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options) {
+long calc_arm_samples(const ArmModel& m) {
+  return static_cast<long>(std::floor(m.duration / m.control_period + 1e-9)) + 1;
+}
+
+ArmLanes make_arm_lanes(std::span<const ArmModel> lanes, const ArmRunOptions& options) {
   if (lanes.empty()) throw std::invalid_argument("simulate_arms: no lanes");
   const ArmModel& m0 = lanes[0];
-  for (std::size_t l = 1; l < lanes.size(); ++l)
+  for (size_t l = 1; l < lanes.size(); ++l)
     if (const std::string why = explain_arm_shape_mismatch(m0, lanes[l]); !why.empty())
       throw std::invalid_argument("simulate_arms: lane " + std::to_string(l) + ": " + why);
-  const int W = static_cast<int>(lanes.size());
-  const int na = static_cast<int>(m0.actuated.size());
+  ArmLanes a;
+  a.models = lanes;
+  a.reference = options.reference;
+  const int W = a.W = static_cast<int>(lanes.size());
+  const int na = a.na = static_cast<int>(m0.actuated.size());
   if (options.reference) {  // the replay hook
-    bool ok = options.reference->size() == static_cast<std::size_t>(na);
+    bool ok = options.reference->size() == static_cast<size_t>(na);
     for (const std::vector<double>& x : *options.reference) ok &= !x.empty();
     if (!ok) throw std::invalid_argument("simulate_arms: the reference needs one non-empty sample vector per actuated joint");
   }
-  const int nv = m0.tree.nv();
+  const int nv = a.nv = m0.tree.nv();
   std::vector<Tree> trees;
   for (const ArmModel& m : lanes) trees.push_back(m.tree);
-  TreeLanes tl = make_tree_lanes(trees);
+  a.tl = make_tree_lanes(trees);
+  TreeLanes& tl = a.tl;
   // Each actuated joint's friction, in the plant (every integrator stage, CVODE's right-hand side): the
   // static map, or LuGre's bristles (a state each, after the actuators'); and a drive train's nonlinear
   // law at its twist, in every lane when one lane's drive there is nonlinear.
@@ -146,40 +170,39 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
   }
   // Each hydraulic joint's actuator (its states after the tree's, in joint order), its torque offset the
   // constant load on the joint; the chambers holding the joint's static load, the spool centred.
-  std::vector<int> hyd_joints;  // actuated joint index of actuator a
   for (int j = 0; j < na; ++j) {
-    const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
+    const ActuatedJoint& a0 = m0.actuated[static_cast<size_t>(j)];
     if (!a0.control.hydraulics.enabled) continue;
     std::vector<LaneDrive> p;
     std::vector<double> load;
     for (const ArmModel& m : lanes) {
-      const ActuatedJoint& a = m.actuated[static_cast<std::size_t>(j)];
-      p.push_back(make_hydraulic_drive(a.control.hydraulics));
-      load.push_back(a.control.torque_offset);
+      const ActuatedJoint& aj = m.actuated[static_cast<size_t>(j)];
+      p.push_back(make_hydraulic_drive(aj.control.hydraulics));
+      load.push_back(aj.control.torque_offset);
     }
     add_tree_lanes_hydraulics(tl, a0.dof, p, load);
-    hyd_joints.push_back(j);
+    a.hyd_joints.push_back(j);
   }
-  const int nh = static_cast<int>(hyd_joints.size());
-  TreeLanesState s = make_tree_lanes_state(tl);
-  for (int a = 0; a < nh; ++a)
+  const int nh = a.nh = static_cast<int>(a.hyd_joints.size());
+  a.s = make_tree_lanes_state(tl);
+  TreeLanesState& s = a.s;
+  for (int h = 0; h < nh; ++h)
     for (int l = 0; l < W; ++l) {
-      const auto [pa, pb] = calc_initial_pressures(lanes[l].actuated[static_cast<std::size_t>(hyd_joints[static_cast<std::size_t>(a)])]);
-      s.z[static_cast<std::size_t>((kHydraulicStates * a + 2) * W + l)] = pa / kPressureUnit;
-      s.z[static_cast<std::size_t>((kHydraulicStates * a + 3) * W + l)] = pb / kPressureUnit;
+      const auto [pa, pb] = calc_initial_pressures(lanes[l].actuated[static_cast<size_t>(a.hyd_joints[static_cast<size_t>(h)])]);
+      s.z[static_cast<size_t>((kHydraulicStates * h + 2) * W + l)] = pa / kPressureUnit;
+      s.z[static_cast<size_t>((kHydraulicStates * h + 3) * W + l)] = pb / kPressureUnit;
     }
-  const std::vector<double> z0 = s.z;
-  TreeStepWorkspace ws(tl);
+  a.z0 = s.z;
+  a.ws = TreeStepWorkspace(tl);
   for (int l = 0; l < W; ++l)
     for (int j = 0; j < nv; ++j) {
-      s.q[static_cast<std::size_t>(j * W + l)] = lanes[l].q0[j];
-      s.qd[static_cast<std::size_t>(j * W + l)] = lanes[l].qd0.size() == nv ? lanes[l].qd0[j] : 0.0;
+      s.q[static_cast<size_t>(j * W + l)] = lanes[l].q0[j];
+      s.qd[static_cast<size_t>(j * W + l)] = lanes[l].qd0.size() == nv ? lanes[l].qd0[j] : 0.0;
     }
 
-  const double T = m0.control_period, h = T / m0.substeps;
+  a.T = m0.control_period;
   // The variable-step reference: CVODE per lane over each control period.
-  std::unique_ptr<TreeCvode> cvode;
-  std::vector<char> cvode_ok(static_cast<std::size_t>(W), 1);
+  a.cvode_ok.assign(static_cast<size_t>(W), 1);
   if (m0.integrator == Integrator::kCvodeDense || m0.integrator == Integrator::kCvodeKlu ||
       m0.integrator == Integrator::kCvodeGmres) {
     TreeCvodeOptions o;
@@ -188,228 +211,329 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
                                                         : TreeCvodeSolver::kGmres;
     o.rtol = m0.spec.rtol;
     o.atol = m0.spec.atol;
-    cvode = std::make_unique<TreeCvode>(tl, o);
+    a.cvode = std::make_unique<TreeCvode>(tl, o);
   }
-  const long samples = static_cast<long>(std::floor(m0.duration / T + 1e-9)) + 1;
-  const std::vector<std::string> names = arm_trace_names(m0);
-  ArmRun run;
-  run.status.assign(static_cast<std::size_t>(W), LaneStatus::kOk);
-  run.traces.resize(static_cast<std::size_t>(W));
-  for (ArmTrace& tr : run.traces) {
-    tr.names = names;
-    tr.columns.assign(names.size(), std::vector<double>(static_cast<std::size_t>(samples), 0.0));
-  }
-  if (options.keep_q) run.q.assign(static_cast<std::size_t>(W), Eigen::MatrixXd::Zero(nv, samples));
-  const std::size_t kin0 = 1 + 4 * static_cast<std::size_t>(na);  // first kinematic column
-  const std::size_t hyd0 = names.size() - 2 * static_cast<std::size_t>(nh);  // first pressure column
-  const std::size_t meas0 = hyd0 - 2 * static_cast<std::size_t>(na);           // first measured column
+  a.samples = calc_arm_samples(m0);
+  a.names = arm_trace_names(m0);
+  a.status.assign(static_cast<size_t>(W), LaneStatus::kOk);
+  a.row.assign(a.names.size() * static_cast<size_t>(W), 0.0);
 
   // Controller state; each notch at rest at its first input.
-  ControlLanes c;
-  c.W = W, c.na = na;
-  c.integral.assign(static_cast<std::size_t>(na * W), 0.0);
-  c.tau_held.assign(static_cast<std::size_t>(na * W), 0.0);
-  c.coef.resize(static_cast<std::size_t>(na));
-  c.state.resize(static_cast<std::size_t>(na));
-  c.in.assign(static_cast<std::size_t>(W), 0.0);
-  c.out.assign(static_cast<std::size_t>(W), 0.0);
-  std::vector<double> r(static_cast<std::size_t>(na * W)), rd(r.size()), rdd(r.size()), scratch(3 * static_cast<std::size_t>(na));
-  std::vector<double> tau_id(static_cast<std::size_t>(na)), tau_g(static_cast<std::size_t>(na));
-  for (int l = 0; l < W; ++l) {
-    if (options.reference)  // the replay hook
-      eval_replay_reference(*options.reference, 0, T, &r[static_cast<std::size_t>(l * na)],
-                            &rd[static_cast<std::size_t>(l * na)], &rdd[static_cast<std::size_t>(l * na)]);
-    else
-      eval_arm_reference(lanes[l], 0.0, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
-                         &rdd[static_cast<std::size_t>(l * na)], scratch.data());
-  }
+  a.integral.assign(static_cast<size_t>(na * W), 0.0);
+  a.tau_held.assign(static_cast<size_t>(na * W), 0.0);
+  a.notch_coef.resize(static_cast<size_t>(na));
+  a.notch_state.resize(static_cast<size_t>(na));
+  a.notch_in.assign(static_cast<size_t>(W), 0.0);
+  a.notch_out.assign(static_cast<size_t>(W), 0.0);
+  a.r.assign(static_cast<size_t>(na * W), 0.0);
+  a.rd = a.rdd = a.r;
+  a.scratch.assign(3 * static_cast<size_t>(na), 0.0);
+  a.tau_id.assign(static_cast<size_t>(na), 0.0);
+  a.tau_g = a.tau_id;
+  eval_lane_references(a, 0);
   for (int j = 0; j < na; ++j) {
-    const int ns = static_cast<int>(m0.actuated[static_cast<std::size_t>(j)].notch.size());
-    c.coef[static_cast<std::size_t>(j)].assign(static_cast<std::size_t>(5 * ns * W), 0.0);
-    c.state[static_cast<std::size_t>(j)].assign(static_cast<std::size_t>(2 * ns * W), 0.0);
+    const int ns = static_cast<int>(m0.actuated[static_cast<size_t>(j)].notch.size());
+    a.notch_coef[static_cast<size_t>(j)].assign(static_cast<size_t>(5 * ns * W), 0.0);
+    a.notch_state[static_cast<size_t>(j)].assign(static_cast<size_t>(2 * ns * W), 0.0);
     for (int l = 0; l < W; ++l) {
-      const ActuatedJoint& a = lanes[l].actuated[static_cast<std::size_t>(j)];
+      const ActuatedJoint& aj = lanes[l].actuated[static_cast<size_t>(j)];
       if (ns == 0) continue;
-      pack_notch_sections(a.notch, W, l, c.coef[static_cast<std::size_t>(j)].data());
-      const double x0 = a.notch_on_feedback ? lanes[l].q0[a.dof] : r[static_cast<std::size_t>(l * na + j)];
-      reset_notch_state(ns, W, l, c.coef[static_cast<std::size_t>(j)].data(), x0, c.state[static_cast<std::size_t>(j)].data());
+      pack_notch_sections(aj.notch, W, l, a.notch_coef[static_cast<size_t>(j)].data());
+      const double x0 = aj.notch_on_feedback ? lanes[l].q0[aj.dof] : a.r[static_cast<size_t>(l * na + j)];
+      reset_notch_state(ns, W, l, a.notch_coef[static_cast<size_t>(j)].data(), x0, a.notch_state[static_cast<size_t>(j)].data());
     }
   }
 
-  std::vector<ArmFeedforward> ff;
-  for (const ArmModel& m : lanes) ff.emplace_back(m.tree);
-  std::vector<Pose> poses(static_cast<std::size_t>(m0.tree.num_bodies()));
-  Eigen::VectorXd q_lane(nv), q_ref(nv);
-  std::vector<double> tau_applied(static_cast<std::size_t>(nv * W), 0.0), kin(names.size());
-  std::vector<double> e(static_cast<std::size_t>(na * W));  // the control errors
+  for (const ArmModel& m : lanes) a.ff.emplace_back(m.tree);
+  a.poses.resize(static_cast<size_t>(m0.tree.num_bodies()));
+  a.q_lane.resize(nv);
+  a.q_ref.resize(nv);
+  a.tau_applied.assign(static_cast<size_t>(nv * W), 0.0);
+  a.kin.assign(a.names.size(), 0.0);
+  a.e.assign(static_cast<size_t>(na * W), 0.0);  // the control errors
   // The sensors: what each joint's controller measures (joint j, lane l at [j * W + l]), and per joint
   // and channel a ring of past readings (H x W), H the longest delay + hold of any joint and lane.
-  int H = 1;
   for (const ArmModel& m : lanes)
-    for (const ActuatedJoint& a : m.actuated)
-      H = std::max({H, a.control.angle_sensor.delay + a.angle_hold, a.control.rate_sensor.delay + a.rate_hold});
-  std::vector<double> q_meas(static_cast<std::size_t>(na * W)), qd_meas(q_meas.size());
-  std::vector<std::vector<double>> ring_q(static_cast<std::size_t>(na), std::vector<double>(static_cast<std::size_t>(H * W), 0.0));
-  std::vector<std::vector<double>> ring_qd = ring_q;
+    for (const ActuatedJoint& aj : m.actuated)
+      a.H = std::max({a.H, aj.control.angle_sensor.delay + aj.angle_hold, aj.control.rate_sensor.delay + aj.rate_hold});
+  a.q_meas.assign(static_cast<size_t>(na * W), 0.0);
+  a.qd_meas = a.q_meas;
+  a.ring_q.assign(static_cast<size_t>(na), std::vector<double>(static_cast<size_t>(a.H * W), 0.0));
+  a.ring_qd = a.ring_q;
+  return a;
+}
 
+void calc_arm_outputs(ArmLanes& a) {
+  const int W = a.W, na = a.na, nv = a.nv;
+  const size_t kin0 = kinematics_column(a), hyd0 = pressure_column(a);
+  double* row = a.row.data();
+  auto put = [&](size_t c, int l, double v) { row[c * static_cast<size_t>(W) + static_cast<size_t>(l)] = v; };
+  for (int l = 0; l < W; ++l) {
+    const ArmModel& m = a.models[static_cast<size_t>(l)];
+    for (int j = 0; j < na; ++j) {
+      const ActuatedJoint& aj = m.actuated[static_cast<size_t>(j)];
+      put(static_cast<size_t>(2 + 4 * j), l, a.s.q[static_cast<size_t>(aj.dof * W + l)]);
+      put(static_cast<size_t>(3 + 4 * j), l, a.s.qd[static_cast<size_t>(aj.dof * W + l)]);
+    }
+    // A hydraulic joint's torque is its actuator's, D (p_a - p_b), and its chamber pressures (Pa).
+    for (int h = 0; h < a.nh; ++h) {
+      const size_t z = static_cast<size_t>(kHydraulicStates * h * W + l);
+      const size_t col = hyd0 + 2 * static_cast<size_t>(h);
+      put(static_cast<size_t>(4 + 4 * a.hyd_joints[static_cast<size_t>(h)]), l,
+          eval_hydraulic_actuator(a.tl.hydraulics[static_cast<size_t>(h * W + l)], 0.0, 0.0, 0.0, a.s.z.data() + z,
+                                  static_cast<size_t>(W), nullptr));
+      put(col, l, a.s.z[z + 2 * static_cast<size_t>(W)] * kPressureUnit);
+      put(col + 1, l, a.s.z[z + 3 * static_cast<size_t>(W)] * kPressureUnit);
+    }
+    // The tool (tool.x/y/z) and the links' deflections, after the reference tool's three columns.
+    const size_t n_plant = 3 + 2 * m.links.size();
+    if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
+      for (int j = 0; j < nv; ++j) a.q_lane[j] = a.s.q[static_cast<size_t>(j * W + l)];
+      calc_plant_kinematics(m, a.q_lane, a.poses, a.kin.data());
+    } else {
+      std::fill(a.kin.begin(), a.kin.begin() + static_cast<std::ptrdiff_t>(n_plant), std::nan(""));
+    }
+    for (size_t i = 0; i < 3; ++i) put(kin0 + i, l, a.kin[i]);
+    for (size_t i = 3; i < n_plant; ++i) put(kin0 + 3 + i, l, a.kin[i]);
+  }
+}
+
+void step_arm_controllers(ArmLanes& a, long k) {
+  const int W = a.W, na = a.na;
+  const std::span<const ArmModel> lanes = a.models;
+  const ArmModel& m0 = lanes[0];
+  const double T = a.T, t = static_cast<double>(k) * T;
+  TreeLanesState& s = a.s;
+  // What the sensors give the controllers now.
+  for (int j = 0; j < na; ++j) {
+    const int d = m0.actuated[static_cast<size_t>(j)].dof;
+    for (int l = 0; l < W; ++l) {
+      const ActuatedJoint& aj = lanes[l].actuated[static_cast<size_t>(j)];
+      const ChannelSpec &ca = aj.control.angle_sensor, &cr = aj.control.rate_sensor;
+      const size_t jl = static_cast<size_t>(j * W + l), dl = static_cast<size_t>(d * W + l);
+      a.q_meas[jl] = sample_channel(s.q[dl], ca.noise, aj.angle_key, ca.resolution, ca.delay, aj.angle_hold, k, a.H, W, l,
+                                    a.ring_q[static_cast<size_t>(j)].data());
+      a.qd_meas[jl] = sample_channel(s.qd[dl], cr.noise, aj.rate_key, cr.resolution, cr.delay, aj.rate_hold, k, a.H, W, l,
+                                     a.ring_qd[static_cast<size_t>(j)].data());
+    }
+  }
+  // The reference of every lane (its own trajectory and shapers).
+  eval_lane_references(a, k);
+  // The notch on each joint's reference or feedback, all lanes at once.
+  for (int j = 0; j < na; ++j) {
+    const ActuatedJoint& a0 = m0.actuated[static_cast<size_t>(j)];
+    const int ns = static_cast<int>(a0.notch.size());
+    for (int l = 0; l < W; ++l) {
+      const double q = a.q_meas[static_cast<size_t>(j * W + l)];
+      a.notch_in[static_cast<size_t>(l)] = a0.notch_on_feedback ? q : a.r[static_cast<size_t>(l * na + j)];
+    }
+    if (ns > 0)
+      step_notch(ns, W, a.notch_coef[static_cast<size_t>(j)].data(), a.notch_state[static_cast<size_t>(j)].data(),
+                 a.notch_in.data(), a.notch_out.data());
+    else std::copy(a.notch_in.begin(), a.notch_in.end(), a.notch_out.begin());
+    for (int l = 0; l < W; ++l) {
+      const double q = a.q_meas[static_cast<size_t>(j * W + l)];
+      const double ref = a.r[static_cast<size_t>(l * na + j)];
+      a.e[static_cast<size_t>(j * W + l)] =
+          a0.notch_on_feedback ? ref - a.notch_out[static_cast<size_t>(l)] : a.notch_out[static_cast<size_t>(l)] - q;
+    }
+  }
+  const size_t kin0 = kinematics_column(a), meas0 = measured_column(a);
+  double* row = a.row.data();
+  auto put = [&](size_t c, int l, double v) { row[c * static_cast<size_t>(W) + static_cast<size_t>(l)] = v; };
+  for (int l = 0; l < W; ++l) {
+    const ArmModel& m = lanes[l];
+    double* rl = &a.r[static_cast<size_t>(l * na)];
+    double* rdl = &a.rd[static_cast<size_t>(l * na)];
+    bool need_ff = false;
+    for (const ActuatedJoint& aj : m.actuated) need_ff |= aj.control.feedforward != 0.0 || aj.control.gravity_compensation != 0.0;
+    if (need_ff)
+      calc_arm_feedforward(m, rl, rdl, &a.rdd[static_cast<size_t>(l * na)], a.tau_id.data(), a.tau_g.data(),
+                           a.ff[static_cast<size_t>(l)]);
+    // PID with clamping anti-windup, saturation, feed-forward.
+    for (int j = 0; j < na; ++j) {
+      const ActuatedJoint& aj = m.actuated[static_cast<size_t>(j)];
+      const size_t jl = static_cast<size_t>(j * W + l);
+      const double qd = a.qd_meas[jl];
+      const double err = a.e[jl];
+      double u = aj.control.kp * err + aj.control.ki * a.integral[jl] - aj.control.kd * qd;
+      if (need_ff)
+        u += aj.control.feedforward * (a.tau_id[static_cast<size_t>(j)] - a.tau_g[static_cast<size_t>(j)] + aj.control.kd * rdl[j]) +
+             aj.control.gravity_compensation * a.tau_g[static_cast<size_t>(j)];
+      double tau = u;
+      bool saturated = false;
+      if (aj.torque_limit > 0.0 && std::abs(u) > aj.torque_limit) {
+        tau = std::copysign(aj.torque_limit, u);
+        saturated = true;
+      }
+      if (!(saturated && err * u > 0.0)) a.integral[jl] += T * err;
+      a.tau_held[jl] = tau;
+    }
+    // The outputs at this sample that are the controller's: the time, each joint's reference and
+    // torque, the reference's tool point, the measurements.
+    put(0, l, t);
+    for (int j = 0; j < na; ++j) {
+      put(static_cast<size_t>(1 + 4 * j), l, rl[j]);
+      put(static_cast<size_t>(4 + 4 * j), l, a.tau_held[static_cast<size_t>(j * W + l)]);
+    }
+    if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
+      a.q_ref.setZero();
+      for (int j = 0; j < na; ++j) a.q_ref[m.actuated[static_cast<size_t>(j)].dof] = rl[j];
+      const Vec3 ref = calc_reference_tool(m, a.q_ref, a.poses);
+      put(kin0 + 3, l, ref.x()), put(kin0 + 4, l, ref.y()), put(kin0 + 5, l, ref.z());
+    } else {
+      for (size_t i = 3; i < 6; ++i) put(kin0 + i, l, std::nan(""));
+    }
+    for (int j = 0; j < na; ++j) {
+      put(meas0 + 2 * static_cast<size_t>(j), l, a.q_meas[static_cast<size_t>(j * W + l)]);
+      put(meas0 + 2 * static_cast<size_t>(j) + 1, l, a.qd_meas[static_cast<size_t>(j * W + l)]);
+    }
+  }
+  calc_arm_outputs(a);
+}
+
+void step_arm_plant(ArmLanes& a, long k) {
+  const int W = a.W, na = a.na, nv = a.nv;
+  const ArmModel& m0 = a.models[0];
+  const double T = a.T, t = static_cast<double>(k) * T, h = T / m0.substeps;
+  TreeLanes& tl = a.tl;
+  TreeLanesState& s = a.s;
+  // The plant over one period with the torques held, less each joint's constant load; a hydraulic
+  // joint's held torque is its valve loop's command (the load is the actuator's, TreeLanes).
+  for (int j = 0; j < na; ++j) {
+    const ActuatedJoint& a0 = m0.actuated[static_cast<size_t>(j)];
+    const bool hydraulic = a0.control.hydraulics.enabled;
+    for (int l = 0; l < W; ++l)
+      a.tau_applied[static_cast<size_t>(a0.dof * W + l)] =
+          a.tau_held[static_cast<size_t>(j * W + l)] -
+          (hydraulic ? 0.0 : a.models[static_cast<size_t>(l)].actuated[static_cast<size_t>(j)].control.torque_offset);
+  }
+  if (a.cvode) {
+    a.cvode->advance(tl, a.tau_applied.data(), s, t, T, a.cvode_ok);
+    for (int l = 0; l < W; ++l)
+      if (!a.cvode_ok[static_cast<size_t>(l)] && a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
+        a.status[static_cast<size_t>(l)] = LaneStatus::kSolverFail;
+        for (int j = 0; j < nv; ++j) s.q[static_cast<size_t>(j * W + l)] = std::nan("");
+      }
+  }
+  for (int sub = 0; sub < (a.cvode ? 0 : m0.substeps); ++sub) {
+    switch (m0.integrator) {
+      case Integrator::kSdirk2: step_tree_sdirk2(tl, a.tau_applied.data(), s, a.ws, h); break;
+      case Integrator::kMidpoint: step_tree_midpoint(tl, a.tau_applied.data(), s, a.ws, h); break;
+      default: step_tree_rk4(tl, a.tau_applied.data(), s, a.ws, h); break;
+    }
+  }
+  // A lane gone non-finite (or whose solver failed) is frozen at zero (its neighbours never see it:
+  // lanes are independent).
+  for (int l = 0; l < W; ++l) {
+    if (a.status[static_cast<size_t>(l)] == LaneStatus::kNonfinite) continue;
+    bool finite = true;
+    for (int j = 0; j < nv; ++j)
+      finite &= std::isfinite(s.q[static_cast<size_t>(j * W + l)]) && std::isfinite(s.qd[static_cast<size_t>(j * W + l)]);
+    for (int i = 0; i < tl.nz(); ++i) finite &= std::isfinite(s.z[static_cast<size_t>(i * W + l)]);
+    if (!finite) {
+      if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) a.status[static_cast<size_t>(l)] = LaneStatus::kNonfinite;
+      for (int j = 0; j < nv; ++j) {
+        s.q[static_cast<size_t>(j * W + l)] = 0.0;
+        s.qd[static_cast<size_t>(j * W + l)] = 0.0;
+        s.a_prev[static_cast<size_t>(j * W + l)] = 0.0;
+      }
+      for (int i = 0; i < tl.nz(); ++i) s.z[static_cast<size_t>(i * W + l)] = a.z0[static_cast<size_t>(i * W + l)];
+    }
+  }
+}
+
+int calc_arm_state_size(const ArmLanes& a) { return 2 * a.nv + a.tl.nz(); }
+
+void get_arm_state(const ArmLanes& a, int l, double* x) {
+  const int W = a.W, nv = a.nv;
+  for (int i = 0; i < nv; ++i) {
+    x[i] = a.s.q[static_cast<size_t>(i * W + l)];
+    x[nv + i] = a.s.qd[static_cast<size_t>(i * W + l)];
+  }
+  for (int i = 0; i < a.tl.nz(); ++i) x[2 * nv + i] = a.s.z[static_cast<size_t>(i * W + l)];
+}
+
+void set_arm_state(ArmLanes& a, int l, const double* x) {
+  const int W = a.W, nv = a.nv;
+  for (int i = 0; i < nv; ++i) {
+    a.s.q[static_cast<size_t>(i * W + l)] = x[i];
+    a.s.qd[static_cast<size_t>(i * W + l)] = x[nv + i];
+  }
+  for (int i = 0; i < a.tl.nz(); ++i) a.s.z[static_cast<size_t>(i * W + l)] = x[2 * nv + i];
+}
+
+void copy_arm_lane(const ArmLanes& a, int from, ArmLanes& b, int to) {
+  if (a.nv != b.nv || a.na != b.na || a.tl.nz() != b.tl.nz() || a.H != b.H || a.notch_state.size() != b.notch_state.size())
+    throw std::invalid_argument("copy_arm_lane: lanes of another shape");
+  // Row i of a (rows x a.W) array into row i of b's (rows x b.W).
+  auto rows = [&](const std::vector<double>& x, std::vector<double>& y, size_t n) {
+    for (size_t i = 0; i < n; ++i)
+      y[i * static_cast<size_t>(b.W) + static_cast<size_t>(to)] = x[i * static_cast<size_t>(a.W) + static_cast<size_t>(from)];
+  };
+  const size_t nv = static_cast<size_t>(a.nv), na = static_cast<size_t>(a.na);
+  rows(a.s.q, b.s.q, nv);
+  rows(a.s.qd, b.s.qd, nv);
+  rows(a.s.a_prev, b.s.a_prev, nv);
+  rows(a.s.z, b.s.z, static_cast<size_t>(a.tl.nz()));
+  rows(a.integral, b.integral, na);
+  rows(a.tau_held, b.tau_held, na);
+  for (size_t j = 0; j < na; ++j) {
+    if (a.notch_state[j].size() / static_cast<size_t>(a.W) != b.notch_state[j].size() / static_cast<size_t>(b.W))
+      throw std::invalid_argument("copy_arm_lane: notches of another shape");
+    rows(a.notch_state[j], b.notch_state[j], a.notch_state[j].size() / static_cast<size_t>(a.W));
+    rows(a.ring_q[j], b.ring_q[j], static_cast<size_t>(a.H));
+    rows(a.ring_qd[j], b.ring_qd[j], static_cast<size_t>(a.H));
+  }
+  b.status[static_cast<size_t>(to)] = a.status[static_cast<size_t>(from)];
+}
+
+ArmTrace make_arm_trace(const ArmLanes& a) {
+  ArmTrace tr;
+  tr.names = a.names;
+  tr.columns.assign(a.names.size(), std::vector<double>(static_cast<size_t>(a.samples), 0.0));
+  return tr;
+}
+
+void store_arm_row(const ArmLanes& a, int l, long k, ArmTrace& tr) {
+  for (size_t c = 0; c < a.names.size(); ++c)
+    tr.columns[c][static_cast<size_t>(k)] = a.row[c * static_cast<size_t>(a.W) + static_cast<size_t>(l)];
+}
+
+void mark_arm_trace_failure(const ArmLanes& a, ArmTrace& tr) {
+  // The kinematic columns go NaN at the sample the lane failed at.
+  const std::vector<double>& x = tr.columns[kinematics_column(a)];
+  size_t first = 0;
+  while (first < x.size() && std::isfinite(x[first])) ++first;
+  for (size_t c = 1; c < tr.columns.size(); ++c)
+    for (size_t k = first; k < tr.columns[c].size(); ++k) tr.columns[c][k] = std::nan("");
+}
+
+ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options) {
+  ArmLanes a = make_arm_lanes(lanes, options);
+  const int W = a.W, nv = a.nv;
+  const long samples = a.samples;
+  ArmRun run;
+  run.traces.assign(static_cast<size_t>(W), make_arm_trace(a));
+  if (options.keep_q) run.q.assign(static_cast<size_t>(W), Eigen::MatrixXd::Zero(nv, samples));
   for (long k = 0; k < samples; ++k) {
-    const double t = static_cast<double>(k) * T;
-    // What the sensors give the controllers now.
-    for (int j = 0; j < na; ++j) {
-      const int d = m0.actuated[static_cast<std::size_t>(j)].dof;
-      for (int l = 0; l < W; ++l) {
-        const ActuatedJoint& a = lanes[l].actuated[static_cast<std::size_t>(j)];
-        const ChannelSpec &ca = a.control.angle_sensor, &cr = a.control.rate_sensor;
-        const std::size_t jl = static_cast<std::size_t>(j * W + l), dl = static_cast<std::size_t>(d * W + l);
-        q_meas[jl] = sample_channel(s.q[dl], ca.noise, a.angle_key, ca.resolution, ca.delay, a.angle_hold, k, H, W, l,
-                                    ring_q[static_cast<std::size_t>(j)].data());
-        qd_meas[jl] = sample_channel(s.qd[dl], cr.noise, a.rate_key, cr.resolution, cr.delay, a.rate_hold, k, H, W, l,
-                                     ring_qd[static_cast<std::size_t>(j)].data());
-      }
-    }
-    // The reference of every lane (its own trajectory and shapers).
+    step_arm_controllers(a, k);
+    // The trace at this sample.
     for (int l = 0; l < W; ++l) {
-      if (options.reference)  // the replay hook
-        eval_replay_reference(*options.reference, k, T, &r[static_cast<std::size_t>(l * na)],
-                              &rd[static_cast<std::size_t>(l * na)], &rdd[static_cast<std::size_t>(l * na)]);
+      store_arm_row(a, l, k, run.traces[static_cast<size_t>(l)]);
+      if (!options.keep_q) continue;
+      if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk)
+        for (int j = 0; j < nv; ++j) run.q[static_cast<size_t>(l)](j, k) = a.s.q[static_cast<size_t>(j * W + l)];
       else
-        eval_arm_reference(lanes[l], t, &r[static_cast<std::size_t>(l * na)], &rd[static_cast<std::size_t>(l * na)],
-                           &rdd[static_cast<std::size_t>(l * na)], scratch.data());
-    }
-    // The notch on each joint's reference or feedback, all lanes at once.
-    for (int j = 0; j < na; ++j) {
-      const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
-      const int ns = static_cast<int>(a0.notch.size());
-      for (int l = 0; l < W; ++l) {
-        const double q = q_meas[static_cast<std::size_t>(j * W + l)];
-        c.in[static_cast<std::size_t>(l)] = a0.notch_on_feedback ? q : r[static_cast<std::size_t>(l * na + j)];
-      }
-      if (ns > 0) step_notch(ns, W, c.coef[static_cast<std::size_t>(j)].data(), c.state[static_cast<std::size_t>(j)].data(), c.in.data(), c.out.data());
-      else std::copy(c.in.begin(), c.in.end(), c.out.begin());
-      for (int l = 0; l < W; ++l) {
-        const double q = q_meas[static_cast<std::size_t>(j * W + l)];
-        const double ref = r[static_cast<std::size_t>(l * na + j)];
-        e[static_cast<std::size_t>(j * W + l)] = a0.notch_on_feedback ? ref - c.out[static_cast<std::size_t>(l)] : c.out[static_cast<std::size_t>(l)] - q;
-      }
-    }
-    for (int l = 0; l < W; ++l) {
-      const ArmModel& m = lanes[l];
-      double* rl = &r[static_cast<std::size_t>(l * na)];
-      double* rdl = &rd[static_cast<std::size_t>(l * na)];
-      bool need_ff = false;
-      for (const ActuatedJoint& a : m.actuated) need_ff |= a.control.feedforward != 0.0 || a.control.gravity_compensation != 0.0;
-      if (need_ff) calc_arm_feedforward(m, rl, rdl, &rdd[static_cast<std::size_t>(l * na)], tau_id.data(), tau_g.data(), ff[static_cast<std::size_t>(l)]);
-      // PID with clamping anti-windup, saturation, feed-forward.
-      for (int j = 0; j < na; ++j) {
-        const ActuatedJoint& a = m.actuated[static_cast<std::size_t>(j)];
-        const std::size_t jl = static_cast<std::size_t>(j * W + l);
-        const double qd = qd_meas[jl];
-        const double err = e[jl];
-        double u = a.control.kp * err + a.control.ki * c.integral[jl] - a.control.kd * qd;
-        if (need_ff)
-          u += a.control.feedforward * (tau_id[static_cast<std::size_t>(j)] - tau_g[static_cast<std::size_t>(j)] + a.control.kd * rdl[j]) +
-               a.control.gravity_compensation * tau_g[static_cast<std::size_t>(j)];
-        double tau = u;
-        bool saturated = false;
-        if (a.torque_limit > 0.0 && std::abs(u) > a.torque_limit) {
-          tau = std::copysign(a.torque_limit, u);
-          saturated = true;
-        }
-        if (!(saturated && err * u > 0.0)) c.integral[jl] += T * err;
-        c.tau_held[jl] = tau;
-      }
-      // The trace at this sample.
-      ArmTrace& tr = run.traces[static_cast<std::size_t>(l)];
-      const std::size_t ks = static_cast<std::size_t>(k);
-      tr.columns[0][ks] = t;
-      for (int j = 0; j < na; ++j) {
-        const ActuatedJoint& a = m.actuated[static_cast<std::size_t>(j)];
-        tr.columns[static_cast<std::size_t>(1 + 4 * j)][ks] = rl[j];
-        tr.columns[static_cast<std::size_t>(2 + 4 * j)][ks] = s.q[static_cast<std::size_t>(a.dof * W + l)];
-        tr.columns[static_cast<std::size_t>(3 + 4 * j)][ks] = s.qd[static_cast<std::size_t>(a.dof * W + l)];
-        tr.columns[static_cast<std::size_t>(4 + 4 * j)][ks] = c.tau_held[static_cast<std::size_t>(j * W + l)];
-      }
-      // A hydraulic joint's torque is its actuator's, D (p_a - p_b), and its chamber pressures (Pa).
-      for (int a = 0; a < nh; ++a) {
-        const std::size_t z = static_cast<std::size_t>(kHydraulicStates * a * W + l);
-        const std::size_t col = hyd0 + 2 * static_cast<std::size_t>(a);
-        tr.columns[static_cast<std::size_t>(4 + 4 * hyd_joints[static_cast<std::size_t>(a)])][ks] =
-            eval_hydraulic_actuator(tl.hydraulics[static_cast<std::size_t>(a * W + l)], 0.0, 0.0, 0.0, s.z.data() + z,
-                                    static_cast<std::size_t>(W), nullptr);
-        tr.columns[col][ks] = s.z[z + 2 * static_cast<std::size_t>(W)] * kPressureUnit;
-        tr.columns[col + 1][ks] = s.z[z + 3 * static_cast<std::size_t>(W)] * kPressureUnit;
-      }
-      if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) {
-        q_ref.setZero();
-        for (int j = 0; j < nv; ++j) q_lane[j] = s.q[static_cast<std::size_t>(j * W + l)];
-        for (int j = 0; j < na; ++j) q_ref[m.actuated[static_cast<std::size_t>(j)].dof] = rl[j];
-        record_kinematics(m, q_lane, q_ref, poses, kin.data());
-        if (options.keep_q) run.q[static_cast<std::size_t>(l)].col(k) = q_lane;
-      } else {
-        std::fill(kin.begin(), kin.end(), std::nan(""));
-        if (options.keep_q) run.q[static_cast<std::size_t>(l)].col(k).setConstant(std::nan(""));
-      }
-      for (std::size_t c2 = kin0; c2 < meas0; ++c2) tr.columns[c2][ks] = kin[c2 - kin0];
-      for (int j = 0; j < na; ++j) {
-        tr.columns[meas0 + 2 * static_cast<std::size_t>(j)][ks] = q_meas[static_cast<std::size_t>(j * W + l)];
-        tr.columns[meas0 + 2 * static_cast<std::size_t>(j) + 1][ks] = qd_meas[static_cast<std::size_t>(j * W + l)];
-      }
+        run.q[static_cast<size_t>(l)].col(k).setConstant(std::nan(""));
     }
     if (k + 1 == samples) break;
-    // The plant over one period with the torques held, less each joint's constant load; a hydraulic
-    // joint's held torque is its valve loop's command (the load is the actuator's, TreeLanes).
-    for (int j = 0; j < na; ++j) {
-      const ActuatedJoint& a0 = m0.actuated[static_cast<std::size_t>(j)];
-      const bool hydraulic = a0.control.hydraulics.enabled;
-      for (int l = 0; l < W; ++l)
-        tau_applied[static_cast<std::size_t>(a0.dof * W + l)] =
-            c.tau_held[static_cast<std::size_t>(j * W + l)] -
-            (hydraulic ? 0.0 : lanes[l].actuated[static_cast<std::size_t>(j)].control.torque_offset);
-    }
-    if (cvode) {
-      cvode->advance(tl, tau_applied.data(), s, t, T, cvode_ok);
-      for (int l = 0; l < W; ++l)
-        if (!cvode_ok[static_cast<std::size_t>(l)] && run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) {
-          run.status[static_cast<std::size_t>(l)] = LaneStatus::kSolverFail;
-          for (int j = 0; j < nv; ++j) s.q[static_cast<std::size_t>(j * W + l)] = std::nan("");
-        }
-    }
-    for (int sub = 0; sub < (cvode ? 0 : m0.substeps); ++sub) {
-      switch (m0.integrator) {
-        case Integrator::kSdirk2: step_tree_sdirk2(tl, tau_applied.data(), s, ws, h); break;
-        case Integrator::kMidpoint: step_tree_midpoint(tl, tau_applied.data(), s, ws, h); break;
-        default: step_tree_rk4(tl, tau_applied.data(), s, ws, h); break;
-      }
-    }
-    // A lane gone non-finite (or whose solver failed) is frozen at zero (its neighbours never see it:
-    // lanes are independent).
-    for (int l = 0; l < W; ++l) {
-      if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kNonfinite) continue;
-      bool finite = true;
-      for (int j = 0; j < nv; ++j)
-        finite &= std::isfinite(s.q[static_cast<std::size_t>(j * W + l)]) && std::isfinite(s.qd[static_cast<std::size_t>(j * W + l)]);
-      for (int i = 0; i < tl.nz(); ++i) finite &= std::isfinite(s.z[static_cast<std::size_t>(i * W + l)]);
-      if (!finite) {
-        if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) run.status[static_cast<std::size_t>(l)] = LaneStatus::kNonfinite;
-        for (int j = 0; j < nv; ++j) {
-          s.q[static_cast<std::size_t>(j * W + l)] = 0.0;
-          s.qd[static_cast<std::size_t>(j * W + l)] = 0.0;
-          s.a_prev[static_cast<std::size_t>(j * W + l)] = 0.0;
-        }
-        for (int i = 0; i < tl.nz(); ++i) s.z[static_cast<std::size_t>(i * W + l)] = z0[static_cast<std::size_t>(i * W + l)];
-      }
-    }
+    step_arm_plant(a, k);
   }
+  run.status = a.status;
   // A failed lane's trace is NaN from the sample it failed at: mark what it recorded after.
-  for (int l = 0; l < W; ++l) {
-    if (run.status[static_cast<std::size_t>(l)] == LaneStatus::kOk) continue;
-    ArmTrace& tr = run.traces[static_cast<std::size_t>(l)];
-    const std::vector<double>& x = tr.columns[kin0];
-    std::size_t first = 0;
-    while (first < x.size() && std::isfinite(x[first])) ++first;
-    for (std::size_t c2 = 1; c2 < tr.columns.size(); ++c2)
-      for (std::size_t k = first; k < tr.columns[c2].size(); ++k) tr.columns[c2][k] = std::nan("");
-  }
+  for (int l = 0; l < W; ++l)
+    if (run.status[static_cast<size_t>(l)] != LaneStatus::kOk) mark_arm_trace_failure(a, run.traces[static_cast<size_t>(l)]);
   return run;
 }
 

@@ -3,12 +3,15 @@
 // its sample rate with the torque held between samples (arm_model.hpp gives the law).
 #pragma once
 
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "arm/arm_model.hpp"
 #include "kernel/batch.hpp"  // LaneStatus
+#include "multibody/lane_integrators.hpp"
+#include "multibody/tree_cvode.hpp"
 
 namespace ff {
 
@@ -63,6 +66,71 @@ std::vector<std::string> arm_trace_names(const ArmModel& m);
 // keep_q changes only what is kept, never the results (ArmRun::q is stored into memory reserved
 // before the first step); `reference` replaces the reference (above).
 ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options = {});
+
+// The sample loop of simulate_arms one controller sample at a time, for callers that act between
+// samples (the observer of validate/arm_observer.hpp reads the outputs, corrects the plant state and
+// copies lanes). simulate_arms is, per sample k: step_arm_controllers(k), the trace's row k from `row`,
+// then step_arm_plant(k) (none after the last sample). Made once by make_arm_lanes (the same checks and
+// initial state as simulate_arms); stepping allocates nothing.
+struct ArmLanes {
+  std::span<const ArmModel> models;  // (W) the caller's: they must outlive this
+  const std::vector<std::vector<double>>* reference = nullptr;  // ArmRunOptions::reference
+  int W = 0, na = 0, nv = 0, nh = 0;
+  long samples = 0;                  // controller samples of the models' duration
+  double T = 0.0;                    // s, the controller's sample time
+  TreeLanes tl;
+  TreeLanesState s;                  // the plant: q, qd, a_prev (nv x W), z (nz x W)
+  std::vector<LaneStatus> status;    // (W)
+  std::vector<std::string> names;    // the trace's columns (arm_trace_names)
+  std::vector<double> row;           // (names x W) the outputs at the last sample stepped, [c * W + l]
+  // The rest is the loop's own: the controllers' states (joint j, lane l at [j * W + l]), the sensors'
+  // rings of past readings (H x W per joint), scratch.
+  std::vector<int> hyd_joints;       // actuated joint index of hydraulic actuator a
+  std::vector<double> z0;            // the actuators' initial states (a failed lane's reset)
+  TreeStepWorkspace ws;
+  std::unique_ptr<TreeCvode> cvode;  // with a CVODE integrator
+  std::vector<char> cvode_ok;
+  std::vector<double> integral, tau_held;
+  std::vector<std::vector<double>> notch_coef, notch_state;  // per joint (lanes innermost)
+  std::vector<double> notch_in, notch_out;                   // (W)
+  int H = 1;
+  std::vector<double> q_meas, qd_meas;
+  std::vector<std::vector<double>> ring_q, ring_qd;
+  std::vector<double> r, rd, rdd, scratch, tau_id, tau_g, e, tau_applied, kin;
+  std::vector<ArmFeedforward> ff;
+  std::vector<Pose> poses;
+  Eigen::VectorXd q_lane, q_ref;
+};
+
+// The lanes at their initial state, sample 0 next. Throws std::invalid_argument as simulate_arms does.
+ArmLanes make_arm_lanes(std::span<const ArmModel> lanes, const ArmRunOptions& options = {});
+// Controller samples of an arm's run: floor(duration / T) + 1.
+long calc_arm_samples(const ArmModel& m);
+// Sample k (t = k T) of the controllers: the sensors read the plant, the reference, notch and control
+// law give the torque held until the next sample; `row` then holds every trace column at sample k.
+void step_arm_controllers(ArmLanes& a, long k);
+// The columns of `row` that are functions of the plant state alone (every <joint>.q and .qd, a
+// hydraulic joint's .torque and pressures, tool.x/y/z, the deflections), from the state now; NaN
+// kinematics in a failed lane. step_arm_controllers calls it.
+void calc_arm_outputs(ArmLanes& a);
+// The plant from sample k to k + 1 with the held torques; a lane gone non-finite (or whose solver
+// failed) is frozen at rest with its status set.
+void step_arm_plant(ArmLanes& a, long k);
+// The plant state x = [q; qd; z] of lane l (nv, nv, nz rows): 2 nv + nz values.
+int calc_arm_state_size(const ArmLanes& a);
+void get_arm_state(const ArmLanes& a, int l, double* x);
+void set_arm_state(ArmLanes& a, int l, const double* x);
+// Lane `from` of a into lane `to` of b (lanes of one shape: the same tree, joints and sensor rings;
+// std::invalid_argument otherwise): the plant state, the integrator's predictor, the controllers'
+// integral, held torque, notch states and sensor rings, the status. Lane `to` then continues as
+// lane `from` would with b's model (CVODE starts its history anew). Allocates nothing.
+void copy_arm_lane(const ArmLanes& a, int from, ArmLanes& b, int to);
+
+// A trace of the lanes' columns and samples (zeros); lane l's `row` stored as its sample k; after a run,
+// a failed lane's trace made NaN from the sample it failed at (simulate_arms's traces are these).
+ArmTrace make_arm_trace(const ArmLanes& a);
+void store_arm_row(const ArmLanes& a, int l, long k, ArmTrace& tr);
+void mark_arm_trace_failure(const ArmLanes& a, ArmTrace& tr);
 
 // Writes a trace as CSV (a header of its names, one row per sample), atomically; reads it back.
 void write_arm_trace_csv(const ArmTrace& trace, const std::string& path);

@@ -139,16 +139,11 @@ std::vector<std::vector<double>> sample_arm_reference(const ArmModel& m) {
   return ref;
 }
 
-namespace {
-
-// The record column's value in a trace (the trace's name for it).
-std::string trace_name(const std::string& column) {
+std::string arm_trace_name(const std::string& column) {
   if (ends_with(column, ".angle")) return column.substr(0, column.size() - 6) + ".q";
   if (ends_with(column, ".rate")) return column.substr(0, column.size() - 5) + ".qd";
   return column;
 }
-
-}  // namespace
 
 Record make_arm_record(const ArmModel& m, const ArmRecordNoise& noise, std::uint64_t seed) {
   const std::vector<std::vector<double>> ref = sample_arm_reference(m);
@@ -162,7 +157,7 @@ Record make_arm_record(const ArmModel& m, const ArmRecordNoise& noise, std::uint
   r.t = tr.t();
   const std::vector<std::string> cols = arm_record_columns(m);
   for (std::size_t c = 0; c < cols.size(); ++c) {
-    std::vector<double> y = tr.column(trace_name(cols[c]));
+    std::vector<double> y = tr.column(arm_trace_name(cols[c]));
     const std::string& n = cols[c];
     const double sd = ends_with(n, ".angle") ? noise.angle
                       : ends_with(n, ".rate") ? noise.rate
@@ -178,61 +173,72 @@ Record make_arm_record(const ArmModel& m, const ArmRecordNoise& noise, std::uint
   return r;
 }
 
-std::vector<ArmReplay> replay_arm_records(std::span<const ArmModel> models, const Record& r) {
+ArmReplaySetup prepare_arm_replay(std::span<const ArmModel> models, const Record& r) {
   const ArmModel& model = models.front();
   const double T = model.control_period;
   const std::size_t n = r.size();
   const double t0 = r.t.front();
-  bool resampled = false;
-  for (std::size_t k = 0; k < n && !resampled; ++k)
-    resampled = std::abs(r.t[k] - t0 - static_cast<double>(k) * T) > 1e-3 * T;
-  const long samples = resampled ? static_cast<long>(std::floor((r.t.back() - t0) / T + 1e-9)) + 1
-                                 : static_cast<long>(n);
-  std::vector<std::vector<double>> ref;
+  ArmReplaySetup out;
+  for (std::size_t k = 0; k < n && !out.resampled; ++k)
+    out.resampled = std::abs(r.t[k] - t0 - static_cast<double>(k) * T) > 1e-3 * T;
+  const long samples = out.resampled ? static_cast<long>(std::floor((r.t.back() - t0) / T + 1e-9)) + 1
+                                     : static_cast<long>(n);
   for (const ActuatedJoint& a : model.actuated) {
     const std::vector<double>& x = r.at(a.name + ".ref");
-    if (!resampled) {
-      ref.push_back(x);
+    if (!out.resampled) {
+      out.ref.push_back(x);
       continue;
     }
     std::vector<double> y(static_cast<std::size_t>(samples));
     for (long k = 0; k < samples; ++k) y[static_cast<std::size_t>(k)] = interpolate(r.t, x, t0 + static_cast<double>(k) * T);
-    ref.push_back(std::move(y));
+    out.ref.push_back(std::move(y));
   }
-  std::vector<ArmModel> lanes(models.begin(), models.end());
-  for (ArmModel& m : lanes) {
+  out.lanes.assign(models.begin(), models.end());
+  for (ArmModel& m : out.lanes) {
     m.duration = static_cast<double>(samples - 1) * T;
     // The start: the model's, unless the record's first references say otherwise.
     bool moved = false;
     Eigen::VectorXd pose = m.q0;
     for (std::size_t j = 0; j < m.actuated.size(); ++j) {
       const int d = m.actuated[j].dof;
-      moved |= std::abs(ref[j][0] - pose[d]) > 1e-9;
-      pose[d] = ref[j][0];
+      moved |= std::abs(out.ref[j][0] - pose[d]) > 1e-9;
+      pose[d] = out.ref[j][0];
     }
     if (moved) m.q0 = calc_arm_sag(m, pose).q;
   }
+  return out;
+}
+
+std::map<std::string, std::vector<double>> sample_arm_trace_at_record(const ArmTrace& tr, const ArmModel& m,
+                                                                      const Record& r, bool resampled) {
+  std::map<std::string, std::vector<double>> out;
+  const std::vector<double>& tm = tr.t();
+  for (const std::string& c : arm_record_columns(m)) {
+    const std::vector<double>& y = tr.column(arm_trace_name(c));
+    if (!resampled) {
+      out[c] = y;
+      continue;
+    }
+    std::vector<double> v(r.size());
+    for (std::size_t k = 0; k < v.size(); ++k) v[k] = interpolate(tm, y, r.t[k] - r.t.front());
+    out[c] = std::move(v);
+  }
+  return out;
+}
+
+std::vector<ArmReplay> replay_arm_records(std::span<const ArmModel> models, const Record& r) {
+  const ArmReplaySetup setup = prepare_arm_replay(models, r);
   ArmRunOptions o;
-  o.reference = &ref;
-  ArmRun run = simulate_arms(lanes, o);
-  std::vector<ArmReplay> out(lanes.size());
-  for (std::size_t l = 0; l < lanes.size(); ++l) {
+  o.reference = &setup.ref;
+  ArmRun run = simulate_arms(setup.lanes, o);
+  std::vector<ArmReplay> out(setup.lanes.size());
+  for (std::size_t l = 0; l < setup.lanes.size(); ++l) {
     ArmReplay& rp = out[l];
-    rp.control_period = T;
-    rp.resampled = resampled;
+    rp.control_period = setup.lanes[l].control_period;
+    rp.resampled = setup.resampled;
     rp.ok = run.status[l] == LaneStatus::kOk;
     rp.trace = std::move(run.traces[l]);
-    const std::vector<double>& tm = rp.trace.t();
-    for (const std::string& c : arm_record_columns(lanes[l])) {
-      const std::vector<double>& y = rp.trace.column(trace_name(c));
-      if (!resampled) {
-        rp.at_record[c] = y;
-        continue;
-      }
-      std::vector<double> v(n);
-      for (std::size_t k = 0; k < n; ++k) v[k] = interpolate(tm, y, r.t[k] - t0);
-      rp.at_record[c] = std::move(v);
-    }
+    rp.at_record = sample_arm_trace_at_record(rp.trace, setup.lanes[l], r, setup.resampled);
   }
   return out;
 }

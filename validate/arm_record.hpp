@@ -87,6 +87,24 @@ struct ArmReplay {
   std::map<std::string, std::vector<double>> at_record;
 };
 
+// A record column's name in an arm trace (arm_simulate.hpp): <joint>.angle is <joint>.q, .rate is .qd,
+// the others their own.
+std::string arm_trace_name(const std::string& column);
+
+// What a replay of a checked record runs (replay_arm_record's rules below): the time base, each
+// actuated joint's reference at every controller sample (ArmRunOptions::reference), and the models
+// lasting the record's span and starting at its first references.
+struct ArmReplaySetup {
+  bool resampled = false;
+  std::vector<std::vector<double>> ref;  // (actuated joints) x (controller samples)
+  std::vector<ArmModel> lanes;           // one per model
+};
+ArmReplaySetup prepare_arm_replay(std::span<const ArmModel> models, const Record& r);
+// A run's trace on the controller grid as the record's columns (arm_record_columns) at the record's
+// times: the trace's samples, or linearly interpolated when `resampled`.
+std::map<std::string, std::vector<double>> sample_arm_trace_at_record(const ArmTrace& tr, const ArmModel& m,
+                                                                      const Record& r, bool resampled);
+
 // Replays a checked record on a model: the run starts at rest at the model's initial state (when the
 // record's first references differ from the model's start, at those references, the flexible links at
 // their static sag there), lasts the record's span, and the actuated joints follow the record's .ref

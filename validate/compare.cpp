@@ -234,6 +234,18 @@ std::string describe_observer(const CompareResult& r) {
   return s + ".";
 }
 
+std::string format_k_step_errors(const FailureReport& f, const std::string& velocity) {
+  if (!(f.rms > 0)) return "- zero: the model predicts the record exactly.\n";
+  std::string s = fmt("- RMS %.4g; ", f.rms) + (f.white ? "white" : "not white") +
+                  fmt(" (%.0f %% of ACF lags outside the 99 %% band); ", 100.0 * f.acf_outside) +
+                  (f.uncorrelated ? "uncorrelated" : "correlated") +
+                  fmt(" with the input (%.0f %% of CCF lags outside).\n", 100.0 * f.ccf_outside);
+  if (f.velocity_step.ok)
+    s += fmt("- steps by %.0f %% of its RMS across zero ", 100.0 * std::abs(f.velocity_step.relative)) + velocity +
+         (f.friction_like ? ": a friction-like effect is missing.\n" : ".\n");
+  return s;
+}
+
 std::string format_fit_table(const CompareResult& r) {
   std::string s = "| channel | unit | fit % free run | fit % k-step | RMSE free run | RMSE k-step |\n"
                   "|---|---|---:|---:|---:|---:|\n";
@@ -271,19 +283,7 @@ std::string format_compare_report(const CompareResult& r) {
       for (const auto& w : describe_failure(c.free_analysis.failure, r.options)) s += "- " + w + ".\n";
     }
     if (c.k_analysis.valid && r.mode != ReplayMode::kInverseDynamics) {
-      s += "\nk-step prediction errors:\n\n";
-      const auto& f = c.k_analysis.failure;
-      if (!(f.rms > 0)) {
-        s += "- zero: the model predicts the record exactly.\n";
-        continue;
-      }
-      s += fmt("- RMS %.4g; ", f.rms) + (f.white ? "white" : "not white") +
-           fmt(" (%.0f %% of ACF lags outside the 99 %% band); ", 100.0 * f.acf_outside) +
-           (f.uncorrelated ? "uncorrelated" : "correlated") +
-           fmt(" with the input (%.0f %% of CCF lags outside).\n", 100.0 * f.ccf_outside);
-      if (f.velocity_step.ok)
-        s += fmt("- steps by %.0f %% of its RMS across zero hub velocity", 100.0 * std::abs(f.velocity_step.relative)) +
-             (f.friction_like ? ": a friction-like effect is missing.\n" : ".\n");
+      s += "\nk-step prediction errors:\n\n" + format_k_step_errors(c.k_analysis.failure, "hub velocity");
     }
   }
   s += "\n## Plots\n\n";
@@ -292,6 +292,14 @@ std::string format_compare_report(const CompareResult& r) {
          ".png`, `spectrum_" + c.name + ".png`, `binned_" + c.name + "_<state>.png`\n";
   }
   return s;
+}
+
+std::string format_observer_channels_json(const std::vector<std::string>& channels, const std::vector<double>& noise_std) {
+  std::string s = "\"channels\": [";
+  for (std::size_t c = 0; c < channels.size(); ++c) s += (c ? ", " : "") + jstr(channels[c]);
+  s += "], \"noise_std\": [";
+  for (std::size_t c = 0; c < noise_std.size(); ++c) s += (c ? ", " : "") + jnum(noise_std[c]);
+  return s + "]";
 }
 
 std::string format_compare_json(const CompareResult& r) {
@@ -304,11 +312,8 @@ std::string format_compare_json(const CompareResult& r) {
     s += "null";
   } else {
     const ObserverDesign& d = r.observer;
-    s += "{\"ok\": " + jbool(d.ok) + ", \"channels\": [";
-    for (std::size_t c = 0; c < d.channels.size(); ++c) s += (c ? ", " : "") + jstr(d.channels[c]);
-    s += "], \"noise_std\": [";
-    for (std::size_t c = 0; c < d.noise_std.size(); ++c) s += (c ? ", " : "") + jnum(d.noise_std[c]);
-    s += "], \"process_noise\": " + jnum(d.process_noise) + ", \"period\": " + std::to_string(d.period) +
+    s += "{\"ok\": " + jbool(d.ok) + ", " + format_observer_channels_json(d.channels, d.noise_std) +
+         ", \"process_noise\": " + jnum(d.process_noise) + ", \"period\": " + std::to_string(d.period) +
          ", \"pole_radius\": " + (d.ok ? jnum(d.pole_radius) : std::string("null")) +
          ", \"message\": " + jstr(d.message) + "}";
   }

@@ -64,6 +64,11 @@ std::string format_compare_json(const CompareResult& r);
 // compare.json's "failure" entry ("null" when not valid); the residual's autocorrelation (cross: its
 // cross-correlation with `input`) and amplitude spectrum plots, free run and k-step where valid.
 std::string format_failure_json(const ResidualAnalysis& a, const ResidualOptions& o);
+// compare.json's observer entries "channels": [...], "noise_std": [...] (no braces).
+std::string format_observer_channels_json(const std::vector<std::string>& channels, const std::vector<double>& noise_std);
+// The k-step residual in words for report.md: its RMS, whiteness, correlation with the input and any
+// step across zero `velocity` ("hub velocity"), as markdown bullets.
+std::string format_k_step_errors(const FailureReport& f, const std::string& velocity);
 void plot_residual_correlation(const ChannelCompare& c, bool cross, const std::string& input, const std::string& path);
 void plot_residual_spectrum(const ChannelCompare& c, const std::string& path);
 // A series for a plot: non-finite values (a failed prediction's) as NaN, which break its line

@@ -73,31 +73,6 @@ SampleInputs record_inputs(const Record& r, bool closed_loop, double T, long n) 
   return in;
 }
 
-// The record sample measured at each controller sample k (within T/4 of t0 + k T), or -1.
-std::vector<long> measured_samples(const Record& r, double T, long n) {
-  std::vector<long> at(n, -1);
-  for (std::size_t j = 0; j < r.t.size(); ++j) {
-    const double u = (r.t[j] - r.t.front()) / T;
-    const long k = std::lround(u);
-    if (k >= 0 && k < n && std::abs(u - k) <= 0.25 && at[k] < 0) at[k] = static_cast<long>(j);
-  }
-  return at;
-}
-
-// Controller samples between measurements: the median spacing, at least 1.
-int measurement_period(const std::vector<long>& at) {
-  std::vector<long> gaps;
-  long last = -1;
-  for (long k = 0; k < static_cast<long>(at.size()); ++k)
-    if (at[k] >= 0) {
-      if (last >= 0) gaps.push_back(k - last);
-      last = k;
-    }
-  if (gaps.empty()) return 1;
-  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
-  return static_cast<int>(std::max(1L, gaps[gaps.size() / 2]));
-}
-
 // The model the gain is designed on: the replay model's smooth part (static Coulomb and Stribeck
 // friction, backlash, the controller's sensor quantisation, noise and delay left out: a central
 // difference across a tanh of width 1e-3 rad/s, a dead zone or a quantum sees a slope the moving arm
@@ -127,8 +102,7 @@ struct Linearisation {
 Linearisation linearise(const Model& dm, const SampleInputs& in0, const std::vector<Channel>& channels,
                         const Eigen::VectorXd& x0) {
   const int nx = static_cast<int>(x0.size()), ny = static_cast<int>(channels.size()), lanes = 2 * nx;
-  Eigen::VectorXd delta(nx);
-  for (int i = 0; i < nx; ++i) delta[i] = 1e-6 * std::max(1.0, std::abs(x0[i]));  // state units
+  const Eigen::VectorXd delta = make_difference_steps(x0);
   Eigen::MatrixXd x1(nx, lanes), y0(ny, lanes);
   Linearisation lin;
   for (int first = 0; first < lanes; first += kMaxLanes) {
@@ -158,27 +132,10 @@ Linearisation linearise(const Model& dm, const SampleInputs& in0, const std::vec
       for (int c = 0; c < ny; ++c) y0(c, first + l) = trace_channel(run.traces[l], channels[c])[0];
     }
   }
-  lin.A.resize(nx, nx);
-  lin.C.resize(ny, nx);
-  for (int i = 0; i < nx; ++i) {
-    lin.A.col(i) = (x1.col(2 * i) - x1.col(2 * i + 1)) / (2.0 * delta[i]);
-    lin.C.col(i) = (y0.col(2 * i) - y0.col(2 * i + 1)) / (2.0 * delta[i]);
-  }
+  lin.A = calc_central_differences(x1, delta);
+  lin.C = calc_central_differences(y0, delta);
   lin.ok = lin.ok && lin.A.allFinite() && lin.C.allFinite();
   return lin;
-}
-
-// Process noise over one controller sample T: white acceleration of std sigma_a on every joint,
-// constant over the sample (Bar-Shalom et al. 2001, eq. 6.3.3-4): [[T^4/4, T^3/2], [T^3/2, T^2]] sigma_a^2.
-Eigen::MatrixXd process_noise(int nseg, int nx, double T, double sigma_a) {
-  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(nx, nx);
-  const double s2 = sigma_a * sigma_a;
-  for (int i = 0; i < nseg; ++i) {
-    Q(i, i) = s2 * T * T * T * T / 4.0;
-    Q(i, nseg + i) = Q(nseg + i, i) = s2 * T * T * T / 2.0;
-    Q(nseg + i, nseg + i) = s2 * T * T;
-  }
-  return Q;
 }
 
 // |P - DARE(P)|_F / |P|_F.
@@ -192,6 +149,95 @@ double dare_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, const E
 }
 
 }  // namespace
+
+Eigen::VectorXd make_difference_steps(const Eigen::VectorXd& x0) {
+  Eigen::VectorXd delta(x0.size());
+  for (Eigen::Index i = 0; i < x0.size(); ++i) delta[i] = 1e-6 * std::max(1.0, std::abs(x0[i]));  // state units
+  return delta;
+}
+
+Eigen::MatrixXd calc_central_differences(const Eigen::MatrixXd& f, const Eigen::VectorXd& delta) {
+  Eigen::MatrixXd d(f.rows(), delta.size());
+  for (Eigen::Index i = 0; i < delta.size(); ++i) d.col(i) = (f.col(2 * i) - f.col(2 * i + 1)) / (2.0 * delta[i]);
+  return d;
+}
+
+std::vector<long> find_measured_samples(const Record& r, double T, long n) {
+  std::vector<long> at(n, -1);
+  for (std::size_t j = 0; j < r.t.size(); ++j) {
+    const double u = (r.t[j] - r.t.front()) / T;
+    const long k = std::lround(u);
+    if (k >= 0 && k < n && std::abs(u - k) <= 0.25 && at[k] < 0) at[k] = static_cast<long>(j);
+  }
+  return at;
+}
+
+int calc_measurement_period(const std::vector<long>& at) {
+  std::vector<long> gaps;
+  long last = -1;
+  for (long k = 0; k < static_cast<long>(at.size()); ++k)
+    if (at[k] >= 0) {
+      if (last >= 0) gaps.push_back(k - last);
+      last = k;
+    }
+  if (gaps.empty()) return 1;
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  return static_cast<int>(std::max(1L, gaps[gaps.size() / 2]));
+}
+
+Eigen::MatrixXd calc_process_noise(int joints, int nx, double T, double sigma_a, bool continuous) {
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(nx, nx);
+  const double s2 = sigma_a * sigma_a;
+  for (int i = 0; i < joints; ++i) {
+    Q(i, i) = s2 * T * T * T * T / (continuous ? 3.0 : 4.0);
+    Q(i, joints + i) = Q(joints + i, i) = s2 * T * T * T / 2.0;
+    Q(joints + i, joints + i) = s2 * T * T;
+  }
+  return Q;
+}
+
+void set_measurement_noise(const Record& r, ObserverDesign& d) {
+  const int ny = static_cast<int>(d.channels.size());
+  d.R = Eigen::MatrixXd::Zero(ny, ny);
+  d.noise_std.clear();
+  for (int c = 0; c < ny; ++c) {
+    const auto& y = r.at(d.channels[c]);
+    double mean = 0.0, var = 0.0;
+    for (double v : y) mean += v;
+    mean /= y.size();
+    for (double v : y) var += (v - mean) * (v - mean);
+    var /= y.size();
+    d.R(c, c) = std::max({calc_white_noise_variance(y), 1e-12 * var, 1e-300});
+    d.noise_std.push_back(std::sqrt(d.R(c, c)));
+  }
+}
+
+void design_steady_gain(const Eigen::MatrixXd& A1, const Eigen::MatrixXd& C, const Eigen::MatrixXd& Q1, ObserverDesign& d) {
+  const Eigen::Index nx = A1.rows();
+  // Over one measurement period m: A^m, Q_m = sum_{j<m} A^j Q A^jT.
+  d.A = Eigen::MatrixXd::Identity(nx, nx);
+  d.Q = Eigen::MatrixXd::Zero(nx, nx);
+  for (int j = 0; j < d.period; ++j) {
+    d.Q += d.A * Q1 * d.A.transpose();
+    d.A = A1 * d.A;
+  }
+  d.C = C;
+  const RiccatiSolution dare = solve_filter_dare(d.A, d.C, d.Q, d.R);
+  d.doublings = dare.iterations;
+  d.ok = false;
+  if (!dare.ok) {
+    d.message = "the Riccati equation of the observer's gain has no solution (residual " +
+                std::to_string(dare.residual) + " after " + std::to_string(dare.iterations) + " doublings)";
+    return;
+  }
+  d.P = dare.P;
+  const Eigen::MatrixXd S = d.C * d.P * d.C.transpose() + d.R;
+  d.L = S.ldlt().solve(d.C * d.P).transpose();  // P C^T S^-1 (S and P symmetric)
+  const Eigen::MatrixXd E = (Eigen::MatrixXd::Identity(nx, nx) - d.L * d.C) * d.A;
+  d.pole_radius = E.eigenvalues().cwiseAbs().maxCoeff();
+  d.ok = d.L.allFinite() && d.pole_radius < 1.0;
+  if (!d.ok) d.message = "the observer's linearised error dynamics do not decay";
+}
 
 std::vector<std::string> observer_channels(const Model& m, const Record& r, ReplayMode mode) {
   const bool closed = is_closed_loop(mode);
@@ -256,18 +302,7 @@ ObserverDesign design_observer(const Model& model, const Record& r, ReplayMode m
   const double T = m.control_period;
   const long ns = std::lround(m.duration / T) + 1;
   // R: the white-noise variance of each channel, at least 1e-12 of its variance (a noise-free record).
-  const int ny = static_cast<int>(channels.size());
-  d.R = Eigen::MatrixXd::Zero(ny, ny);
-  for (int c = 0; c < ny; ++c) {
-    const auto& y = r.at(d.channels[c]);
-    double mean = 0.0, var = 0.0;
-    for (double v : y) mean += v;
-    mean /= y.size();
-    for (double v : y) var += (v - mean) * (v - mean);
-    var /= y.size();
-    d.R(c, c) = std::max({calc_white_noise_variance(y), 1e-12 * var, 1e-300});
-    d.noise_std.push_back(std::sqrt(d.R(c, c)));
-  }
+  set_measurement_noise(r, d);
   // Linearisation about the model's own initial state (the arm at rest) with the record's first input.
   const Model dm = make_design_model(m);
   const BatchModel b1 = make_batch(std::span<const Model>(&dm, 1));
@@ -279,30 +314,8 @@ ObserverDesign design_observer(const Model& model, const Record& r, ReplayMode m
     d.message = "the model failed numerically in its linearisation";
     return d;
   }
-  // Over one measurement period m: A^m, Q_m = sum_{j<m} A^j Q A^jT.
-  d.period = measurement_period(measured_samples(r, T, ns));
-  const Eigen::MatrixXd q1 = process_noise(b1.nseg, nx, T, options.process_noise);
-  d.A = Eigen::MatrixXd::Identity(nx, nx);
-  d.Q = Eigen::MatrixXd::Zero(nx, nx);
-  for (int j = 0; j < d.period; ++j) {
-    d.Q += d.A * q1 * d.A.transpose();
-    d.A = lin.A * d.A;
-  }
-  d.C = lin.C;
-  const RiccatiSolution dare = solve_filter_dare(d.A, d.C, d.Q, d.R);
-  d.doublings = dare.iterations;
-  if (!dare.ok) {
-    d.message = "the Riccati equation of the observer's gain has no solution (residual " +
-                std::to_string(dare.residual) + " after " + std::to_string(dare.iterations) + " doublings)";
-    return d;
-  }
-  d.P = dare.P;
-  const Eigen::MatrixXd S = d.C * d.P * d.C.transpose() + d.R;
-  d.L = S.ldlt().solve(d.C * d.P).transpose();  // P C^T S^-1 (S and P symmetric)
-  const Eigen::MatrixXd E = (Eigen::MatrixXd::Identity(nx, nx) - d.L * d.C) * d.A;
-  d.pole_radius = E.eigenvalues().cwiseAbs().maxCoeff();
-  d.ok = d.L.allFinite() && d.pole_radius < 1.0;
-  if (!d.ok) d.message = "the observer's linearised error dynamics do not decay";
+  d.period = calc_measurement_period(find_measured_samples(r, T, ns));
+  design_steady_gain(lin.A, lin.C, calc_process_noise(b1.nseg, nx, T, options.process_noise), d);
   return d;
 }
 
@@ -328,7 +341,7 @@ ObserverRun run_observer(std::span<const Model> models, const Record& r, ReplayM
     throw std::invalid_argument("run_observer: the initial state needs " + std::to_string(nx) + " values");
 
   SampleInputs in = record_inputs(r, closed, T, ns);
-  const std::vector<long> measured = measured_samples(r, T, ns);
+  const std::vector<long> measured = find_measured_samples(r, T, ns);
   const std::vector<std::string>& names = out.design[0].channels;  // lanes share a shape, so their channels
   std::vector<Channel> channels;
   std::vector<const std::vector<double>*> column;

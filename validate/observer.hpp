@@ -101,6 +101,26 @@ struct ObserverDesign {
   int doublings = 0;                  // steps of the DARE's doubling algorithm
 };
 
+// Pieces of the design, shared with the arm's observer (validate/arm_observer.hpp):
+// the record sample measured at each of n controller samples k (the first within T/4 of t0 + k T), or -1;
+int calc_measurement_period(const std::vector<long>& at);  // the median spacing of those, at least 1
+std::vector<long> find_measured_samples(const Record& r, double T, long n);
+// Q over one controller sample T for x = [q (joints); v (joints); the rest] with white acceleration of
+// std sigma_a on every joint (above), nx x nx; `continuous`: the acceleration white in continuous time
+// with the same rate variance per sample (Bar-Shalom et al. 2001, sec. 6.2.2): [[T^4/3, T^3/2],
+// [T^3/2, T^2]] sigma_a^2, full rank, the angle keeping sigma_a^2 T^4 / 12 of its own;
+Eigen::MatrixXd calc_process_noise(int joints, int nx, double T, double sigma_a, bool continuous = false);
+// d.R and d.noise_std for the record's columns d.channels (above);
+void set_measurement_noise(const Record& r, ObserverDesign& d);
+// the central-difference steps delta_i = 1e-6 max(1, |x0_i|) (state units), and the derivative from
+// values at x0 +- delta_i e_i (columns 2i and 2i + 1 of f): (f_2i - f_2i+1) / (2 delta_i);
+Eigen::VectorXd make_difference_steps(const Eigen::VectorXd& x0);
+Eigen::MatrixXd calc_central_differences(const Eigen::MatrixXd& f, const Eigen::VectorXd& delta);
+// the gain from the linearisation over one controller sample (A1, C; process noise Q1 a sample) and
+// d.R, corrected every d.period samples: sets d.A (A1^m), d.C, d.Q (Q_m), d.P, d.L, d.doublings,
+// d.pole_radius, d.ok and d.message.
+void design_steady_gain(const Eigen::MatrixXd& A1, const Eigen::MatrixXd& C, const Eigen::MatrixXd& Q1, ObserverDesign& d);
+
 // Designs the observer of model m (any span: it is set for the record) for the record in `mode`
 // (closed or open loop; std::invalid_argument for inverse dynamics). A numerical failure is a result
 // (ok = false, message).

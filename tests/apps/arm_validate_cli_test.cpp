@@ -63,6 +63,44 @@ TEST_F(ArmCli, RecordWritesTheArmFormAndCompareWithTheSameArmFitsExactly) {
   for (const auto& f : tree(work)) EXPECT_EQ(f.find(".partial"), std::string::npos) << f;
 }
 
+TEST_F(ArmCli, CompareWithKWritesTheKStepColumnsBesideTheFreeRun) {
+  // Friction hidden at the elbow (0.15 N m), 0.2 mrad of noise on the angles: the k-step prediction
+  // (20 samples, 40 ms) from the observer's estimate fits the elbow's angle and the tool far better
+  // than the free run, whose error grows over the move.
+  ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 2e-4 --seed 3 --set joints.elbow.friction.coulomb=0.15" +
+                kShort).exit_code, 0);
+  const auto r = run("compare --model configs/arm.yaml --data rec.csv --out cmp --k 20" + kShort);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("| channel | unit | fit % free run | fit % k-step | RMSE free run | RMSE k-step |"),
+            std::string::npos) << r.output;
+  const std::string json = read_text(work / "cmp" / "compare.json");
+  EXPECT_NE(json.find("\"k\": 20,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"replay_ok\": {\"free_run\": true, \"k_step\": true}"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"observer\": {\"ok\": true, \"channels\": [\"shoulder.angle\", \"shoulder.rate\""),
+            std::string::npos) << json;
+  // compare.json's k-step map, read as the free run's is.
+  std::string k_json = json.substr(json.find("\"k_step_fit_percent\": {"));
+  k_json.replace(0, 8, "\"");  // "k_step_fit_percent" -> "fit_percent"
+  for (const char* c : {"elbow.angle", "tool.x", "tool.y"}) {
+    const double free_fit = json_fit(json, c), k_fit = json_fit(k_json, c);
+    RecordProperty(std::string(c) + "_free", std::to_string(free_fit));
+    RecordProperty(std::string(c) + "_k20", std::to_string(k_fit));
+    EXPECT_GT(k_fit, free_fit + 1.0) << c << "\n" << json;
+    EXPECT_GT(k_fit, 99.0) << c;
+  }
+  const std::string report = read_text(work / "cmp" / "report.md");
+  EXPECT_NE(report.find("The k-step prediction restarts every 20 controller samples (0.04 s)"), std::string::npos) << report;
+  EXPECT_NE(report.find("k-step prediction errors:"), std::string::npos) << report;
+  for (const char* p : {"overlay_elbow_angle.png", "residual_tool_x.png", "acf_elbow_angle.png", "spectrum_tool_y.png"})
+    expect_png(work / "cmp" / p);
+  // Without --k the arm's compare is the free run alone, as before.
+  ASSERT_EQ(run("compare --model configs/arm.yaml --data rec.csv --out free" + kShort).exit_code, 0);
+  const std::string free_json = read_text(work / "free" / "compare.json");
+  EXPECT_NE(free_json.find("\"k\": null"), std::string::npos) << free_json;
+  EXPECT_EQ(free_json.find("k_step_fit_percent"), std::string::npos);
+  EXPECT_EQ(json_fit(free_json, "elbow.angle"), json_fit(json, "elbow.angle"));
+}
+
 TEST_F(ArmCli, NoiseOnTheMeasuredChannelsLowersTheFitOnlyAsMuchAsTheNoise) {
   // 1 mrad on angles (about 1/400 of each joint's swing), 5 mN m on torques (about 1/100 of each's).
   ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 1e-3 --noise-torque 0.005 --seed 5" + kShort).exit_code, 0);
@@ -140,9 +178,9 @@ TEST_F(ArmCli, ARecordMissingAJointColumnOrNamingAnUnknownJointIsOneErrorAndWrit
   EXPECT_EQ(c.exit_code, 2) << c.output;
   expect_one_error_line(c, "rig.csv:1: shoulder.ref: missing column 'shoulder.ref', needed for an arm model (this record "
                            "is in the reference rig's form");
-  const auto d = run("compare --model configs/arm.yaml --data rec.csv --k 5 --out out");
+  const auto d = run("compare --model configs/arm.yaml --data rec.csv --process-noise 2 --out out");
   EXPECT_EQ(d.exit_code, 2) << d.output;
-  expect_one_error_line(d, "--k: an arm model has no k-step prediction yet");
+  expect_one_error_line(d, "--process-noise: the k-step prediction's option: give --k too");
   auto after = tree(work);
   after.erase(std::remove(after.begin(), after.end(), "rig.csv"), after.end());
   EXPECT_EQ(after, before) << "compare writes nothing";
