@@ -9,6 +9,7 @@
 
 #include "kernel/batch.hpp"  // calc_sensor_hold
 #include "common/errors.hpp"
+#include "common/field_table.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "kernel/modes.hpp"
@@ -43,10 +44,10 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
   const std::string& src = spec.source;
   const std::string key = "joints." + c.joint + ".";
   auto non_negative = [&](double x, const std::string& k) {
-    if (!(x >= 0.0)) throw ConfigError(src, 0, key + k, "must be >= 0, got " + std::to_string(x));
+    if (!(x >= 0.0)) throw ConfigError(src, 0, key + k, "must be >= 0, got " + format_key_number(x));
   };
   auto positive = [&](double x, const std::string& k) {
-    if (!(x > 0.0)) throw ConfigError(src, 0, key + k, "must be > 0, got " + std::to_string(x));
+    if (!(x > 0.0)) throw ConfigError(src, 0, key + k, "must be > 0, got " + format_key_number(x));
   };
   const FrictionSpec& f = c.friction;
   non_negative(f.viscous, "friction.viscous");
@@ -67,7 +68,7 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
     non_negative(c.train.cubic_stiffness, "drive.cubic_stiffness");
     non_negative(c.train.backlash, "drive.backlash");
     if (!(c.train.efficiency > 0.0 && c.train.efficiency <= 1.0))
-      throw ConfigError(src, 0, key + "drive.efficiency", "must be in (0, 1], got " + std::to_string(c.train.efficiency));
+      throw ConfigError(src, 0, key + "drive.efficiency", "must be in (0, 1], got " + format_key_number(c.train.efficiency));
   }
   if (!std::isfinite(c.torque_offset)) throw ConfigError(src, 0, key + "torque_offset", "must be finite");
   if (c.hydraulics.enabled) {

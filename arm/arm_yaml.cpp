@@ -278,7 +278,7 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       s.joints.push_back(c);
       // A compliant drive: the joint's rotor and the twist to its link (insert_drive_train).
       if (one.has("drive")) {
-        if (train.efficiency > 1.0) drive.fail("efficiency", "must be in (0, 1], got " + std::to_string(train.efficiency));
+        if (train.efficiency > 1.0) drive.fail("efficiency", "must be in (0, 1], got " + format_key_number(train.efficiency));
         if (const std::string fault = insert_drive_train(s.tree, name, train); !fault.empty()) one.fail("drive", fault);
         s.joints.back().train = train;
       }
