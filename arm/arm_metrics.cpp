@@ -102,7 +102,8 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
     track[k] = (p - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
     if (t[k] >= t0) over = std::max(over, dir.dot(p - goal));
   }
-  v[c++] = largest > 0.0 ? last_exit(t, err, t0, band * largest, dwell) : 0.0;
+  const double tool_band = m.spec.tool_band > 0.0 ? m.spec.tool_band : band * largest;
+  v[c++] = largest > 0.0 ? last_exit(t, err, t0, tool_band, dwell) : 0.0;
   v[c++] = (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0;
   v[c++] = peak_abs(track);
   v[c++] = track[n - 1];

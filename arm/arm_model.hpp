@@ -91,6 +91,7 @@ struct ArmSpec {
   int substeps = 0;                  // per control period; 0 = from the modes (CVODE: 1)
   double rtol = 1e-8, atol = 1e-10;  // CVODE's tolerances
   double band = 0.02;                // settling band, fraction of each move's amplitude
+  double tool_band = 0.0;            // the tool's settling band, m; 0 = band x the tool's largest move
   std::uint64_t seed = 1;            // sensor noise (simulation.seed); a study gives each variant its own
 };
 

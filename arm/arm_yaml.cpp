@@ -140,8 +140,10 @@ const std::array<Field<SimulationBlock>, 1> kIntegratorFields{{
      .fallback = "auto: sdirk2 with a flexible link, rk4 without"},
 }};
 
-const std::array<Field<ArmSpec>, 1> kMetricsFields{{
+const std::array<Field<ArmSpec>, 2> kMetricsFields{{
     {.key = "band", .member = &ArmSpec::band, .bound = Bound::kPositive},
+    {.key = "tool_band", .member = &ArmSpec::tool_band, .unit = "m", .bound = Bound::kNonNegative,
+     .fallback = "0: band x the tool's largest move"},
 }};
 
 std::string resolve(const std::string& source, const std::string& path) {
