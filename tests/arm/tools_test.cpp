@@ -87,6 +87,12 @@ std::string two_arms(const std::string& tools, const std::string& waypoints) {
          "trajectory:\n  start: {left_shoulder: 0.3, left_elbow: 0.6, right_shoulder: 0.3, right_elbow: 0.6}\n"
          "  waypoints:\n" + waypoints + "simulation: {duration: 2.5, integrator: rk4}\n";
 }
+std::string sci(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3e", v);
+  return b;
+}
+
 const std::string kTwoTools =
     "tools:\n  left: {body: left_fore, point: [0.5, 0, 0]}\n  right: {body: right_fore, point: [0.5, 0, 0]}\n";
 
@@ -105,8 +111,8 @@ TEST(ArmTools, ATwoToolCartesianWaypointReachesBothTargetsThroughTheStackedIk) {
   EXPECT_EQ(pose[m.actuated[0].dof], 0.2);
   const double el = (calc_point_position(m.tree, pose, m.tools[0].body, m.tools[0].point) - left).norm();
   const double er = (calc_point_position(m.tree, pose, m.tools[1].body, m.tools[1].point) - right).norm();
-  RecordProperty("left_ik_error_m", std::to_string(el));
-  RecordProperty("right_ik_error_m", std::to_string(er));
+  RecordProperty("left_ik_error_m", sci(el));
+  RecordProperty("right_ik_error_m", sci(er));
   EXPECT_LT(el, 1e-9);  // IkOptions::tolerance
   EXPECT_LT(er, 1e-9);
   // Simulated: the trace's reference columns at the waypoint are the targets, and both tools settle there
