@@ -57,7 +57,8 @@ std::vector<std::string> arm_record_columns(const ArmModel& m) {
   for (const ArmTool& t : m.tools)
     for (const char* s : {".x", ".y", ".z"}) c.push_back(t.name + s);
   for (const LinkTip& l : m.links)
-    for (const char* s : kLinkSuffixes) c.push_back(l.name + s);
+    if (!l.elastic_dofs.empty())  // a one-segment `flexible:` body is rigid: nothing to measure
+      for (const char* s : kLinkSuffixes) c.push_back(l.name + s);
   return c;
 }
 

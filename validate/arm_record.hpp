@@ -33,7 +33,7 @@ bool is_arm_record(const Record& r);
 
 // An arm record's columns for `m` (after t), in the order `record` writes them: per actuated joint
 // .ref, .angle, .rate, .torque; per tool <tool>.x, .y, .z (tool.x, ... for `tool:`); per flexible link
-// .deflection_y, .deflection_z.
+// with elastic dofs (not a one-segment, rigid one) .deflection_y, .deflection_z.
 std::vector<std::string> arm_record_columns(const ArmModel& m);
 
 // Whether a column is a tool point's coordinate (<tool>.x, .y or .z of one of m's tools).
