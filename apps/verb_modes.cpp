@@ -178,10 +178,11 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
     const Vec3 d2 = root.rotation.transpose() * (poses[static_cast<std::size_t>(l.tip_body)].point(l.tip_point) - root.position) - l.rigid_tip;
     std::printf("  %-16s %12.4f %12.4f %12.4f   (tip, link frame)\n", l.name.c_str(), 1e3 * d2.x(), 1e3 * d2.y(), 1e3 * d2.z());
   }
-  const Vec3 tool = poses[static_cast<std::size_t>(arm.tool_body)].point(arm.tool_point) -
-                    rigid[static_cast<std::size_t>(arm.tool_body)].point(arm.tool_point);
-  std::printf("  %-16s %12.4f %12.4f %12.4f   (base frame; |sag| %.4f mm)\n", "tool", 1e3 * tool.x(), 1e3 * tool.y(),
-              1e3 * tool.z(), 1e3 * tool.norm());
+  for (const ArmTool& t : arm.tools) {
+    const Vec3 tool = poses[static_cast<std::size_t>(t.body)].point(t.point) - rigid[static_cast<std::size_t>(t.body)].point(t.point);
+    std::printf("  %-16s %12.4f %12.4f %12.4f   (base frame; |sag| %.4f mm)\n", t.name.c_str(), 1e3 * tool.x(),
+                1e3 * tool.y(), 1e3 * tool.z(), 1e3 * tool.norm());
+  }
 }
 
 }  // namespace

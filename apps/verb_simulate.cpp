@@ -29,7 +29,7 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
   ResultRow row;
   row.label = path;
   row.values = calc_arm_metrics(m, run.traces[0], run.status[0]);
-  row.status = calc_arm_status(run.status[0], table.columns, row.values);
+  row.status = calc_arm_status(m, run.status[0], table.columns, row.values);
   table.rows.push_back(row);
   std::string md = "| metric | value |\n|---|---|\n";
   for (std::size_t i = 0; i < table.columns.size(); ++i) {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "apps/verbs.hpp"
+#include "arm/arm_metrics.hpp"
 #include "results/summaries.hpp"
 #include "results/table.hpp"
 
@@ -37,7 +38,7 @@ void add_table_verb(CLI::App& app) {
   cmd->add_option("results", args->input, "a study's output directory or its results.csv")->required()->check(CLI::ExistingPath);
   cmd->add_option("--by", args->by, "parameters to group by, comma separated (e.g. payload.mass,segments); none = all rows");
   cmd->add_option("--metric", args->metrics, "metrics to summarise, comma separated")
-      ->default_str("m1_tip_settling_s,m1_tip_overshoot_pct (an arm study's: tool_settling_s,tool_overshoot_pct)");
+      ->default_str("m1_tip_settling_s,m1_tip_overshoot_pct (an arm study's: each tool's, tool_settling_s,tool_overshoot_pct)");
   cmd->add_option("--spec", args->specs, "METRIC=LIMIT: report P(metric > limit or not settled), e.g. m1_tip_settling_s=3");
   cmd->add_option("--format", args->format, "md or csv")->check(CLI::IsMember({"md", "csv"}))->capture_default_str();
   cmd->callback([args] {
@@ -50,9 +51,10 @@ void add_table_verb(CLI::App& app) {
     const ResultTable t = parse_results_csv(text.str(), path);
     auto metrics = split_list(args->metrics);
     if (metrics.empty()) {
-      const bool arm = std::find(t.columns.begin(), t.columns.end(), "tool_settling_s") != t.columns.end();
-      metrics = arm ? std::vector<std::string>{"tool_settling_s", "tool_overshoot_pct"}
-                    : std::vector<std::string>{"m1_tip_settling_s", "m1_tip_overshoot_pct"};
+      // An arm study's: each tool's (`tool:`'s is named "tool").
+      for (const std::string& tool : arm_tool_names(t.columns))
+        for (const char* s : {"_settling_s", "_overshoot_pct"}) metrics.push_back(tool + s);
+      if (metrics.empty()) metrics = {"m1_tip_settling_s", "m1_tip_overshoot_pct"};
     }
     std::map<std::string, double> specs;
     for (const auto& s : split_list(args->specs)) {

@@ -12,8 +12,8 @@ std::vector<std::string> arm_metric_columns(const ArmModel& m) {
   std::vector<std::string> c;
   for (const ActuatedJoint& a : m.actuated)
     for (const char* s : {"_settling_s", "_overshoot_pct", "_peak_torque_Nm", "_peak_speed"}) c.push_back(a.name + s);
-  for (const char* s : {"tool_settling_s", "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m", "tool_sag_m"})
-    c.push_back(s);
+  for (const ArmTool& t : m.tools)
+    for (const char* s : kToolMetricSuffixes) c.push_back(t.name + s);
   for (const LinkTip& l : m.links)
     for (const char* s : {"_peak_deflection_m", "_residual_m", "_sag_m"}) c.push_back(l.name + s);
   c.push_back("settling_horizon_s");
@@ -81,33 +81,36 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
     v[c++] = peak_abs(tr.column(a.name + ".torque"));
     v[c++] = peak_abs(tr.column(a.name + ".qd"));
   }
-  // The tool: its final target, its largest and last moves in the rigid reference.
-  const std::vector<double>*x[3] = {&tr.column("tool.x"), &tr.column("tool.y"), &tr.column("tool.z")};
-  const std::vector<double>*xr[3] = {&tr.column("tool.ref_x"), &tr.column("tool.ref_y"), &tr.column("tool.ref_z")};
+  // Each tool: its final target, its largest and last moves in the rigid reference.
   const std::size_t n = t.size();
-  // Settling and overshoot about where the tool comes to rest (its last sample, as stepinfo's yfinal):
-  // a flexible arm's tool rests off the rigid target by its sag, which tool_final_error_m reports.
-  const Vec3 goal((*x[0])[n - 1], (*x[1])[n - 1], (*x[2])[n - 1]);
-  const Vec3 target((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
-  const Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
-  double largest = 0.0;
-  for (std::size_t k = 0; k < n; ++k)
-    largest = std::max(largest, (Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k]) - begin).norm());
-  std::vector<double> err(n), track(n);
-  double over = 0.0;
-  const Vec3 dir = (target - begin).norm() > 0.0 ? Vec3((target - begin).normalized()) : Vec3::Zero();
-  for (std::size_t k = 0; k < n; ++k) {
-    const Vec3 p((*x[0])[k], (*x[1])[k], (*x[2])[k]);
-    err[k] = (p - goal).norm();
-    track[k] = (p - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
-    if (t[k] >= t0) over = std::max(over, dir.dot(p - goal));
+  for (const ArmTool& tool : m.tools) {
+    const std::string& p = tool.name;
+    const std::vector<double>*x[3] = {&tr.column(p + ".x"), &tr.column(p + ".y"), &tr.column(p + ".z")};
+    const std::vector<double>*xr[3] = {&tr.column(p + ".ref_x"), &tr.column(p + ".ref_y"), &tr.column(p + ".ref_z")};
+    // Settling and overshoot about where the tool comes to rest (its last sample, as stepinfo's yfinal):
+    // a flexible arm's tool rests off the rigid target by its sag, which <tool>_final_error_m reports.
+    const Vec3 goal((*x[0])[n - 1], (*x[1])[n - 1], (*x[2])[n - 1]);
+    const Vec3 target((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
+    const Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
+    double largest = 0.0;
+    for (std::size_t k = 0; k < n; ++k)
+      largest = std::max(largest, (Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k]) - begin).norm());
+    std::vector<double> err(n), track(n);
+    double over = 0.0;
+    const Vec3 dir = (target - begin).norm() > 0.0 ? Vec3((target - begin).normalized()) : Vec3::Zero();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec3 q((*x[0])[k], (*x[1])[k], (*x[2])[k]);
+      err[k] = (q - goal).norm();
+      track[k] = (q - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
+      if (t[k] >= t0) over = std::max(over, dir.dot(q - goal));
+    }
+    const double tool_band = m.spec.tool_band > 0.0 ? m.spec.tool_band : band * largest;
+    v[c++] = largest > 0.0 ? last_exit(t, err, t0, tool_band, dwell) : 0.0;
+    v[c++] = (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0;
+    v[c++] = peak_abs(track);
+    v[c++] = track[n - 1];
+    v[c++] = track[0];
   }
-  const double tool_band = m.spec.tool_band > 0.0 ? m.spec.tool_band : band * largest;
-  v[c++] = largest > 0.0 ? last_exit(t, err, t0, tool_band, dwell) : 0.0;
-  v[c++] = (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0;
-  v[c++] = peak_abs(track);
-  v[c++] = track[n - 1];
-  v[c++] = track[0];
   // The flexible links' tips.
   for (const LinkTip& l : m.links) {
     const std::vector<double>& dy = tr.column(l.name + ".deflection_y");
@@ -124,11 +127,20 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
   return v;
 }
 
-std::string calc_arm_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values) {
+std::string calc_arm_status(const ArmModel& m, LaneStatus lane, const std::vector<std::string>& columns,
+                            const std::vector<double>& values) {
   if (lane != LaneStatus::kOk) return lane_status_name(lane);
   for (std::size_t i = 0; i < columns.size(); ++i)
-    if (columns[i] == "tool_settling_s" && std::isnan(values[i])) return "not_settled";
+    for (const ArmTool& t : m.tools)
+      if (columns[i] == t.name + "_settling_s" && std::isnan(values[i])) return "not_settled";
   return "ok";
+}
+
+std::vector<std::string> arm_tool_names(const std::vector<std::string>& columns) {
+  std::vector<std::string> out;
+  for (const std::string& c : columns)
+    if (c.ends_with("_peak_error_m")) out.push_back(c.substr(0, c.size() - std::string("_peak_error_m").size()));
+  return out;
 }
 
 }  // namespace ff

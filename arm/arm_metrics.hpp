@@ -6,6 +6,8 @@
 //   <joint>_overshoot_pct     beyond the target of the joint's last move, % of that move
 //   <joint>_peak_torque_Nm    largest |torque| (prismatic: N)
 //   <joint>_peak_speed        largest |rate|, rad/s (m/s)
+// Each tool point has the five tool_* metrics under its own name (<tool>_settling_s, ...; "tool" is the
+// `tool:` block's):
 //   tool_settling_s           last exit of the tool point from a ball about where it comes to rest (its
 //                             last sample, as MATLAB's stepinfo takes yfinal) of radius band x the tool's
 //                             largest move in the rigid reference, NaN = not settled
@@ -29,12 +31,20 @@
 
 namespace ff {
 
+// The suffixes of each tool's metrics, in column order.
+inline constexpr const char* kToolMetricSuffixes[] = {"_settling_s", "_overshoot_pct", "_peak_error_m",
+                                                      "_final_error_m", "_sag_m"};
+
 std::vector<std::string> arm_metric_columns(const ArmModel& m);
+
+// The tools of a result table or metrics row, by their columns (<tool>_peak_error_m), in column order.
+std::vector<std::string> arm_tool_names(const std::vector<std::string>& columns);
 
 // Values in arm_metric_columns order; all NaN when the lane failed.
 std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& trace, LaneStatus status);
 
-// "ok", "not_settled" (the tool's settling time is NaN), or the lane's failure.
-std::string calc_arm_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values);
+// "ok", "not_settled" (a tool's settling time is NaN), or the lane's failure.
+std::string calc_arm_status(const ArmModel& m, LaneStatus lane, const std::vector<std::string>& columns,
+                            const std::vector<double>& values);
 
 }  // namespace ff

@@ -32,6 +32,36 @@ ShaperKind parse_shaper_kind(const std::string& type) {
 
 std::string joint_key(const ActuatedJoint& a, const std::string& tail) { return "joints." + a.name + "." + tail; }
 
+// A tool point: its body by name ("" = the last body; a flexible link's name means its tip segment, the
+// point then from the tip point, as the last body's when that is a link's tip), errors at `key`body.
+ArmTool resolve_tool(const ArmModel& m, const ArmSpec& spec, const ToolSpec& t, const std::string& key) {
+  ArmTool out{t.name, m.tree.num_bodies() - 1, t.point};
+  bool at_link_tip = false;
+  if (!t.body.empty()) {
+    const auto link = std::find_if(m.links.begin(), m.links.end(), [&](const LinkTip& l) { return l.name == t.body; });
+    if (link != m.links.end()) {
+      out.body = link->tip_body;
+      out.point = link->tip_point + t.point;
+      at_link_tip = true;
+    } else {
+      const auto it = spec.tree.body_index.find(t.body);
+      if (it == spec.tree.body_index.end())
+        throw ConfigError(spec.source, t.line, key + "body", "no body named '" + t.body + "'");
+      out.body = it->second;
+    }
+  }
+  if (!at_link_tip && t.body.empty())
+    for (const LinkTip& l : m.links)
+      if (l.tip_body == out.body) out.point = l.tip_point + t.point;
+  return out;
+}
+
+std::string tool_names(const ArmModel& m) {
+  std::string s;
+  for (const ArmTool& t : m.tools) s += (s.empty() ? "" : ", ") + t.name;
+  return s;
+}
+
 // The joint info of the body whose joint is `dof`.
 const JointInfo& joint_info(const ArmSpec& spec, const Tree& tree, int dof) {
   for (int i = 0; i < tree.num_bodies(); ++i)
@@ -302,25 +332,26 @@ ArmModel make_arm(const ArmSpec& spec) {
   for (const LinkTip& l : m.links) m.compliant_dofs.insert(m.compliant_dofs.end(), l.elastic_dofs.begin(), l.elastic_dofs.end());
   for (const JointControlSpec& c : spec.joints)
     if (c.drive) m.compliant_dofs.push_back(spec.tree.dof_index.at(c.joint + ".twist"));
-  m.tool_body = m.tree.num_bodies() - 1;
-  m.tool_point = spec.tool_point;
-  bool at_link_tip = false;
-  if (!spec.tool_body.empty()) {
-    const auto link = std::find_if(m.links.begin(), m.links.end(), [&](const LinkTip& t) { return t.name == spec.tool_body; });
-    if (link != m.links.end()) {
-      m.tool_body = link->tip_body;
-      m.tool_point = link->tip_point + spec.tool_point;
-      at_link_tip = true;
-    } else {
-      const auto it = spec.tree.body_index.find(spec.tool_body);
-      if (it == spec.tree.body_index.end())
-        throw ConfigError(src, 0, "tool.body", "no body named '" + spec.tool_body + "'");
-      m.tool_body = it->second;
+  // The tools: `tool:`'s one, named "tool", or `tools:`'s by name. Their names head trace columns and
+  // metrics (<name>.x, <name>_settling_s), so none may be an actuated joint's or a flexible link's.
+  if (spec.tools.empty()) {
+    m.tools.push_back(resolve_tool(m, spec, {"tool", spec.tool_body, spec.tool_point, 0}, "tool."));
+  } else {
+    for (const ToolSpec& t : spec.tools) {
+      const std::string key = "tools." + t.name;
+      for (const ArmTool& o : m.tools)
+        if (o.name == t.name) throw ConfigError(src, t.line, key, "a tool of that name is given already");
+      for (const JointControlSpec& c : spec.joints)
+        if (c.joint == t.name)
+          throw ConfigError(src, t.line, key, "an actuated joint has that name: its columns and metrics would clash");
+      for (const LinkTip& l : m.links)
+        if (l.name == t.name)
+          throw ConfigError(src, t.line, key, "a flexible link has that name: its columns and metrics would clash");
+      m.tools.push_back(resolve_tool(m, spec, t, key + "."));
     }
   }
-  if (!at_link_tip && spec.tool_body.empty())
-    for (const LinkTip& t : m.links)
-      if (t.tip_body == m.tool_body) m.tool_point = t.tip_point + spec.tool_point;
+  m.tool_body = m.tools.front().body;
+  m.tool_point = m.tools.front().point;
 
   // The trajectory: joint waypoints as written, tool waypoints by IK on the rigid arm (flexible links
   // straight), each from the pose before it.
@@ -348,7 +379,20 @@ ArmModel make_arm(const ArmSpec& spec) {
     const ArmWaypoint& wp = spec.waypoints[w];
     const std::string key = "trajectory.waypoints[" + std::to_string(w) + "]";
     if (na == 0) throw ConfigError(src, wp.line, key, "the arm has no actuated joint to move (give `joints`)");
+    // Joint values as written (a `tools` waypoint's fix those joints before its IK).
+    for (const auto& [name, value] : wp.joints) {
+      const auto it = act_index.find(name);
+      if (it == act_index.end())
+        throw ConfigError(src, wp.line, key + ".joints." + name,
+                          spec.tree.dof_index.count(name) ? "a passive joint cannot be commanded (give it a controller under `joints`)"
+                                                          : "no moving joint of that name");
+      if (!std::isfinite(value)) throw ConfigError(src, wp.line, key + ".joints." + name, "must be finite");
+      pose[m.actuated[static_cast<std::size_t>(it->second)].dof] = value;
+    }
     if (wp.cartesian) {
+      if (m.tools.size() != 1)
+        throw ConfigError(src, wp.line, key + ".tool",
+                          "this arm has several tools (" + tool_names(m) + "): give `tools: {NAME: [x, y, z], ...}`");
       IkTarget target;
       target.body = m.tool_body;
       target.point = m.tool_point;
@@ -356,16 +400,29 @@ ArmModel make_arm(const ArmSpec& spec) {
       const IkResult r = solve_inverse_kinematics(m.tree, pose, target, ik);
       if (!r.converged) throw ConfigError(src, wp.line, key + ".tool", "the tool cannot reach it: " + r.why);
       pose = r.q;
-    } else {
-      for (const auto& [name, value] : wp.joints) {
-        const auto it = act_index.find(name);
-        if (it == act_index.end())
-          throw ConfigError(src, wp.line, key + ".joints." + name,
-                            spec.tree.dof_index.count(name) ? "a passive joint cannot be commanded (give it a controller under `joints`)"
-                                                            : "no moving joint of that name");
-        if (!std::isfinite(value)) throw ConfigError(src, wp.line, key + ".joints." + name, "must be finite");
-        pose[m.actuated[static_cast<std::size_t>(it->second)].dof] = value;
+    } else if (!wp.tools.empty()) {
+      // Every named tool's target at once: the stacked tasks over the actuated joints this waypoint
+      // does not fix.
+      std::vector<IkTarget> targets;
+      for (const auto& [name, position] : wp.tools) {
+        const auto t = std::find_if(m.tools.begin(), m.tools.end(), [&](const ArmTool& x) { return x.name == name; });
+        if (t == m.tools.end())
+          throw ConfigError(src, wp.line, key + ".tools." + name, "no tool of that name (tools: " + tool_names(m) + ")");
+        if (!position.allFinite()) throw ConfigError(src, wp.line, key + ".tools." + name, "must be finite");
+        targets.push_back({.body = t->body, .point = t->point, .position = position, .name = name});
       }
+      IkOptions free = ik;
+      free.free_dofs.clear();
+      for (const ActuatedJoint& a : m.actuated)
+        if (std::none_of(wp.joints.begin(), wp.joints.end(), [&](const auto& j) { return j.first == a.name; }))
+          free.free_dofs.push_back(a.dof);
+      if (free.free_dofs.empty())
+        throw ConfigError(src, wp.line, key + ".tools", "`joints` fixes every actuated joint: none is left for the tools");
+      const IkResult r = solve_inverse_kinematics(m.tree, pose, targets, free);
+      if (!r.converged)
+        throw ConfigError(src, wp.line, key + ".tools",
+                          std::string(targets.size() == 1 ? "the tool cannot reach it: " : "the tools cannot reach them: ") + r.why);
+      pose = r.q;
     }
     JointWaypoint jw;
     jw.time = wp.time;

@@ -62,12 +62,22 @@ struct JointControlSpec {
 };
 
 // Where a waypoint goes: joint values by name (the others keep the previous waypoint's), or a tool
-// position reached by inverse kinematics at plan time.
+// position reached by inverse kinematics at plan time, or several tools' positions at once (`tools`,
+// with `joints` fixing some actuated joints first; the IK moves the others).
 struct ArmWaypoint {
   double time = 0.0;                 // arrival, s from the start
   std::vector<std::pair<std::string, double>> joints;  // joint name -> rad (m)
   bool cartesian = false;            // `tool` set: solve for the actuated joints
   Vec3 tool = Vec3::Zero();          // the tool point's target in the base frame, m
+  std::vector<std::pair<std::string, Vec3>> tools;  // `tools`: tool name -> its target, base frame, m
+  int line = 0;                      // where it is written, for errors
+};
+
+// One named tool point (`tools: {NAME: {body, point}}`; the `tool:` block is the one tool named "tool").
+struct ToolSpec {
+  std::string name;
+  std::string body;                  // "" = the last body; a flexible link's name means its tip
+  Vec3 point = Vec3::Zero();         // in that body's frame (a flexible link: from its tip point), m
   int line = 0;                      // where it is written, for errors
 };
 
@@ -78,6 +88,7 @@ struct ArmSpec {
   std::string tool_body;             // the end effector's body ("" = the last body; a flexible link's tip)
   Vec3 tool_point = Vec3::Zero();    // in that body's frame (a flexible link: from its tip point), m
   bool tool_point_given = false;
+  std::vector<ToolSpec> tools;       // `tools:` in file order; empty: the one tool of `tool:` (named "tool")
   double rate = 1000.0;              // controller sample rate, Hz
   std::vector<JointControlSpec> joints;  // the actuated joints, in file order
   TrajectoryShape shape = TrajectoryShape::kQuintic;
@@ -126,13 +137,21 @@ struct ActuatedJoint {
   double hold_torque = 0.0;
 };
 
+// A tool point, derived: trace columns <name>.x/.y/.z and .ref_x/.ref_y/.ref_z, metrics <name>_settling_s, ...
+struct ArmTool {
+  std::string name;                  // "tool" for the `tool:` block (or none given)
+  int body = -1;
+  Vec3 point = Vec3::Zero();         // in body's frame, m
+};
+
 struct ArmModel {
   ArmSpec spec;
   Tree tree;
   std::vector<ActuatedJoint> actuated;  // in dof order
   std::vector<int> passive_dofs;     // every other moving joint (cells, unactuated joints)
   std::vector<int> compliant_dofs;   // the flexible links' cells and the drive trains' twists: what sags
-  int tool_body = -1;
+  std::vector<ArmTool> tools;        // at least one: `tool:`'s as "tool", or `tools:`'s in file order
+  int tool_body = -1;                // the first tool's body and point
   Vec3 tool_point = Vec3::Zero();    // in tool_body's frame, m
   std::vector<LinkTip> links;        // the flexible links
   JointTrajectory trajectory;        // of the actuated joints (their order), start = the initial pose

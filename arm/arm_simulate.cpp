@@ -27,7 +27,8 @@ std::vector<std::string> arm_trace_names(const ArmModel& m) {
   std::vector<std::string> n{"t"};
   for (const ActuatedJoint& a : m.actuated)
     for (const char* s : {".ref", ".q", ".qd", ".torque"}) n.push_back(a.name + s);
-  for (const char* s : {"tool.x", "tool.y", "tool.z", "tool.ref_x", "tool.ref_y", "tool.ref_z"}) n.push_back(s);
+  for (const ArmTool& t : m.tools)
+    for (const char* s : {".x", ".y", ".z", ".ref_x", ".ref_y", ".ref_z"}) n.push_back(t.name + s);
   for (const LinkTip& l : m.links)
     for (const char* s : {".deflection_y", ".deflection_z"}) n.push_back(l.name + s);
   for (const ActuatedJoint& a : m.actuated)
@@ -52,6 +53,9 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
         (a.actuated[j].control.friction.model == "lugre") != (b.actuated[j].control.friction.model == "lugre"))
       return "joint " + a.actuated[j].name + "'s control differs in shape";
   if (a.links.size() != b.links.size()) return "the flexible links differ";
+  if (a.tools.size() != b.tools.size()) return "the tools differ";
+  for (std::size_t t = 0; t < a.tools.size(); ++t)
+    if (a.tools[t].name != b.tools[t].name) return "the tools differ";
   if (a.control_period != b.control_period || a.duration != b.duration || a.substeps != b.substeps ||
       a.integrator != b.integrator || a.spec.rtol != b.spec.rtol || a.spec.atol != b.spec.atol)
     return "the rate, duration, substeps, integrator or its tolerances differ";
@@ -62,13 +66,15 @@ namespace {
 
 using std::size_t;
 
-// The lane's tool point and, per flexible link, its tip deflection in the root frame (out[0..2], then
-// two per link).
+// The lane's tool points and, per flexible link, its tip deflection in the root frame (out[3 t .. 3 t + 2]
+// per tool t, then two per link).
 void calc_plant_kinematics(const ArmModel& m, const Eigen::VectorXd& q, std::vector<Pose>& poses, double* out) {
   calc_body_poses(m.tree, q, poses);
-  const Vec3 tool = poses[static_cast<size_t>(m.tool_body)].point(m.tool_point);
-  out[0] = tool.x(), out[1] = tool.y(), out[2] = tool.z();
-  int k = 3;
+  int k = 0;
+  for (const ArmTool& t : m.tools) {
+    const Vec3 tool = poses[static_cast<size_t>(t.body)].point(t.point);
+    out[k++] = tool.x(), out[k++] = tool.y(), out[k++] = tool.z();
+  }
   for (const LinkTip& l : m.links) {
     const Pose& root = poses[static_cast<size_t>(l.root_body)];
     const Vec3 tip = poses[static_cast<size_t>(l.tip_body)].point(l.tip_point);
@@ -78,10 +84,9 @@ void calc_plant_kinematics(const ArmModel& m, const Eigen::VectorXd& q, std::vec
   }
 }
 
-// Where the rigid arm at the reference puts the tool point.
-Vec3 calc_reference_tool(const ArmModel& m, const Eigen::VectorXd& q_ref, std::vector<Pose>& poses) {
-  calc_body_poses(m.tree, q_ref, poses);
-  return poses[static_cast<size_t>(m.tool_body)].point(m.tool_point);
+// Where the rigid arm at the reference puts each tool point (calc_body_poses first).
+Vec3 calc_reference_tool(const ArmTool& t, const std::vector<Pose>& poses) {
+  return poses[static_cast<size_t>(t.body)].point(t.point);
 }
 
 // ---- The replay hook (ArmRunOptions::reference) ----
@@ -111,8 +116,8 @@ void eval_lane_references(ArmLanes& a, long k) {
   }
 }
 
-// Trace columns: t, 4 per actuated joint, the kinematics (tool, tool.ref, 2 per link), 2 measured per
-// joint, 2 pressures per hydraulic joint.
+// Trace columns: t, 4 per actuated joint, the kinematics (6 per tool: its point and the reference's, then
+// 2 per link), 2 measured per joint, 2 pressures per hydraulic joint.
 size_t kinematics_column(const ArmLanes& a) { return 1 + 4 * static_cast<size_t>(a.na); }
 size_t pressure_column(const ArmLanes& a) { return a.names.size() - 2 * static_cast<size_t>(a.nh); }
 size_t measured_column(const ArmLanes& a) { return pressure_column(a) - 2 * static_cast<size_t>(a.na); }
@@ -285,16 +290,17 @@ void calc_arm_outputs(ArmLanes& a) {
       put(col, l, a.s.z[z + 2 * static_cast<size_t>(W)] * kPressureUnit);
       put(col + 1, l, a.s.z[z + 3 * static_cast<size_t>(W)] * kPressureUnit);
     }
-    // The tool (tool.x/y/z) and the links' deflections, after the reference tool's three columns.
-    const size_t n_plant = 3 + 2 * m.links.size();
+    // The tools (<tool>.x/y/z, each before its reference's three columns) and the links' deflections.
+    const size_t nt = m.tools.size(), n_plant = 3 * nt + 2 * m.links.size();
     if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
       for (int j = 0; j < nv; ++j) a.q_lane[j] = a.s.q[static_cast<size_t>(j * W + l)];
       calc_plant_kinematics(m, a.q_lane, a.poses, a.kin.data());
     } else {
       std::fill(a.kin.begin(), a.kin.begin() + static_cast<std::ptrdiff_t>(n_plant), std::nan(""));
     }
-    for (size_t i = 0; i < 3; ++i) put(kin0 + i, l, a.kin[i]);
-    for (size_t i = 3; i < n_plant; ++i) put(kin0 + 3 + i, l, a.kin[i]);
+    for (size_t t = 0; t < nt; ++t)
+      for (size_t i = 0; i < 3; ++i) put(kin0 + 6 * t + i, l, a.kin[3 * t + i]);
+    for (size_t i = 3 * nt; i < n_plant; ++i) put(kin0 + 3 * nt + i, l, a.kin[i]);
   }
 }
 
@@ -379,10 +385,14 @@ void step_arm_controllers(ArmLanes& a, long k) {
     if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
       a.q_ref.setZero();
       for (int j = 0; j < na; ++j) a.q_ref[m.actuated[static_cast<size_t>(j)].dof] = rl[j];
-      const Vec3 ref = calc_reference_tool(m, a.q_ref, a.poses);
-      put(kin0 + 3, l, ref.x()), put(kin0 + 4, l, ref.y()), put(kin0 + 5, l, ref.z());
+      calc_body_poses(m.tree, a.q_ref, a.poses);
+      for (size_t t = 0; t < m.tools.size(); ++t) {
+        const Vec3 ref = calc_reference_tool(m.tools[t], a.poses);
+        put(kin0 + 6 * t + 3, l, ref.x()), put(kin0 + 6 * t + 4, l, ref.y()), put(kin0 + 6 * t + 5, l, ref.z());
+      }
     } else {
-      for (size_t i = 3; i < 6; ++i) put(kin0 + i, l, std::nan(""));
+      for (size_t t = 0; t < m.tools.size(); ++t)
+        for (size_t i = 3; i < 6; ++i) put(kin0 + 6 * t + i, l, std::nan(""));
     }
     for (int j = 0; j < na; ++j) {
       put(meas0 + 2 * static_cast<size_t>(j), l, a.q_meas[static_cast<size_t>(j * W + l)]);

@@ -19,7 +19,8 @@ namespace ff {
 // before that sample's torque is applied; the torque columns hold the torque applied from it on.
 //   <joint>.ref, <joint>.q, <joint>.qd, <joint>.torque    per actuated joint (rad, rad/s, N·m; prismatic m, N)
 //   tool.x, tool.y, tool.z, tool.ref_x, tool.ref_y, tool.ref_z   the tool point and where the rigid arm
-//                                                        at the reference puts it, base frame, m
+//                                                        at the reference puts it, base frame, m; per
+//                                                        tool, named as it is ("tool" for `tool:`)
 //   <link>.deflection_y, <link>.deflection_z             a flexible link's tip from the straight link's
 //                                                        tip, in the link's root frame, m
 //   <joint>.q_measured, <joint>.qd_measured              per actuated joint, what its controller measured

@@ -35,6 +35,12 @@ const std::array<Field<ArmSpec>, 2> kToolFields{{
     {.key = "point", .member = &ArmSpec::tool_point, .unit = "m"},
 }};
 
+// One of several named tools (`tools: {NAME: {body, point}}`).
+const std::array<Field<ToolSpec>, 2> kToolsFields{{
+    {.key = "body", .member = &ToolSpec::body, .fallback = "the last body (a flexible link: its tip)"},
+    {.key = "point", .member = &ToolSpec::point, .unit = "m"},
+}};
+
 const std::array<Field<ArmSpec>, 1> kControllerFields{{
     {.key = "rate", .member = &ArmSpec::rate, .unit = "Hz", .bound = Bound::kPositive},
 }};
@@ -211,6 +217,24 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   read_present(tool, kToolFields, s);
   s.tool_point_given = tool.has("point");
   tool.finish();
+  // Several tool points by name, instead of `tool`.
+  if (const YAML::Node tv = top.raw("tools"); tv) {
+    if (top.has("tool")) top.fail("tools", "give either `tool` (one tool point) or `tools` (several, by name), not both");
+    if (!tv.IsMap() || tv.size() == 0) top.fail("tools", "expected a map from tool name to its {body, point}");
+    YamlReader tr(tv, source, "tools", &lines);
+    for (const auto& kv : tv) {
+      ToolSpec t;
+      t.name = kv.first.as<std::string>();
+      YamlReader one = tr.child(t.name);
+      t.line = one.line();
+      if (t.name.empty() || t.name.find_first_of(". ,\"") != std::string::npos)
+        tr.fail(t.name, "a tool's name heads its columns (NAME.x) and metrics: no dots, spaces, commas or quotes");
+      read_present(one, kToolsFields, t);
+      one.finish();
+      s.tools.push_back(std::move(t));
+    }
+    tr.finish();
+  }
 
   YamlReader controller = top.child("controller");
   read_present(controller, kControllerFields, s);
@@ -315,6 +339,18 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
     wp.line = w.line();
     read_present(w, kWaypointFields, wp);
     wp.cartesian = w.has("tool");
+    const YAML::Node tv = w.raw("tools");
+    if (tv) {  // several tools' targets by name
+      if (!tv.IsMap() || tv.size() == 0) w.fail("tools", "expected a map from tool name to its target [x, y, z] (m)");
+      YamlReader vr(tv, source, w.full_key("tools"), &lines);
+      for (const auto& kv : tv) {
+        const std::string name = kv.first.as<std::string>();
+        Vec3 target = Vec3::Zero();
+        read_vec3(vr, name, target);
+        wp.tools.emplace_back(name, target);
+      }
+      vr.finish();
+    }
     const YAML::Node jv = w.raw("joints");
     if (jv) {
       if (!jv.IsMap()) w.fail("joints", "expected a map from joint name to its value (rad or m)");
@@ -330,7 +366,8 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
     w.finish();
     require(w, kWaypointFields);
     if (wp.cartesian && jv) w.fail("tool", "a waypoint is either a tool position or joint values, not both");
-    if (!wp.cartesian && !jv) w.fail("joints", "missing: the joint values (or a `tool` position)");
+    if (wp.cartesian && tv) w.fail("tools", "give either `tool` (the one tool's target) or `tools`, not both");
+    if (!wp.cartesian && !jv && !tv) w.fail("joints", "missing: the joint values (or a `tool` position, or `tools`)");
     if (!(wp.time > previous)) w.fail("time", "waypoints must be in time order, each after the one before");
     previous = wp.time;
     s.waypoints.push_back(std::move(wp));
@@ -374,6 +411,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   std::vector<KeyDoc> out;
   add_keys(out, "", kTopFields);
   add_keys(out, "tool.", kToolFields);
+  add_keys(out, "tools.NAME.", kToolsFields);
   add_keys(out, "controller.", kControllerFields);
   add_keys(out, "joints.NAME.controller.", kGainFields);
   add_keys(out, "joints.NAME.notch.", kNotchFields);
@@ -391,6 +429,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   add_keys(out, "trajectory.", kTrajectoryFields);
   out.push_back({"trajectory.start", "rad (m)", "no", "every joint at 0"});
   add_keys(out, "trajectory.waypoints[i].", kWaypointFields);
+  out.push_back({"trajectory.waypoints[i].tools", "m", "no", "none"});
   out.push_back({"trajectory.waypoints[i].joints", "rad (m)", "no", "none: `tool`"});
   add_keys(out, "simulation.", kSimulationFields);
   add_keys(out, "simulation.", kIntegratorFields);

@@ -1,7 +1,7 @@
 // Arm model files (docs/formats.md, "Arm models"): a kinematic tree, inline (tree YAML's `gravity` and
-// `bodies`) or from a URDF (`urdf`, `sidecar`), with the control of its actuated joints, the tool, a
-// trajectory through waypoints and the simulation settings. Read strictly, each block from its field
-// table; every error is one ConfigError naming the file, line and key path.
+// `bodies`) or from a URDF (`urdf`, `sidecar`), with the control of its actuated joints, the tool (or
+// several by name: `tools`), a trajectory through waypoints and the simulation settings. Read strictly,
+// each block from its field table; every error is one ConfigError naming the file, line and key path.
 #pragma once
 
 #include <yaml-cpp/yaml.h>

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "arm/arm_metrics.hpp"
 #include "common/files.hpp"
 #include "kernel/simulate.hpp"
 #include "kernel/trajectory.hpp"
@@ -88,18 +89,26 @@ std::vector<std::string> write_arm_plots(const std::string& dir, const std::vect
     for (const std::string& j : joints)
       p.series.push_back({.label = many ? label + " " + j : j, .x = tr.t(), .y = tr.column(j + ".torque")});
   });
-  plot("tool_error.png", "tool error (mm)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
-    Series e{.label = many ? label : "|tool - reference|", .x = tr.t(), .y = {}};
-    for (std::size_t k = 0; k < tr.t().size(); ++k) {
-      double d2 = 0.0;
-      for (const char* c : {"x", "y", "z"}) {
-        const double d = tr.column(std::string("tool.") + c)[k] - tr.column(std::string("tool.ref_") + c)[k];
-        d2 += d * d;
-      }
-      e.y.push_back(1e3 * std::sqrt(d2));
-    }
-    p.series.push_back(std::move(e));
-  });
+  // Each tool's error from where the rigid arm at the reference puts it (tools by their ".ref_x" columns).
+  std::vector<std::string> tools;
+  for (const std::string& n : first.names)
+    if (n.ends_with(".ref_x")) tools.push_back(n.substr(0, n.size() - 6));
+  plot("tool_error.png", tools.size() > 1 ? "tool errors (mm)" : "tool error (mm)",
+       [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+         for (const std::string& tool : tools) {
+           const std::string name = tools.size() > 1 ? tool : "|tool - reference|";
+           Series e{.label = many ? (tools.size() > 1 ? label + " " + tool : label) : name, .x = tr.t(), .y = {}};
+           for (std::size_t k = 0; k < tr.t().size(); ++k) {
+             double d2 = 0.0;
+             for (const char* c : {"x", "y", "z"}) {
+               const double d = tr.column(tool + "." + c)[k] - tr.column(tool + ".ref_" + c)[k];
+               d2 += d * d;
+             }
+             e.y.push_back(1e3 * std::sqrt(d2));
+           }
+           p.series.push_back(std::move(e));
+         }
+       });
   if (!links.empty())
     plot("deflection.png", "link tip deflection (mm)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
       for (const std::string& l : links) {
@@ -128,14 +137,17 @@ KeyMetrics key_metrics(const ResultTable& t) {
   if (std::find(t.columns.begin(), t.columns.end(), "m1_tip_settling_s") != t.columns.end())
     return {"m1_tip_settling_s", "m1_tip_overshoot_pct", "m1_peak_tip_deflection_m", "m1_residual_vibration_m",
             "m1_peak_torque_Nm", "tip", "peak tip deflection"};
-  KeyMetrics k{"tool_settling_s", "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m", "", "tool",
-               "peak tool tracking error"};
+  // The first tool's (`tool:`'s is named "tool").
+  const std::vector<std::string> tools = arm_tool_names(t.columns);
+  const std::string tool = tools.empty() ? "tool" : tools.front();
+  KeyMetrics k{tool + "_settling_s", tool + "_overshoot_pct", tool + "_peak_error_m", tool + "_final_error_m", "", "tool",
+               tool == "tool" ? "peak tool tracking error" : "peak tracking error of tool " + tool};
   for (const std::string& c : t.columns) {
-    if (c.ends_with("_peak_deflection_m") && k.deflection == "tool_peak_error_m") {
+    if (c.ends_with("_peak_deflection_m") && k.deflection == tool + "_peak_error_m") {
       k.deflection = c;
       k.deflection_title = "peak deflection of " + c.substr(0, c.size() - 18);
     }
-    if (c.ends_with("_residual_m") && k.residual == "tool_final_error_m") k.residual = c;
+    if (c.ends_with("_residual_m") && k.residual == tool + "_final_error_m") k.residual = c;
     if (c.ends_with("_peak_torque_Nm") && k.torque.empty()) k.torque = c;
   }
   return k;

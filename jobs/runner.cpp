@@ -183,7 +183,7 @@ struct ArmFamily {
     for (std::size_t l = 0; l < lanes.size(); ++l) {
       const Variant& v = study.variants[static_cast<std::size_t>(variants[l])];
       ResultRow row{v.eval_id, v.seed, v.label, "", v.params, calc_arm_metrics(lanes[l], run.traces[l], run.status[l])};
-      row.status = calc_arm_status(run.status[l], columns, row.values);
+      row.status = calc_arm_status(lanes[l], run.status[l], columns, row.values);
       res.rows.push_back(std::move(row));
       if (keep_traces) res.arm_traces.push_back(std::move(run.traces[l]));
     }

@@ -125,9 +125,26 @@ Reach reach_bound(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& t
 
 IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target,
                                   const IkOptions& opt) {
-  check_arguments(tree, q0, target, opt);
+  return solve_inverse_kinematics(tree, q0, std::span<const IkTarget>(&target, 1), opt);
+}
+
+IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, std::span<const IkTarget> targets,
+                                  const IkOptions& opt) {
+  if (targets.empty()) fail("no target");
+  for (const IkTarget& target : targets) check_arguments(tree, q0, target, opt);
   const int nv = tree.nv();
-  const int rows = target.orient ? 6 : 3;
+  const std::size_t nt = targets.size();
+  // The stacked task: target k's rows from row0[k] (3, or 6 with orient).
+  std::vector<int> row0(nt), rows_of(nt);
+  int rows = 0;
+  for (std::size_t k = 0; k < nt; ++k) {
+    rows_of[k] = targets[k].orient ? 6 : 3;
+    row0[k] = rows;
+    rows += rows_of[k];
+  }
+  const auto label = [&](std::size_t k) {
+    return targets[k].name.empty() ? "target " + std::to_string(k) : targets[k].name;
+  };
 
   std::vector<int> moving = opt.free_dofs;
   if (moving.empty())
@@ -143,39 +160,62 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
   IkResult r;
   r.q = q0;
   for (int d : moving) r.q[d] = std::clamp(r.q[d], lo[d], hi[d]);
-  Vec6 e = residual(tree, r.q, target);
-  double cost = e.squaredNorm();
+  // Each target's residual and the task's cost sum |e_k|² (one target: e.squaredNorm() exactly).
+  std::vector<Vec6> e(nt), e_trial(nt);
+  const auto evaluate = [&](const Eigen::VectorXd& q, std::vector<Vec6>& out) {
+    double c = 0.0;
+    for (std::size_t k = 0; k < nt; ++k) {
+      out[k] = residual(tree, q, targets[k]);
+      c += out[k].squaredNorm();
+    }
+    return c;
+  };
+  double cost = evaluate(r.q, e);
+  const auto worst = [&](int part) {
+    double w = 0.0;
+    for (const Vec6& ek : e) w = std::max(w, part == 0 ? ek.head<3>().norm() : ek.tail<3>().norm());
+    return w;
+  };
   auto finish = [&](bool converged, std::string why) {
     r.converged = converged;
-    r.position_error = e.head<3>().norm();
-    r.orientation_error = e.tail<3>().norm();
+    r.position_error = worst(0);
+    r.orientation_error = worst(1);
     r.why = std::move(why);
     return r;
   };
+  auto residual_of = [&](std::size_t k) {
+    std::string s = length(e[k].head<3>().norm());
+    if (targets[k].orient) s += ", " + fmt("%.3g rad", e[k].tail<3>().norm());
+    return s;
+  };
   auto residual_text = [&]() {
-    std::string s = length(e.head<3>().norm());
-    if (target.orient) s += ", " + fmt("%.3g rad", e.tail<3>().norm());
+    if (nt == 1) return residual_of(0);
+    std::string s;
+    for (std::size_t k = 0; k < nt; ++k) s += (k ? ", " : "") + label(k) + " " + residual_of(k);
     return s;
   };
 
   TreeWorkspace ws(tree);
   Eigen::MatrixXd J6(6, nv), J(rows, m), Jm(rows, m);
-  Eigen::VectorXd dq(m), q_trial(nv);
+  Eigen::VectorXd dq(m), q_trial(nv), er(rows);
   std::vector<bool> locked(static_cast<std::size_t>(m));
   double lambda = opt.damping;
 
   for (;;) {
-    if (e.head<3>().norm() <= opt.tolerance && e.tail<3>().norm() <= opt.tolerance) return finish(true, "");
+    if (worst(0) <= opt.tolerance && worst(1) <= opt.tolerance) return finish(true, "");
     if (r.iterations >= opt.max_iterations)
       return finish(false, "did not converge in " + std::to_string(opt.max_iterations) + " iterations; residual " +
                                residual_text());
     // J's rows for e: calc_point_jacobian gives [omega; v], e is [position; orientation].
-    calc_point_jacobian(tree, r.q, target.body, target.point, J6, ws);
-    for (int c = 0; c < m; ++c) {
-      J.block<3, 1>(0, c) = J6.block<3, 1>(3, moving[c]);
-      if (target.orient) J.block<3, 1>(3, c) = J6.block<3, 1>(0, moving[c]);
+    for (std::size_t k = 0; k < nt; ++k) {
+      const IkTarget& target = targets[k];
+      calc_point_jacobian(tree, r.q, target.body, target.point, J6, ws);
+      for (int c = 0; c < m; ++c) {
+        J.block<3, 1>(row0[k], c) = J6.block<3, 1>(3, moving[c]);
+        if (target.orient) J.block<3, 1>(row0[k] + 3, c) = J6.block<3, 1>(0, moving[c]);
+      }
+      er.segment(row0[k], rows_of[k]) = e[k].head(rows_of[k]);
     }
-    const Eigen::VectorXd er = e.head(rows);
     // Trial steps at growing lambda until one lowers |e|.
     bool stalled = false;
     std::vector<int> at_limit;
@@ -217,9 +257,8 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
       if (biggest > kMaxStep) dq *= kMaxStep / biggest;
       q_trial = r.q;
       for (int c = 0; c < m; ++c) q_trial[moving[c]] = std::clamp(r.q[moving[c]] + dq[c], lo[moving[c]], hi[moving[c]]);
-      const Vec6 e_trial = residual(tree, q_trial, target);
+      const double cost_trial = evaluate(q_trial, e_trial);
       ++r.iterations;
-      const double cost_trial = e_trial.squaredNorm();
       if (cost_trial < cost) {
         // The gain ratio rho = actual / predicted (by e - J dq) decrease sets lambda (Nielsen 1999:
         // x max(1/3, 1 - (2 rho - 1)³)): a step the linear model overrates (large residuals, where
@@ -229,7 +268,7 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
         const double rho = predicted > 0.0 ? (cost - cost_trial) / predicted : 0.0;
         lambda = std::max(lambda * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), kLambdaMin);
         r.q = q_trial;
-        e = e_trial;
+        e.swap(e_trial);
         cost = cost_trial;
         break;
       }
@@ -239,23 +278,29 @@ IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, c
     if (stalled) {
       std::vector<bool> is_free(static_cast<std::size_t>(nv), false);
       for (int d : moving) is_free[static_cast<std::size_t>(d)] = true;
-      const Reach reach = reach_bound(tree, q0, target, is_free, lo, hi);
-      const double beyond = (target.position - reach.centre).norm() - reach.radius;
-      if (beyond > 0.0 && e.head<3>().norm() > opt.tolerance) {
+      for (std::size_t k = 0; k < nt; ++k) {
+        const IkTarget& target = targets[k];
+        const Reach reach = reach_bound(tree, q0, target, is_free, lo, hi);
+        const double beyond = (target.position - reach.centre).norm() - reach.radius;
+        if (!(beyond > 0.0 && e[k].head<3>().norm() > opt.tolerance)) continue;
+        const std::string who = nt == 1 ? "" : label(k) + ": ";
         if (reach.root < 0)
-          return finish(false, "target beyond reach: " + length(beyond) + " from the point, which no joint moves");
-        return finish(false, "target " + length(beyond) + " beyond reach (the point stays within " +
+          return finish(false, who + "target beyond reach: " + length(beyond) + " from the point, which no joint moves");
+        return finish(false, who + "target " + length(beyond) + " beyond reach (the point stays within " +
                                  length(reach.radius) + " of body " + std::to_string(reach.root) +
-                                 "'s joint); stationary " + residual_text() + " from it");
+                                 "'s joint); stationary " + residual_of(k) + " from it");
       }
+      const char* from = nt == 1 ? " from it" : " from the targets";
       if (!at_limit.empty()) {
         std::string dofs;
         for (int d : at_limit) dofs += (dofs.empty() ? "" : ", ") + std::to_string(d);
-        return finish(false, "target not reached within the joint limits: stationary " + residual_text() +
-                                 " from it with dof" + (at_limit.size() > 1 ? "s " : " ") + dofs + " at a limit");
+        return finish(false, "target" + std::string(nt == 1 ? "" : "s") + " not reached within the joint limits: stationary " +
+                                 residual_text() + from + " with dof" + (at_limit.size() > 1 ? "s " : " ") + dofs +
+                                 " at a limit");
       }
       return finish(false, "stationary " + residual_text() +
-                               " from the target: a local minimum, or a target the free dofs cannot reach "
+                               (nt == 1 ? " from the target" : " from the targets") +
+                               ": a local minimum, or a target the free dofs cannot reach "
                                "(try another q0)");
     }
   }

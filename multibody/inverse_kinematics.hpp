@@ -17,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,7 @@ struct IkTarget {
   Vec3 position = Vec3::Zero();       // desired position of the point in the base frame, m
   bool orient = false;                // also reach `rotation`
   Mat3 rotation = Mat3::Identity();   // desired body orientation in the base frame when orient (active)
+  std::string name;                   // in messages when several targets are solved together
 };
 
 struct IkOptions {
@@ -47,8 +49,8 @@ struct IkOptions {
 struct IkResult {
   Eigen::VectorXd q;               // the solution, or the best point reached
   bool converged = false;
-  double position_error = 0.0;     // |p_des - p(q)|, m
-  double orientation_error = 0.0;  // rotation angle of R_des R(q)^T, rad (0 without orient)
+  double position_error = 0.0;     // |p_des - p(q)|, m (several targets: the largest)
+  double orientation_error = 0.0;  // rotation angle of R_des R(q)^T, rad (0 without orient; several: the largest)
   int iterations = 0;              // trial steps taken
   std::string why;                 // why not converged (empty when converged)
 };
@@ -68,6 +70,15 @@ struct IkResult {
 // range or repeated, limits not of nv entries, NaN (infinities are allowed) or lower > upper, and on
 // damping <= 0, max_iterations < 0 or tolerance <= 0.
 IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, const IkTarget& target,
+                                  const IkOptions& opt = {});
+
+// Several targets at once (e.g. two tool points of a two-armed tree): their tasks stacked, e = [e_1; e_2;
+// ...], J = [J_1; J_2; ...] over the same free dofs, solved by the same damped least squares (one
+// target: exactly the call above, bit for bit). Converged when every target is within the tolerance;
+// a failure's message names the target (IkTarget::name, else its index) it concerns: "right: target
+// 0.35 m beyond reach ...", "stationary left 3.1 mm, right 0.19 m from the targets: ...". Throws as
+// above for each target, and on an empty list.
+IkResult solve_inverse_kinematics(const Tree& tree, const Eigen::VectorXd& q0, std::span<const IkTarget> targets,
                                   const IkOptions& opt = {});
 
 }  // namespace ff

@@ -40,6 +40,10 @@ ShapeIndex index_shape(const Tree& tree, const ArmShape& shape) {
   if (shape.tool_body >= n || shape.tool_body < -1)
     throw std::invalid_argument("ArmShape: tool body " + std::to_string(shape.tool_body) + " outside the tree's " +
                                 std::to_string(n) + " bodies");
+  for (const auto& [body, point] : shape.more_tools)
+    if (!body_ok(body))
+      throw std::invalid_argument("ArmShape: tool body " + std::to_string(body) + " outside the tree's " +
+                                  std::to_string(n) + " bodies");
   for (size_t l = 0; l < shape.flexible_links.size(); ++l) {
     const FlexibleLinkShape& f = shape.flexible_links[l];
     const std::string what = "ArmShape: flexible link " + std::to_string(l);
@@ -81,6 +85,7 @@ struct Geometry {
   std::vector<std::vector<Vec3>> flexible;
   std::vector<Vec3> joints;
   Vec3 tool = Vec3::Constant(kNaN);
+  std::vector<Vec3> more_tools;           // ArmShape::more_tools
   void points(std::vector<Vec3>& out) const {
     for (const auto* set : {&links, &base_links})
       for (const Capsule& c : *set) out.push_back(c.a), out.push_back(c.b);
@@ -88,6 +93,7 @@ struct Geometry {
     for (const auto& pl : flexible) out.insert(out.end(), pl.begin(), pl.end());
     for (const Vec3& j : joints) out.push_back(j);
     if (tool.allFinite()) out.push_back(tool);
+    for (const Vec3& t : more_tools) out.push_back(t);
     out.push_back(Vec3::Zero());  // the base
   }
 };
@@ -137,6 +143,8 @@ Geometry arm_geometry(const Tree& tree, const ArmShape& shape, const ShapeIndex&
       if (leaf) add(g.links, p.position, p.point(b.com));
     }
     if (i == shape.tool_body) add(g.links, p.position, p.point(shape.tool_point));
+    for (const auto& [body, point] : shape.more_tools)
+      if (i == body) add(g.links, p.position, p.point(point));
   }
   for (size_t l = 0; l < x.chain.size(); ++l) {
     std::vector<Vec3> pl;
@@ -146,6 +154,7 @@ Geometry arm_geometry(const Tree& tree, const ArmShape& shape, const ShapeIndex&
     g.flexible.push_back(std::move(pl));
   }
   if (shape.tool_body >= 0) g.tool = poses[size_t(shape.tool_body)].point(shape.tool_point);
+  for (const auto& [body, point] : shape.more_tools) g.more_tools.push_back(poses[size_t(body)].point(point));
   return g;
 }
 
@@ -391,10 +400,18 @@ Vec3 arm_tool_position(const Tree& tree, const ArmShape& shape, const Eigen::Ref
   return calc_point_position(tree, exaggerated(x, q, exaggeration), shape.tool_body, shape.tool_point);
 }
 
+Vec3 arm_more_tool_position(const Tree& tree, const ArmShape& shape, std::size_t k,
+                            const Eigen::Ref<const Eigen::VectorXd>& q, double exaggeration) {
+  if (k >= shape.more_tools.size() || q.size() != tree.nv() || !q.allFinite()) return Vec3::Constant(kNaN);
+  const ShapeIndex x = index_shape(tree, shape);
+  return calc_point_position(tree, exaggerated(x, q, exaggeration), shape.more_tools[k].first, shape.more_tools[k].second);
+}
+
 // ---------------------------------------------------------------- frame
 
 cv::Mat render_arm_frame(const Tree& tree, const ArmShape& shape, const Eigen::VectorXd& q, const Camera& camera_in,
-                         const ArmDrawStyle& style_in, double t, std::span<const Vec3> tool_path) {
+                         const ArmDrawStyle& style_in, double t, std::span<const Vec3> tool_path,
+                         std::span<const std::vector<Vec3>> more_paths) {
   if (q.size() != tree.nv())
     throw std::invalid_argument("render_arm_frame: q has " + std::to_string(q.size()) + " values, the tree " +
                                 std::to_string(tree.nv()) + " dofs");
@@ -483,15 +500,18 @@ cv::Mat render_arm_frame(const Tree& tree, const ArmShape& shape, const Eigen::V
     }
   }
 
-  // The tool's path, fading from the newest point back.
-  if (tool_path.size() >= 2) {
+  // Each tool's path, fading from the newest point back.
+  const auto draw_path = [&](std::span<const Vec3> path) {
+    if (path.size() < 2) return;
     const int th = std::max(2, st.px(2.5));
-    for (size_t i = 0; i + 1 < tool_path.size(); ++i) {
-      if (!tool_path[i].allFinite() || !tool_path[i + 1].allFinite()) continue;
-      const double age = 1.0 - double(i + 1) / double(tool_path.size() - 1);  // 0 = newest
-      p.line(tool_path[i], tool_path[i + 1], lighter(path_colour(), 0.85 * age), th, false, r);
+    for (size_t i = 0; i + 1 < path.size(); ++i) {
+      if (!path[i].allFinite() || !path[i + 1].allFinite()) continue;
+      const double age = 1.0 - double(i + 1) / double(path.size() - 1);  // 0 = newest
+      p.line(path[i], path[i + 1], lighter(path_colour(), 0.85 * age), th, false, r);
     }
-  }
+  };
+  draw_path(tool_path);
+  for (const std::vector<Vec3>& path : more_paths) draw_path(path);
 
   // The arm.
   if (finite) {
@@ -502,6 +522,8 @@ cv::Mat render_arm_frame(const Tree& tree, const ArmShape& shape, const Eigen::V
       p.sphere(s.centre, std::max(style.sphere_radius * std::cbrt(s.mass / std::max(x.heaviest, 1e-300)), 1.2 * r), mass_colour());
     for (const Vec3& j : g.joints) p.ring(j, 1.6 * r);
     if (g.tool.allFinite()) p.sphere(g.tool, 1.1 * r, tool_colour());
+    for (const Vec3& tool : g.more_tools)
+      if (tool.allFinite()) p.sphere(tool, 1.1 * r, tool_colour());
   }
   p.paint(img);
 
@@ -570,6 +592,7 @@ struct Prepared {
   Camera camera;
   ArmDrawStyle style;
   std::vector<Vec3> tool;  // per sample
+  std::vector<std::vector<Vec3>> more_tools;  // per ArmShape::more_tools, per sample
 };
 
 Prepared prepare(const Tree& tree, const ArmShape& shape, std::span<const double> times,
@@ -579,25 +602,35 @@ Prepared prepare(const Tree& tree, const ArmShape& shape, std::span<const double
                                 ", want " + std::to_string(tree.nv()) + " x " + std::to_string(times.size()) +
                                 " (dofs x samples)");
   if (!std::isfinite(o.style.exaggeration)) throw std::invalid_argument("arm animation: exaggeration must be finite");
-  Prepared p{o.camera, o.style, {}};
+  Prepared p{o.camera, o.style, {}, {}};
   fit_arm_view(tree, shape, qs, p.camera, p.style);
   camera_view(p.camera, up_direction(tree));  // reject a bad camera before any file is touched
   p.tool.reserve(times.size());
   for (Eigen::Index k = 0; k < qs.cols(); ++k) p.tool.push_back(arm_tool_position(tree, shape, qs.col(k), p.style.exaggeration));
+  p.more_tools.resize(shape.more_tools.size());
+  for (std::size_t t = 0; t < shape.more_tools.size(); ++t)
+    for (Eigen::Index k = 0; k < qs.cols(); ++k)
+      p.more_tools[t].push_back(arm_more_tool_position(tree, shape, t, qs.col(k), p.style.exaggeration));
   return p;
 }
 
 cv::Mat frame_at(const Tree& tree, const ArmShape& shape, std::span<const double> times,
                  const Eigen::Ref<const Eigen::MatrixXd>& qs, const ArmAnimationOptions& o, const Prepared& p, int i) {
-  std::vector<Vec3> path;
-  if (o.trace_seconds > 0 && shape.tool_body >= 0) {
+  // Each tool's positions over the last trace_seconds, oldest first (at most ~300 points).
+  const auto recent = [&](const std::vector<Vec3>& positions) {
+    std::vector<Vec3> path;
+    if (o.trace_seconds <= 0) return path;
     int first = i;
     while (first > 0 && times[size_t(i)] - times[size_t(first - 1)] <= o.trace_seconds) --first;
     const int stride = std::max(1, (i - first) / 300);
-    for (int j = i; j >= first; j -= stride) path.push_back(p.tool[size_t(j)]);
+    for (int j = i; j >= first; j -= stride) path.push_back(positions[size_t(j)]);
     std::reverse(path.begin(), path.end());
-  }
-  return render_arm_frame(tree, shape, qs.col(i), p.camera, p.style, times[size_t(i)], path);
+    return path;
+  };
+  const std::vector<Vec3> path = shape.tool_body >= 0 ? recent(p.tool) : std::vector<Vec3>{};
+  std::vector<std::vector<Vec3>> more;
+  for (const std::vector<Vec3>& positions : p.more_tools) more.push_back(recent(positions));
+  return render_arm_frame(tree, shape, qs.col(i), p.camera, p.style, times[size_t(i)], path, more);
 }
 
 int sample_at(std::span<const double> times, double t) {

@@ -28,6 +28,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 // OpenCV 4.6 headers mix enum types, which C++20 deprecates; keep that noise out of our build.
@@ -54,6 +55,8 @@ struct ArmShape {
   std::vector<FlexibleLinkShape> flexible_links;
   int tool_body = -1;              // -1 = no tool point (no path, no dot)
   Vec3 tool_point = Vec3::Zero();  // in the tool body's frame, m
+  // Further tool points (a two-armed tree's second tool): body and point each, a dot and a path each.
+  std::vector<std::pair<int, Vec3>> more_tools;
 };
 
 inline constexpr double kDegree = 3.14159265358979323846 / 180.0;
@@ -122,17 +125,20 @@ void fit_arm_view(const Tree& tree, const ArmShape& shape, const Eigen::Ref<cons
 // finite or the shape has no tool.
 Vec3 arm_tool_position(const Tree& tree, const ArmShape& shape, const Eigen::Ref<const Eigen::VectorXd>& q,
                        double exaggeration);
+// The same for shape.more_tools[k].
+Vec3 arm_more_tool_position(const Tree& tree, const ArmShape& shape, std::size_t k,
+                            const Eigen::Ref<const Eigen::VectorXd>& q, double exaggeration);
 
 // One frame of the arm at q (nv values) as a BGR image (camera.height x camera.width, CV_8UC3). Automatic
 // camera and style fields are fitted to this q alone (fit_arm_view). `t`: the time stamp, s (NaN =
 // none). `tool_path`: the tool's earlier positions, oldest first, drawn fading from the newest
-// (non-finite points break it). A non-finite q is not drawn: the ground, the text and a red warning
+// (non-finite points break it); `more_paths`: those of ArmShape::more_tools, in their order. A non-finite q is not drawn: the ground, the text and a red warning
 // "non-finite joint state: arm not drawn" are. Throws std::invalid_argument for q of the wrong size,
 // a bad camera (camera_view) or a bad shape (a body index out of range, a flexible link whose
 // tip is not below its root).
 cv::Mat render_arm_frame(const Tree& tree, const ArmShape& shape, const Eigen::VectorXd& q, const Camera& camera,
                          const ArmDrawStyle& style, double t = std::numeric_limits<double>::quiet_NaN(),
-                         std::span<const Vec3> tool_path = {});
+                         std::span<const Vec3> tool_path = {}, std::span<const std::vector<Vec3>> more_paths = {});
 
 struct ArmAnimationOptions {
   Camera camera;                    // automatic fields fitted to every frame together

@@ -10,12 +10,14 @@
 
 namespace ff {
 
-// The flexible links (their segment chains and elastic dofs) and the tool point of an arm.
+// The flexible links (their segment chains and elastic dofs) and the tool points of an arm (the first as
+// tool_body/tool_point, the others as more_tools).
 inline ArmShape arm_shape(const ArmModel& m) {
   ArmShape s;
   for (const LinkTip& l : m.links) s.flexible_links.push_back({l.root_body, l.tip_body, l.tip_point, l.elastic_dofs});
   s.tool_body = m.tool_body;
   s.tool_point = m.tool_point;
+  for (std::size_t t = 1; t < m.tools.size(); ++t) s.more_tools.emplace_back(m.tools[t].body, m.tools[t].point);
   return s;
 }
 

@@ -232,12 +232,16 @@ std::vector<Effect> make_candidates(const ArmModel& base, const YAML::Node& doc,
       auto e = make_link_effects(doc, l.name);
       out.insert(out.end(), e.begin(), e.end());
     }
-  // A rigid tool body's mass (a re-fit), where the tree is inline.
-  const std::string tool = base.spec.tool_body;
-  if (const YAML::Node b = find_body(doc, tool); b && b["mass"] && !b["flexible"])
-    if (const double m = number_at(doc, "bodies[" + tool + "].mass", 0.0); m > 0)
-      out.push_back({"payload@" + tool, "the mass of the tool body " + tool + " (a re-fit, no new physics)", {},
-                     {{"bodies[" + tool + "].mass", m, m / 10.0, m * 10.0}}, "", {}, false, ""});
+  // A rigid tool body's mass (a re-fit), where the tree is inline: each tool's (`tool:`'s, or `tools:`'s).
+  std::vector<std::string> tool_bodies{base.spec.tool_body};
+  if (!base.spec.tools.empty()) tool_bodies.clear();
+  for (const ToolSpec& t : base.spec.tools)
+    if (std::find(tool_bodies.begin(), tool_bodies.end(), t.body) == tool_bodies.end()) tool_bodies.push_back(t.body);
+  for (const std::string& tool : tool_bodies)
+    if (const YAML::Node b = find_body(doc, tool); b && b["mass"] && !b["flexible"])
+      if (const double m = number_at(doc, "bodies[" + tool + "].mass", 0.0); m > 0)
+        out.push_back({"payload@" + tool, "the mass of the tool body " + tool + " (a re-fit, no new physics)", {},
+                       {{"bodies[" + tool + "].mass", m, m / 10.0, m * 10.0}}, "", {}, false, ""});
   return out;
 }
 

@@ -117,7 +117,7 @@ std::vector<std::string> arm_observer_channels(const ArmModel& m, const Record& 
     if (a.control.hydraulics.enabled) take(a.name + ".torque");
   }
   for (const std::string& c : arm_record_columns(m))
-    if (c.rfind("tool.", 0) == 0 || c.find(".deflection_") != std::string::npos) take(c);
+    if (is_arm_tool_column(m, c) || c.find(".deflection_") != std::string::npos) take(c);
   return out;
 }
 

@@ -54,10 +54,19 @@ std::vector<std::string> arm_record_columns(const ArmModel& m) {
   std::vector<std::string> c;
   for (const ActuatedJoint& a : m.actuated)
     for (const char* s : kJointSuffixes) c.push_back(a.name + s);
-  for (const char* s : {"tool.x", "tool.y", "tool.z"}) c.push_back(s);
+  for (const ArmTool& t : m.tools)
+    for (const char* s : {".x", ".y", ".z"}) c.push_back(t.name + s);
   for (const LinkTip& l : m.links)
-    for (const char* s : kLinkSuffixes) c.push_back(l.name + s);
+    if (!l.elastic_dofs.empty())  // a one-segment `flexible:` body is rigid: nothing to measure
+      for (const char* s : kLinkSuffixes) c.push_back(l.name + s);
   return c;
+}
+
+bool is_arm_tool_column(const ArmModel& m, const std::string& column) {
+  for (const ArmTool& t : m.tools)
+    for (const char* s : {".x", ".y", ".z"})
+      if (column == t.name + s) return true;
+  return false;
 }
 
 std::string arm_record_unit(const ArmModel& m, const std::string& column) {
@@ -92,8 +101,10 @@ void check_arm_record(const Record& r, const ArmModel& m) {
           throw ConfigError(r.source, 1, name,
                             "'" + link + "' is not a flexible link of the model (its flexible links: " + link_list(m) + ")");
       }
-    if (name.rfind("tool.", 0) == 0 && name != "tool.x" && name != "tool.y" && name != "tool.z")
-      throw ConfigError(r.source, 1, name, "unknown tool column (tool.x, tool.y, tool.z: the tool point, base frame, m)");
+    for (const ArmTool& t : m.tools)
+      if (name.rfind(t.name + ".", 0) == 0 && !is_arm_tool_column(m, name))
+        throw ConfigError(r.source, 1, name,
+                          "unknown tool column (" + t.name + ".x, " + t.name + ".y, " + t.name + ".z: the tool point, base frame, m)");
   }
   const bool arm_form = is_arm_record(r);
   for (const ActuatedJoint& a : m.actuated)
@@ -109,7 +120,7 @@ std::vector<std::pair<std::string, std::string>> arm_scored_columns(const ArmMod
   for (const ActuatedJoint& a : m.actuated) out.emplace_back(a.name + ".angle", a.name);
   for (const ActuatedJoint& a : m.actuated) out.emplace_back(a.name + ".torque", a.name);
   for (const std::string& c : arm_record_columns(m))
-    if (c.rfind("tool.", 0) == 0 || c.find(".deflection_") != std::string::npos) out.emplace_back(c, "");
+    if (is_arm_tool_column(m, c) || c.find(".deflection_") != std::string::npos) out.emplace_back(c, "");
   return out;
 }
 

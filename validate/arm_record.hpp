@@ -32,11 +32,15 @@ namespace ff {
 bool is_arm_record(const Record& r);
 
 // An arm record's columns for `m` (after t), in the order `record` writes them: per actuated joint
-// .ref, .angle, .rate, .torque; tool.x, tool.y, tool.z; per flexible link .deflection_y, .deflection_z.
+// .ref, .angle, .rate, .torque; per tool <tool>.x, .y, .z (tool.x, ... for `tool:`); per flexible link
+// with elastic dofs (not a one-segment, rigid one) .deflection_y, .deflection_z.
 std::vector<std::string> arm_record_columns(const ArmModel& m);
 
+// Whether a column is a tool point's coordinate (<tool>.x, .y or .z of one of m's tools).
+bool is_arm_tool_column(const ArmModel& m, const std::string& column);
+
 // The columns compare and diagnose score, in order: every actuated joint's .angle, every one's .torque,
-// tool.x/y/z, the links' deflections; each with its joint ("" for the tool and the links).
+// each tool's .x/.y/.z, the links' deflections; each with its joint ("" for the tools and the links).
 std::vector<std::pair<std::string, std::string>> arm_scored_columns(const ArmModel& m);
 
 // A joint's states from the record, what residuals are binned against, appended to `states`:

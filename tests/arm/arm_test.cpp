@@ -23,19 +23,8 @@ using test::arm_from;
 
 // A 2 kg bob 0.5 m out on a hinge about y (gravity -z: at q = 0 the arm is horizontal), rotor 0.05.
 std::string pendulum(const std::string& controller, const std::string& waypoints = "") {
-  return R"(gravity: [0, 0, -9.81]
-bodies:
-  - name: arm
-    parent: base
-    mass: 2.0
-    com: [0.5, 0, 0]
-    inertia: {ixx: 0.001, iyy: 0.01, izz: 0.01}
-    joint: {type: revolute, axis: [0, 1, 0], armature: 0.05}
-tool: {body: arm, point: [0.5, 0, 0]}
-controller: {rate: 1000}
-joints:
-  arm:
-    controller: )" + controller + "\n" + waypoints + "simulation: {duration: 6.0}\n";
+  return test::pendulum_arm("tool: {body: arm, point: [0.5, 0, 0]}\ncontroller: {rate: 1000}\njoints:\n  arm:\n    controller: " +
+                            controller + "\n" + waypoints + "simulation: {duration: 6.0}\n");
 }
 
 TEST(ArmControl, APdHeldPendulumDroopsUntilKpTimesTheErrorCarriesItsWeight) {
@@ -101,7 +90,7 @@ simulation: {settle: 3}
   const auto at = [&](const std::string& name) { return v[static_cast<std::size_t>(std::find(c.begin(), c.end(), name) - c.begin())]; };
   EXPECT_LT(at("tool_final_error_m"), 1e-5);
   EXPECT_GE(at("tool_settling_s"), 0.0);
-  EXPECT_EQ(calc_arm_status(run.status[0], c, v), "ok");
+  EXPECT_EQ(calc_arm_status(arm, run.status[0], c, v), "ok");
   // Out of reach (|p| = 1.2 m > 1.1 m): the IK's failure is the waypoint's error.
   std::string far = text;
   far.replace(far.find("[0.3, 0.5, 0]"), 13, "[1.2, 0.0, 0]");

@@ -349,4 +349,34 @@ TEST(Animate3d, AnArmModelsRunIsDrawnWithItsFlexibleLinkExaggerated) {
   }
 }
 
+
+TEST(Animate3d, EveryToolOfATwoArmedMachineGetsItsDotAndPath) {
+  // configs/sers.yaml's two tools: the first as tool_body/tool_point, the second in more_tools; each as
+  // drawn is where the trace puts it; a still of both is written.
+  TempDir dir;
+  const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/sers.yaml";
+  YAML::Node doc = ff::load_yaml_file(path);
+  doc["simulation"]["duration"] = 1.0;
+  const ff::ArmModel arm = ff::parse_arm(doc, path);
+  const ff::ArmShape shape = ff::arm_shape(arm);
+  ASSERT_EQ(shape.more_tools.size(), 1u);
+  EXPECT_EQ(shape.more_tools[0].first, arm.tools[1].body);
+  const ff::ArmRun run = ff::simulate_arms(std::span<const ff::ArmModel>(&arm, 1), {.keep_q = true});
+  ASSERT_EQ(run.status[0], ff::LaneStatus::kOk);
+  const size_t last = run.traces[0].t().size() - 1;
+  const Eigen::VectorXd q = run.q[0].col(Eigen::Index(last));
+  const Vec3 left = ff::arm_tool_position(arm.tree, shape, q, 1.0);
+  const Vec3 right = ff::arm_more_tool_position(arm.tree, shape, 0, q, 1.0);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(left[k], run.traces[0].column(std::string("left.") + "xyz"[k])[last], 1e-12);
+    EXPECT_NEAR(right[k], run.traces[0].column(std::string("right.") + "xyz"[k])[last], 1e-12);
+  }
+  EXPECT_TRUE(std::isnan(ff::arm_more_tool_position(arm.tree, shape, 1, q, 1.0).x()));  // no third tool
+  ff::ArmAnimationOptions o;
+  o.camera.width = 480, o.camera.height = 360;
+  const std::string still = (dir.path / "still.png").string();
+  EXPECT_NEAR(ff::write_arm_still(arm, run.traces[0].t(), run.q[0], 0.9, still, o), 0.9, 1e-9);
+  EXPECT_TRUE(std::filesystem::exists(still));
+}
+
 }  // namespace

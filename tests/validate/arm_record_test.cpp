@@ -4,6 +4,7 @@
 // and the record's checks naming the file, line 1 and the column.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -215,6 +216,31 @@ TEST(ArmRecordCheck, AMissingOrUnknownJointColumnIsNamedWithTheFileLineOneAndThe
                                  "record is in the reference rig's form: ref, hub_angle, ...)");
   EXPECT_EQ(arm_record_unit(m, "elbow.torque"), "N m");
   EXPECT_EQ(arm_record_unit(m, "forearm.deflection_y"), "m");
+}
+
+
+TEST(ArmRecordCheck, TheTwoToolMachinesRecordHasEachToolsChannelsAndARigidForearmNoDeflection) {
+  // configs/sers.yaml: tools left and right; its forearms rigid (one segment), then flexible.
+  const std::string sers = std::string(FLEXFARM_SOURCE_DIR) + "/configs/sers.yaml";
+  const ArmModel rigid = load_arm_with(sers, {"simulation.duration=0.5"});
+  const std::vector<std::string> c = arm_record_columns(rigid);
+  for (const char* k : {"left.x", "left.y", "left.z", "right.x", "right.y", "right.z"})
+    EXPECT_NE(std::find(c.begin(), c.end(), k), c.end()) << k;
+  EXPECT_EQ(std::find(c.begin(), c.end(), "left_forearm.deflection_y"), c.end());
+  EXPECT_TRUE(is_arm_tool_column(rigid, "right.z"));
+  EXPECT_FALSE(is_arm_tool_column(rigid, "tool.x"));
+  const ArmModel flexible = load_arm_with(sers, {"simulation.duration=0.5", "bodies[left_forearm].flexible.segments=4"});
+  const std::vector<std::string> f = arm_record_columns(flexible);
+  EXPECT_NE(std::find(f.begin(), f.end(), "left_forearm.deflection_y"), f.end());
+  EXPECT_EQ(std::find(f.begin(), f.end(), "right_forearm.deflection_y"), f.end());
+  // A model against its own record: every tool channel exact; a misspelt tool column named.
+  Record r = make_arm_record(rigid, {}, 1);
+  r.source = "rec.csv";
+  const ArmCompareResult cmp = compare_arm_record(rigid, r);
+  ASSERT_TRUE(cmp.ok);
+  for (const char* k : {"left.x", "right.y"}) EXPECT_EQ(channel(cmp, k).fit_free.rmse, 0.0) << k;
+  r.columns["right.w"] = r.at("right.x");
+  EXPECT_EQ(check_error(r, rigid), "rec.csv:1: right.w: unknown tool column (right.x, right.y, right.z: the tool point, base frame, m)");
 }
 
 }  // namespace
