@@ -267,6 +267,19 @@ TEST(ArmSensors, NoiseWithTheSameSeedRepeatsBitForBitAndDiffersWithAnother) {
   EXPECT_NEAR(mean, 0.0, 4.0 * 1e-3 / std::sqrt(static_cast<double>(n)));
 }
 
+// Each lane's trace the same bits alone, in a batch, and in the batch reversed.
+void expect_same_bits_alone_and_in_any_lane(const std::vector<ArmModel>& lanes, const char* integ) {
+  const ArmRun together = simulate_arms(lanes);
+  for (std::size_t l = 0; l < lanes.size(); ++l) {
+    const ArmRun alone = simulate_arms(std::span<const ArmModel>(&lanes[l], 1));
+    EXPECT_EQ(alone.traces[0].columns, together.traces[l].columns) << integ << " lane " << l;
+  }
+  std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
+  const ArmRun back = simulate_arms(reversed);
+  for (std::size_t l = 0; l < lanes.size(); ++l)
+    EXPECT_EQ(back.traces[lanes.size() - 1 - l].columns, together.traces[l].columns) << integ << " lane " << l;
+}
+
 TEST(ArmSimulate, AVariantWithFrictionSensorsAndALoadGivesTheSameBitsAloneAndInAnyLane) {
   for (const char* integ : {"rk4", "sdirk2"}) {
     const std::string sim = std::string("{duration: 1.5, substeps: 8, integrator: ") + integ;
@@ -277,15 +290,7 @@ TEST(ArmSimulate, AVariantWithFrictionSensorsAndALoadGivesTheSameBitsAloneAndInA
                                    sim + ", seed: 3}\ntrajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.5}}")));
     lanes.push_back(arm_from(rotor("{controller: {kp: 100, kd: 12}, torque_offset: 1.5}",
                                    sim + "}\ntrajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 0.5}}")));
-    const ArmRun together = simulate_arms(lanes);
-    for (std::size_t l = 0; l < lanes.size(); ++l) {
-      const ArmRun alone = simulate_arms(std::span<const ArmModel>(&lanes[l], 1));
-      EXPECT_EQ(alone.traces[0].columns, together.traces[l].columns) << integ << " lane " << l;
-    }
-    std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
-    const ArmRun back = simulate_arms(reversed);
-    for (std::size_t l = 0; l < lanes.size(); ++l)
-      EXPECT_EQ(back.traces[lanes.size() - 1 - l].columns, together.traces[l].columns) << integ << " lane " << l;
+    expect_same_bits_alone_and_in_any_lane(lanes, integ);
   }
 }
 
@@ -531,15 +536,7 @@ TEST(ArmSimulate, ALugreJointAndANonlinearDriveGiveTheSameBitsAloneAndInAnyLane)
       text.replace(text.find("    drive:"), 0, "    friction: {model: lugre, coulomb: 0.5, bristle_stiffness: 1.0e4}\n");
       lanes.push_back(arm_from(text));
     }
-    const ArmRun together = simulate_arms(lanes);
-    for (std::size_t l = 0; l < lanes.size(); ++l) {
-      const ArmRun alone = run_one(lanes[l]);
-      EXPECT_EQ(alone.traces[0].columns, together.traces[l].columns) << integ << " lane " << l;
-    }
-    std::vector<ArmModel> reversed(lanes.rbegin(), lanes.rend());
-    const ArmRun back = simulate_arms(reversed);
-    for (std::size_t l = 0; l < lanes.size(); ++l)
-      EXPECT_EQ(back.traces[lanes.size() - 1 - l].columns, together.traces[l].columns) << integ << " lane " << l;
+    expect_same_bits_alone_and_in_any_lane(lanes, integ);
   }
 }
 
