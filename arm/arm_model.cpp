@@ -404,7 +404,10 @@ ArmModel make_arm(const ArmSpec& spec) {
       // Every named tool's target at once: the stacked tasks over the actuated joints this waypoint
       // does not fix.
       std::vector<IkTarget> targets;
-      for (const auto& [name, position] : wp.tools) {
+      for (const auto& tool_target : wp.tools) {
+        // Named, not bound: clang 14 cannot capture a structured binding in a lambda (C++20, clang 16).
+        const std::string& name = tool_target.first;
+        const auto& position = tool_target.second;
         const auto t = std::find_if(m.tools.begin(), m.tools.end(), [&](const ArmTool& x) { return x.name == name; });
         if (t == m.tools.end())
           throw ConfigError(src, wp.line, key + ".tools." + name, "no tool of that name (tools: " + tool_names(m) + ")");
