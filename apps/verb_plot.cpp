@@ -41,8 +41,8 @@ void add_plot_verb(CLI::App& app) {
     }
     if (ids.empty() || ids.size() > 12) throw CLI::ValidationError("--eval", "give 1 to 12 eval_ids");
     make_directories(args->out);
-    std::vector<std::string> labels;
-    for (int id : ids) labels.push_back(std::to_string(id) + ": " + study.variants[id].label);
+    std::vector<std::string> labels = calc_legend_labels(study, ids);
+    for (std::size_t k = 0; k < ids.size(); ++k) labels[k] = std::to_string(ids[k]) + ": " + labels[k];
     // Each variant alone (a variant's bits are the same in any lane), its trace written as `write` does.
     auto run_each = [&](auto simulate_one, auto write) {
       std::vector<decltype(simulate_one(0))> traces;

@@ -79,9 +79,16 @@ void YamlReader::required(const std::string& key, int& out) { out = to_int(*this
 void YamlReader::optional(const std::string& key, bool& out) {
   auto v = value(key, false);
   if (!v) return;
+  // true/false (YAML's spellings), or the numbers 1 and 0 that a study's sweep of the flag writes.
   bool x = false;
-  if (!v.IsScalar() || !YAML::convert<bool>::decode(v, x)) fail(key, "expected true or false");
-  out = x;
+  double n = -1.0;
+  if (v.IsScalar() && YAML::convert<bool>::decode(v, x)) {
+    out = x;
+  } else if (v.IsScalar() && YAML::convert<double>::decode(v, n) && (n == 0.0 || n == 1.0)) {
+    out = n == 1.0;
+  } else {
+    fail(key, "expected true or false");
+  }
 }
 
 void YamlReader::optional(const std::string& key, std::string& out) {

@@ -61,8 +61,9 @@ std::vector<Step> split_path(const std::string& path, const std::string& source)
 
 }  // namespace
 
-void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value, const std::string& source) {
+std::string set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value, const std::string& source) {
   const auto steps = split_path(path, source);
+  std::string resolved;  // the path with each [NAME] as its index
   YAML::Node node = doc;  // yaml-cpp nodes are handles: walking reassigns the handle, not the value
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const bool last = s + 1 == steps.size();
@@ -74,23 +75,26 @@ void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value,
     if (st.index >= 0) {
       if (!node.IsSequence() || st.index >= static_cast<int>(node.size()))
         throw ConfigError(source, 0, path, "index [" + std::to_string(st.index) + "] is not in the list");
+      resolved += "[" + std::to_string(st.index) + "]";
       if (last) {
         node[st.index] = YAML::Clone(value);  // a fresh copy: assigning shared nodes merges their documents
-        return;
+        return resolved;
       }
       YAML::Node next = node[st.index];
       node.reset(next);
     } else {
       if (node.IsDefined() && !node.IsMap() && !node.IsNull())
         throw ConfigError(source, 0, path, "'" + st.key + "' is inside a value that is not a map");
+      resolved += (resolved.empty() ? "" : ".") + st.key;
       if (last) {
         node[st.key] = YAML::Clone(value);
-        return;
+        return resolved;
       }
       YAML::Node next = node[st.key];
       node.reset(next);
     }
   }
+  return resolved;
 }
 
 YAML::Node get_path(const YAML::Node& doc, const std::string& path) {
@@ -129,15 +133,17 @@ Assignment parse_assignment(const std::string& text) {
 }
 
 namespace {
-// The assignment an error key falls under (the same path, one below it, or one above it), or null.
-const Assignment* owner_of(const std::string& key, const std::vector<Assignment>& set) {
-  for (auto it = set.rbegin(); it != set.rend(); ++it) {  // the last assignment wins
-    const auto& p = it->path;
-    if (key == p || key.rfind(p + ".", 0) == 0 || key.rfind(p + "[", 0) == 0 || p.rfind(key + ".", 0) == 0 ||
-        p.rfind(key + "[", 0) == 0)
-      return &*it;
-  }
-  return nullptr;
+// The assignment an error key falls under (the same path, one below it, or one above it), by its path
+// as written or as resolved (bodies[beam] as bodies[0], as the parser names it), and the path matched;
+// {null, ""} when none.
+std::pair<const Assignment*, std::string> owner_of(const std::string& key, const std::vector<Assignment>& set,
+                                                   const std::vector<std::string>& resolved) {
+  for (std::size_t i = set.size(); i-- > 0;)  // the last assignment wins
+    for (const std::string& p : {set[i].path, resolved[i]})
+      if (key == p || key.rfind(p + ".", 0) == 0 || key.rfind(p + "[", 0) == 0 || p.rfind(key + ".", 0) == 0 ||
+          p.rfind(key + "[", 0) == 0)
+        return {&set[i], p};
+  return {nullptr, ""};
 }
 }  // namespace
 
@@ -145,9 +151,10 @@ const Assignment* owner_of(const std::string& key, const std::vector<Assignment>
 // where it was assigned.
 template <class Parse>
 auto parse_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set, Parse parse) {
+  std::vector<std::string> resolved;
   for (const auto& a : set) {
     try {
-      set_path(doc, a.path, a.value, a.source);
+      resolved.push_back(set_path(doc, a.path, a.value, a.source));
     } catch (const ConfigError& e) {
       throw ConfigError(a.source, a.line, a.key, e.message());
     }
@@ -155,11 +162,11 @@ auto parse_with(YAML::Node doc, const std::string& model_source, const std::vect
   try {
     return parse(doc, model_source);
   } catch (const ConfigError& e) {
-    const Assignment* a = owner_of(e.key(), set);
+    const auto [a, path] = owner_of(e.key(), set, resolved);
     if (!a) throw;
     // Name the exact key: an error below the assigned path (payload: {mass: -1}) keeps its tail.
-    const bool below = e.key().size() > a->path.size() && e.key().rfind(a->path, 0) == 0;
-    throw ConfigError(a->source, a->line, below ? a->key + e.key().substr(a->path.size()) : a->key, e.message());
+    const bool below = e.key().size() > path.size() && e.key().rfind(path, 0) == 0;
+    throw ConfigError(a->source, a->line, below ? a->key + e.key().substr(path.size()) : a->key, e.message());
   }
 }
 

@@ -22,9 +22,10 @@ struct Assignment {
   std::string key;         // how `source` names it, e.g. "runs[2].set.payload.mass"
 };
 
-// Replaces (or creates) the value at `path` in `doc` with `value`. Throws ConfigError naming
-// `source` and the path when the path cannot exist (indexing a map, a key inside a number, ...).
-void set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value, const std::string& source);
+// Replaces (or creates) the value at `path` in `doc` with `value`, and returns the path with each
+// [NAME] as its index (bodies[beam].mass -> bodies[0].mass). Throws ConfigError naming `source` and
+// the path when the path cannot exist (indexing a map, a key inside a number, ...).
+std::string set_path(YAML::Node& doc, const std::string& path, const YAML::Node& value, const std::string& source);
 
 // The value at `path`, or a null node when absent.
 YAML::Node get_path(const YAML::Node& doc, const std::string& path);

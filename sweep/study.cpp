@@ -300,6 +300,32 @@ Variant make_nominal_variant(const Study& st, std::size_t c) {
 
 }  // namespace
 
+std::vector<std::string> calc_legend_labels(const Study& st, const std::vector<int>& eval_ids) {
+  std::vector<std::string> out;
+  for (int id : eval_ids) out.push_back(st.variants[static_cast<std::size_t>(id)].label);
+  if (st.listed || eval_ids.size() < 2) return out;
+  const bool cases = !st.case_labels.empty();
+  const std::size_t first = cases ? 1 : 0;  // params[0] is the case's index
+  const auto param = [&](int id, std::size_t j) { return st.variants[static_cast<std::size_t>(id)].params[first + j]; };
+  std::vector<std::size_t> differ;
+  for (std::size_t j = 0; j < st.variables.size(); ++j)
+    for (int id : eval_ids)
+      if (short_number(param(id, j)) != short_number(param(eval_ids[0], j))) {
+        differ.push_back(j);
+        break;
+      }
+  for (std::size_t k = 0; k < eval_ids.size(); ++k) {
+    std::string vars;
+    for (std::size_t j : differ)
+      vars += (vars.empty() ? "" : ", ") + st.variables[j].path + "=" + short_number(param(eval_ids[k], j));
+    const auto& v = st.variants[static_cast<std::size_t>(eval_ids[k])];
+    const std::string c = cases ? st.case_labels[static_cast<std::size_t>(v.params[0])] : "";
+    const std::string s = c.empty() ? vars : vars.empty() ? c : c + " | " + vars;
+    if (!s.empty()) out[k] = s;
+  }
+  return out;
+}
+
 Study read_study(const std::string& path, int max_variants) {
   Study st;
   st.source = path;

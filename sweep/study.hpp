@@ -71,6 +71,11 @@ Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
 // built again, per batch, when the variants run: memory does not grow with the study.
 void check_models(Study& st);
 
+// The legends of variants shown together (`flexfarm plot`): each one's label less the `path=value`
+// items all of them share, so the legend names what differs. One variant, or a list of runs, keeps
+// its whole label; variants that differ in nothing keep theirs too.
+std::vector<std::string> calc_legend_labels(const Study& st, const std::vector<int>& eval_ids);
+
 // The overrides that make a variant, in the order applied: the study's `set:`, then its run's or its
 // case's, then its variables' values (Variant::params).
 std::vector<Assignment> make_variant_set(const Study& study, const Variant& v);

@@ -83,3 +83,29 @@ TEST(YamlReader, SyntaxErrorInTextNamesTheLine) {
   EXPECT_EQ(e.file(), "t.yaml");
   EXPECT_GE(e.line(), 2);
 }
+
+// A flag reads YAML's true/false, and the 1 and 0 a study's sweep of it writes; 2 or "maybe" is an
+// error naming the key.
+TEST(YamlReader, AFlagReadsTrueFalseAndTheSweepsOneAndZero) {
+  const auto read = [](const std::string& text) {
+    const YAML::Node doc = YAML::Load(text);
+    ff::YamlReader r(doc, "t.yaml", "", nullptr);
+    bool flag = false;
+    r.optional("f", flag);
+    return flag;
+  };
+  EXPECT_TRUE(read("f: true"));
+  EXPECT_FALSE(read("f: false"));
+  EXPECT_TRUE(read("f: 1"));
+  EXPECT_FALSE(read("f: 0"));
+  EXPECT_TRUE(read("f: 1.0"));
+  for (const char* bad : {"f: 2", "f: 0.5", "f: maybe", "f: [1]"}) {
+    try {
+      read(bad);
+      ADD_FAILURE() << "accepted: " << bad;
+    } catch (const ff::ConfigError& e) {
+      EXPECT_EQ(e.key(), "f") << bad;
+      EXPECT_NE(e.message().find("expected true or false"), std::string::npos) << e.what();
+    }
+  }
+}

@@ -142,6 +142,7 @@ TEST(SetPath, AListElementIsFoundByItsName) {
   ff::set_path(d, "bodies[fore].mass", YAML::Node(5.0), "--set");
   EXPECT_EQ(d["bodies"][1]["mass"].as<double>(), 5.0);
   EXPECT_EQ(d["bodies"][0]["mass"].as<double>(), 1.0);
+  EXPECT_EQ(ff::set_path(d, "bodies[upper].mass", YAML::Node(1.0), "--set"), "bodies[0].mass");
   EXPECT_EQ(ff::get_path(d, "bodies[upper].mass").as<double>(), 1.0);
   EXPECT_TRUE(ff::get_path(d, "bodies[elbow].mass").IsNull());
   try {
@@ -351,3 +352,30 @@ TEST(ApplyAssignment, HydraulicPhysicalParametersAreSweepable) {
 }
 
 }  // namespace
+
+// A bad value set by a body's name is named where it was set, though the arm's parser names the body
+// by its index (bodies[0]): the study's file, line and key, not the model's.
+TEST(ApplyAssignment, ABadValueSetByABodysNameIsNamedWhereItWasSet) {
+  const std::string model = std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb_titan.yaml";
+  ff::Assignment a{"bodies[beam].flexible.planar", YAML::Node(2), "study.yaml", 7,
+                   "variables[1] (bodies[beam].flexible.planar)"};
+  try {
+    ff::make_arm_with(YAML::LoadFile(model), model, {a});
+    FAIL() << "planar: 2 was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), "study.yaml");
+    EXPECT_EQ(e.line(), 7);
+    EXPECT_EQ(e.key(), "variables[1] (bodies[beam].flexible.planar)");
+    EXPECT_NE(e.message().find("expected true or false"), std::string::npos) << e.what();
+  }
+  a.path = "bodies[beam].flexible.section";
+  a.key = "set.bodies[beam].flexible.section";
+  a.value = YAML::Load("{E: -1, G: 1, density: 1, area: 1, I_y: 1, I_z: 1, J: 1}");
+  try {
+    ff::make_arm_with(YAML::LoadFile(model), model, {a});
+    FAIL() << "E: -1 was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.file(), "study.yaml");
+    EXPECT_EQ(e.key(), "set.bodies[beam].flexible.section.E") << e.what();
+  }
+}

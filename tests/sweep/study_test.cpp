@@ -22,6 +22,12 @@ const std::string kSource = FLEXFARM_SOURCE_DIR;
 const std::string kModel = kSource + "/configs/fbtb.yaml";
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
+// A grid study of the reference rig with two cases, plain and notched, over `variables` (YAML list items).
+std::string plain_and_notched_study(const std::string& variables) {
+  return "model: " + kModel + "\ncases:\n  - label: plain\n  - label: notched\n    set: {notch.enabled: true}\n" +
+         "variables:\n" + variables + "design: {type: grid}\n";
+}
+
 // A fresh directory per test, removed with its contents.
 class StudyFiles : public ::testing::Test {
  protected:
@@ -122,17 +128,29 @@ TEST_F(StudyFiles, StudyWideSetAppliesToEveryRun) {
   for (const auto& v : st.variants) EXPECT_EQ(ff::make_variant_model(st, v).nseg, 8);
 }
 
+// A plot's legend names what differs between the variants shown: shared `path=value` items go,
+// the case stays; one variant keeps its whole label.
+TEST_F(StudyFiles, LegendLabelsDropWhatTheShownVariantsShare) {
+  const auto path = write("s.yaml", plain_and_notched_study("  - path: payload.mass\n"
+                                                            "    levels: [200, 300]\n"
+                                                            "  - path: controller.kp\n"
+                                                            "    levels: [1e5, 2e5]\n"));
+  const ff::Study st = ff::load_study(path);
+  ASSERT_EQ(st.variants.size(), 8u);
+  EXPECT_EQ(st.variants[1].label, "plain | payload.mass=200, controller.kp=200000");
+  using L = std::vector<std::string>;
+  EXPECT_EQ(ff::calc_legend_labels(st, {0, 1}), (L{"plain | controller.kp=100000", "plain | controller.kp=200000"}));
+  EXPECT_EQ(ff::calc_legend_labels(st, {0, 4}), (L{"plain", "notched"}));
+  EXPECT_EQ(ff::calc_legend_labels(st, {1, 2, 6}),
+            (L{"plain | payload.mass=200, controller.kp=200000", "plain | payload.mass=300, controller.kp=100000",
+               "notched | payload.mass=300, controller.kp=100000"}));
+  EXPECT_EQ(ff::calc_legend_labels(st, {3}), (L{st.variants[3].label}));
+  EXPECT_EQ(ff::calc_legend_labels(st, {3, 3}), (L{"plain", "plain"}));
+}
+
 TEST_F(StudyFiles, CasesAreCrossedWithEveryDesignPoint) {
-  const auto path = write("s.yaml", "model: " + kModel +
-                                        "\n"
-                                        "cases:\n"
-                                        "  - label: plain\n"
-                                        "  - label: notched\n"
-                                        "    set: {notch.enabled: true}\n"
-                                        "variables:\n"
-                                        "  - path: payload.mass\n"
-                                        "    levels: [200, 300, 400]\n"
-                                        "design: {type: grid}\n");
+  const auto path = write("s.yaml", plain_and_notched_study("  - path: payload.mass\n"
+                                                            "    levels: [200, 300, 400]\n"));
   const ff::Study st = ff::load_study(path);
   ASSERT_EQ(st.variants.size(), 6u);
   EXPECT_EQ(st.params, (std::vector<std::string>{"case", "payload.mass"}));
