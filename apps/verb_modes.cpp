@@ -64,19 +64,32 @@ void print_tree_modes(const char* title, const std::vector<TreeMode>& modes, int
   double wmax = 0.0;
   for (const TreeMode& m : modes) wmax = std::max(wmax, m.omega_n);
   std::printf("%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
-  for (std::size_t k = 0; k < modes.size() && static_cast<int>(k) < count; ++k) {
+  // A mode that moves no joint and that nothing restores (a hydraulic actuator's mean chamber pressure)
+  // is counted below the table, not listed.
+  const auto still = [&](const TreeMode& m) { return !m.moves && m.omega_n <= 1e-9 * wmax; };
+  int listed = 0, neutral = 0;
+  for (std::size_t k = 0; k < modes.size(); ++k) {
     const TreeMode& m = modes[k];
+    if (still(m)) {
+      ++neutral;
+      continue;
+    }
+    if (++listed > count) continue;
     if (m.oscillatory)
-      std::printf("  %-4zu %12.4f %12.4f %10.4f\n", k + 1, m.frequency_hz(), m.omega_n, m.zeta);
+      std::printf("  %-4zu %12.4f %12.4f %10.4f\n", static_cast<std::size_t>(listed), m.frequency_hz(), m.omega_n, m.zeta);
     else if (m.omega_n <= 1e-9 * wmax)
-      std::printf("  %-4zu %12s %12s %10s   free: nothing resists this motion\n", k + 1, "-", "0", "-");
+      std::printf("  %-4zu %12s %12s %10s   free: nothing resists this motion\n", static_cast<std::size_t>(listed), "-", "0", "-");
     else if (m.zeta < 0.0)
-      std::printf("  %-4zu %12s %12.4f %10s   unstable: grows e-fold in %.4g s\n", k + 1, "-", m.omega_n, "-",
+      std::printf("  %-4zu %12s %12.4f %10s   unstable: grows e-fold in %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",
                   1.0 / m.omega_n);
     else
-      std::printf("  %-4zu %12s %12.4f %10s   real pole, time constant %.4g s\n", k + 1, "-", m.omega_n, "-",
+      std::printf("  %-4zu %12s %12.4f %10s   real pole, time constant %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",
                   1.0 / m.omega_n);
   }
+  if (neutral > 0)
+    std::printf("  and %d neutral state%s that move%s no joint (omega 0; the hydraulic actuators' mean chamber "
+                "pressures, which the linearised valves do not restore)\n",
+                neutral, neutral == 1 ? "" : "s", neutral == 1 ? "s" : "");
 }
 
 // One row per mode: its frequency, damping and the joint coordinates of its shape.

@@ -120,7 +120,11 @@ std::vector<TreeMode> calc_tree_modes(const Tree& tree, const Eigen::Ref<const E
       m.zeta = m.omega_n > 0.0 ? -lam.real() / m.omega_n : 1.0;
       if (!m.oscillatory) m.zeta = lam.real() <= 0.0 ? 1.0 : -1.0;
       // The q block of the eigenvector, turned so its largest entry is real.
-      Eigen::VectorXcd z = eig.eigenvectors().col(k).head(n);
+      const Eigen::VectorXcd x = eig.eigenvectors().col(k);
+      // Below 1e-6: round-off of a repeated zero eigenvalue in states of mixed units (Pa beside rad)
+      // leaves the q block at 1e-9 of the eigenvector (the Titan arm's six actuators).
+      m.moves = x.head(2 * n).norm() > 1e-6 * x.norm();
+      Eigen::VectorXcd z = x.head(n);
       Eigen::Index big = 0;
       z.cwiseAbs().maxCoeff(&big);
       if (std::abs(z[big]) > 0.0) z *= std::conj(z[big]) / std::abs(z[big]);

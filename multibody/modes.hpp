@@ -36,6 +36,8 @@ struct TreeMode {
   double zeta = 0.0;       // damping ratio; 1 for a stable real pole, -1 for an unstable one
   bool oscillatory = true; // a complex pair (reported once), or an undamped mode with w^2 > 0
   Eigen::VectorXd shape;   // (nv) joint coordinates, zero at the locked dofs, largest |entry| = 1 and positive
+  bool moves = true;       // false: the eigenvector's q and qd blocks are below 1e-6 of it (an actuator state
+                           // alone, as a valve-controlled actuator's mean chamber pressure)
   double frequency_hz() const;
 };
 

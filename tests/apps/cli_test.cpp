@@ -151,6 +151,18 @@ TEST_F(Cli, ModesOfAUrdfAndOfItsTreeYamlAreTheSame) {
   EXPECT_NE(a.output.find(" 0.4844 "), std::string::npos) << a.output;
 }
 
+// The Titan arm on the FBTB: the closed loop's table opens with the beam's first mode (about 0.24 Hz),
+// and the six actuators' mean chamber pressures, which nothing restores, are counted, not listed.
+TEST_F(Cli, ModesOfTheTitanOnTheBeamListTheBeamsModeAndCountTheNeutralPressures) {
+  const auto r = run("modes " + quote(kSource + "/configs/fbtb_titan.yaml") + " --count 3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string loop = r.output.substr(r.output.find("closed loop"));
+  EXPECT_NE(loop.find("  1          0.2369 "), std::string::npos) << r.output;
+  EXPECT_EQ(loop.find("  4  "), std::string::npos) << r.output;  // --count 3
+  EXPECT_EQ(loop.find("free: nothing resists"), std::string::npos) << r.output;
+  EXPECT_NE(loop.find("and 6 neutral states that move no joint"), std::string::npos) << r.output;
+}
+
 // ---- rejected input: one line, non-zero exit, nothing written ----------------------------
 
 TEST_F(Cli, SimulateBadModelWritesNothing) {

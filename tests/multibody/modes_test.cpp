@@ -103,6 +103,51 @@ TEST(TreeModes, DampedJointHasItsClosedFormFrequencyAndDampingAndAPdLoopAddsToTh
   EXPECT_NEAR(m[0].zeta, 3.2 / (2.0 * std::sqrt(80.0 * J)), 1e-12);
 }
 
+// A zero mode either moves the joints (a free joint: nothing resists it) or is an actuator state that
+// nothing restores and that moves no joint (a valve-controlled actuator's mean chamber pressure);
+// `moves` tells them apart.
+TEST(TreeModes, AnActuatorStateNothingRestoresMovesNoJointButAFreeJointMoves) {
+  TreeSpec s;
+  BodySpec b;
+  b.axis = Vec3::UnitZ();
+  b.mass = 3.0;
+  b.inertia = test::box_inertia(3.0, 0.4, 0.3, 0.2);
+  b.stiffness = 50.0;
+  b.damping = 1.2;
+  s.bodies.push_back(b);
+  b.parent = 0;
+  b.stiffness = 0.0;  // the second joint: free, damped
+  b.damping = 0.5;
+  s.bodies.push_back(b);
+  const Tree tree = make_tree(s);
+  TreeModeOptions o;
+  // z0: a lag on joint 0's rate that pushes joint 0; z1: a state whose rate is zero and that pushes nothing.
+  o.actuator_force = Eigen::MatrixXd::Zero(2, 2);
+  o.actuator_force(0, 0) = -4.0;
+  o.actuator_q = Eigen::MatrixXd::Zero(2, 2);
+  o.actuator_qd = Eigen::MatrixXd::Zero(2, 2);
+  o.actuator_qd(0, 0) = 1.0;
+  o.actuator_z = Eigen::MatrixXd::Zero(2, 2);
+  o.actuator_z(0, 0) = -5.0;
+  const std::vector<TreeMode> m = calc_tree_modes(tree, VectorXd::Zero(2), o);
+  int neutral = 0, free = 0;
+  for (const TreeMode& x : m) {
+    if (x.omega_n > 1e-9) {
+      EXPECT_TRUE(x.moves) << x.omega_n;
+      continue;
+    }
+    if (x.moves) {
+      ++free;
+      EXPECT_NEAR(x.shape[0], 0.0, 1e-12);  // the free joint alone
+      EXPECT_EQ(x.shape[1], 1.0);
+    } else {
+      ++neutral;
+    }
+  }
+  EXPECT_EQ(neutral, 1);
+  EXPECT_EQ(free, 1);
+}
+
 TEST(TreeModes, LockedDofsAreZeroInEveryShapeAndShapesPeakAtPlusOne) {
   test::Rng rng(5);
   TreeSpec s;
