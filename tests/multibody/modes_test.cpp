@@ -79,16 +79,21 @@ TEST(TreeModes, PendulumHangingHasSqrtGOverLAndInvertedIsAnUnstableRealMode) {
   EXPECT_NEAR(up[0].omega_n, std::sqrt(m * g * l / J), 1e-6);  // the growth rate, 1/s
 }
 
-TEST(TreeModes, DampedJointHasItsClosedFormFrequencyAndDampingAndAPdLoopAddsToThem) {
-  // Gravity along the axis: no gravity stiffness. omega_n = sqrt(k/J), zeta = c / (2 sqrt(k J)).
-  TreeSpec s;
+// A 3 kg box (0.4 x 0.3 x 0.2 m) on a z joint with a 50 N m/rad spring and a 1.2 N m s/rad damper.
+BodySpec damped_spring_body() {
   BodySpec b;
   b.axis = Vec3::UnitZ();
   b.mass = 3.0;
   b.inertia = test::box_inertia(3.0, 0.4, 0.3, 0.2);
   b.stiffness = 50.0;
   b.damping = 1.2;
-  s.bodies.push_back(b);
+  return b;
+}
+
+TEST(TreeModes, DampedJointHasItsClosedFormFrequencyAndDampingAndAPdLoopAddsToThem) {
+  // Gravity along the axis: no gravity stiffness. omega_n = sqrt(k/J), zeta = c / (2 sqrt(k J)).
+  TreeSpec s;
+  s.bodies.push_back(damped_spring_body());
   const Tree tree = make_tree(s);
   const double J = 3.0 * (0.16 + 0.09) / 12.0;
   std::vector<TreeMode> m = calc_tree_modes(tree, VectorXd::Zero(1));
@@ -108,12 +113,7 @@ TEST(TreeModes, DampedJointHasItsClosedFormFrequencyAndDampingAndAPdLoopAddsToTh
 // `moves` tells them apart.
 TEST(TreeModes, AnActuatorStateNothingRestoresMovesNoJointButAFreeJointMoves) {
   TreeSpec s;
-  BodySpec b;
-  b.axis = Vec3::UnitZ();
-  b.mass = 3.0;
-  b.inertia = test::box_inertia(3.0, 0.4, 0.3, 0.2);
-  b.stiffness = 50.0;
-  b.damping = 1.2;
+  BodySpec b = damped_spring_body();
   s.bodies.push_back(b);
   b.parent = 0;
   b.stiffness = 0.0;  // the second joint: free, damped
