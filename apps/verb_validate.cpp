@@ -1,6 +1,7 @@
 // flexfarm diagnose / calibrate / record: find the physical effect a model lacks, add it, and make
 // records with a hidden effect to test that this works (docs/validation.md).
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 
@@ -95,6 +96,15 @@ void add_diagnose_verb(CLI::App& app) {
     const auto [arm, src, r] = read_fit_inputs(a->model, a->sets, a->data, opt.mode, "diagnosed");
     std::fprintf(stderr, "diagnosing %s against %s (%s, %zu samples)...\n", a->model.c_str(), a->data.c_str(),
                  a->mode.c_str(), r.size());
+    // One line per candidate as its fit ends, with the time since the start.
+    const auto start = std::chrono::steady_clock::now();
+    opt.on_fitted = [start](int done, int total, const EffectFit& f) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (f.ok)
+        std::fprintf(stderr, "  [%d/%d] %s: delta BIC %.1f (%.0f s)\n", done, total, f.effect.c_str(), f.delta_bic, s);
+      else
+        std::fprintf(stderr, "  [%d/%d] %s: no fit (%.0f s)\n", done, total, f.effect.c_str(), s);
+    };
     const Diagnosis d = arm ? diagnose_arm(src, r, opt) : diagnose(src, r, opt);
     write_file_atomic(a->json, format_diagnosis_json(d));
     std::printf("%swrote %s\n", format_diagnosis_text(d).c_str(), a->json.c_str());

@@ -773,11 +773,16 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return effects[a].params.size() > effects[b].params.size(); });
   d.ranking.resize(effects.size());
+  int done = 0;
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::size_t o = 0; o < order.size(); ++o) {
     const std::size_t i = order[o];
     const EffectFit& b = baselines.at(refits[i]);
     d.ranking[i] = fit_one(sc, effects[i], {b.rss, b.fit_percent, b.tests}, opt, static_cast<int>(refits[i].size()));
+    if (opt.on_fitted) {
+#pragma omp critical(diagnose_progress)
+      opt.on_fitted(++done, static_cast<int>(order.size()), d.ranking[i]);
+    }
   }
   std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;

@@ -15,6 +15,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -119,6 +120,9 @@ struct DiagnoseOptions {
   int starts = 3;                              // Ceres races from the best points of the global scan (a quarter
                                                // of max_iterations each), the leader then runs to the end
   int max_samples = 1500;                      // per channel: the record is decimated to at most this
+  // Progress: called as each candidate's fit ends (done of total, that fit), one call at a time, from
+  // whichever thread fitted it; the ranking does not depend on it. Empty: silent.
+  std::function<void(int done, int total, const EffectFit& fit)> on_fitted;
 };
 
 // The reference rig's model (src, its --set applied) against a rig record.

@@ -42,6 +42,22 @@ inline std::string quote(const std::string& s) {
   return q + "'";
 }
 
+// Whether `program` is on PATH.
+inline bool on_path(const std::string& program) {
+  return std::system(("command -v " + program + " > /dev/null 2>&1").c_str()) == 0;
+}
+
+// `mpirun -np RANKS ` for a shell command. As root in a container: OpenMPI refuses root unless told
+// twice (--allow-run-as-root and the two OMPI_ALLOW_RUN_AS_ROOT* variables; harmless for other
+// users). --oversubscribe: more ranks than cores (OpenMPI counts cores as slots and refuses -np
+// above them). --mca btl self,vader: shared memory only, no probing of the container's network
+// interfaces; the vader single-copy mechanism (CMA, process_vm_readv) needs ptrace rights containers
+// often lack, so it is turned off. `timeout`: a rank stuck in a barrier must not hang the test suite.
+inline std::string mpirun(int ranks) {
+  return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout 300 mpirun -np " + std::to_string(ranks) +
+         " --oversubscribe --allow-run-as-root --mca btl self,vader --mca btl_vader_single_copy_mechanism none ";
+}
+
 struct Result {
   int exit_code = -1;
   std::string output;  // stdout and stderr together
@@ -70,10 +86,12 @@ class CliFixture : public ::testing::Test {
   }
 
   // Runs `flexfarm ARGS` (ARGS already quoted as needed) in `work`.
-  Result run(const std::string& args) const {
+  Result run(const std::string& args) const { return run_shell(quote(kBinary) + " " + args); }
+
+  // Runs a shell command line in `work`, e.g. flexfarm under mpirun.
+  Result run_shell(const std::string& command) const {
     const fs::path log = base / "output.txt";
-    const std::string cmd = "cd " + quote(work.string()) + " && " + quote(kBinary) + " " + args + " > " +
-                            quote(log.string()) + " 2>&1";
+    const std::string cmd = "cd " + quote(work.string()) + " && " + command + " > " + quote(log.string()) + " 2>&1";
     const int status = std::system(cmd.c_str());
     Result r;
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -28,7 +28,12 @@
 #include <thread>
 #include <vector>
 
+#include "tests/apps/cli_fixture.hpp"  // on_path, mpirun
+
 namespace {
+
+using ff::test::mpirun;
+using ff::test::on_path;
 
 namespace fs = std::filesystem;
 
@@ -94,10 +99,6 @@ std::string first_difference(const std::string& a, const std::string& b) {
   return "same lines, different bytes";
 }
 
-bool on_path(const std::string& program) {
-  return std::system(("command -v " + program + " > /dev/null 2>&1").c_str()) == 0;
-}
-
 // Number of variants of mc_small.yaml (its `samples:`), so the tests follow the study file.
 int study_size() {
   std::smatch m;
@@ -121,17 +122,6 @@ Journal read_journal(const fs::path& p) {
   const auto lines = split_lines(j.complete);
   for (std::size_t i = 2; i < lines.size(); ++i) j.ids.push_back(std::stoi(lines[i].substr(0, lines[i].find(','))));
   return j;
-}
-
-// `mpirun -np RANKS ` for a shell command. As root in a container: OpenMPI refuses root unless told
-// twice (--allow-run-as-root and the two OMPI_ALLOW_RUN_AS_ROOT* variables; harmless for other
-// users). --oversubscribe: more ranks than cores (OpenMPI counts cores as slots and refuses -np
-// above them). --mca btl self,vader: shared memory only, no probing of the container's network
-// interfaces; the vader single-copy mechanism (CMA, process_vm_readv) needs ptrace rights containers
-// often lack, so it is turned off. `timeout`: a rank stuck in a barrier must not hang the test suite.
-std::string mpirun(int ranks) {
-  return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout 300 mpirun -np " + std::to_string(ranks) +
-         " --oversubscribe --allow-run-as-root --mca btl self,vader --mca btl_vader_single_copy_mechanism none ";
 }
 
 // The pid of a process whose environment holds `entry` (e.g. OMPI_COMM_WORLD_RANK=1) and whose
