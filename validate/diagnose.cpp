@@ -672,8 +672,11 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   const EffectScales& scales = p.scales;
   auto effects = p.effects;
   for (const auto& name : opt.only)
-    if (std::find(p.names.begin(), p.names.end(), name) == p.names.end())
-      throw std::invalid_argument("unknown effect '" + name + "'");
+    if (std::find(p.names.begin(), p.names.end(), name) == p.names.end()) {
+      std::string offered;
+      for (const auto& n : p.names) offered += (offered.empty() ? "" : ", ") + n;
+      throw std::invalid_argument("unknown effect '" + name + "' (this model offers: " + offered + ")");
+    }
   if (!opt.only.empty())
     effects.erase(std::remove_if(effects.begin(), effects.end(),
                                  [&](const Effect& e) {
