@@ -159,6 +159,24 @@ TEST(ArmDiagnose, CandidatesAreNamedAfterTheJointOrLinkTheyActAt) {
     EXPECT_EQ(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 
+// A friction's search box holds the model's own tanh smoothing even on a slow joint: the Titan arm's
+// elbow moves at 0.05 rad/s RMS, so 1e-2 of its rate (the box's old top) was half the default 1e-3 rad/s
+// and the fit of a hidden 15 N m, pinned there, ended at 14.1 with the record unexplained.
+TEST(ArmDiagnose, AFrictionsSmoothingRangeHoldsTheModelsOwnOnASlowJoint) {
+  const ModelSource src = load_arm_source(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb_titan.yaml", {"simulation.settle=2"});
+  const ArmModel m = build_arm(src);
+  const Record r = make_arm_record(m, {}, 1);
+  const auto effects = make_arm_candidate_effects(m, apply_overrides(src), r);
+  const auto e = std::find_if(effects.begin(), effects.end(), [](const Effect& x) { return x.name == "coulomb_friction@elbow"; });
+  ASSERT_NE(e, effects.end());
+  const auto smoothing = std::find_if(e->params.begin(), e->params.end(),
+                                      [](const EffectParam& q) { return q.path == "joints.elbow.friction.smoothing"; });
+  ASSERT_NE(smoothing, e->params.end());
+  EXPECT_EQ(smoothing->initial, 1e-3);  // the model's own (FrictionSpec's default)
+  EXPECT_GE(smoothing->hi, 2e-3);
+  EXPECT_LT(smoothing->lo, 1e-5);
+}
+
 TEST(ArmDiagnose, OtherModesThanClosedLoopAndUnknownEffectsAreRefused) {
   const ModelSource src = load_arm_source(kTwoLink, kShort);
   const Record r = make_arm_record(build_arm(src), {}, 1);
