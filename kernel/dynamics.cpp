@@ -7,6 +7,12 @@
 #include "kernel/fastmath.hpp"
 #include "kernel/friction.hpp"
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define FF_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define FF_TARGET_CLONES
+#endif
+
 namespace ff {
 
 // Planar spatial vectors in body coordinates: motion (w, vx, vy), force (n, fx, fy).
@@ -27,6 +33,7 @@ double calc_hub_friction_damping(const BatchModel& bm, int l, double w) {
   return calc_friction_damping(hub_friction_map(bm, l), w);
 }
 
+FF_TARGET_CLONES [[gnu::flatten]]
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            double* tj) {
   const int W = bm.W, N = bm.nseg;
@@ -54,6 +61,7 @@ void compute_sincos(int n, const double* x, double* s, double* c) {
 }
 }  // namespace
 
+FF_TARGET_CLONES [[gnu::flatten]]
 void compute_forward_dynamics(const BatchModel& bm, const BodyTable& body, const double* q, const double* v,
                               const double* tau, const double* arm, double* qdd, Workspace& ws) {
   const int W = bm.W, N = bm.nseg;
@@ -200,6 +208,7 @@ void compute_acceleration(const BatchModel& bm, const double* q, const double* v
   compute_acceleration(bm, make_body_table(bm), q, v, z, tau_cmd, qdd, zdot, ws);
 }
 
+FF_TARGET_CLONES [[gnu::flatten]]
 void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws) {
   const int W = bm.W;
   // Running angle of each segment relative to the hub, as cos/sin by angle addition.
