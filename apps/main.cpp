@@ -7,13 +7,15 @@
 #include "apps/verbs.hpp"
 #include "jobs/mpi.hpp"
 #include "common/errors.hpp"
+#include "common/isa.hpp"
 
 int main(int argc, char** argv) {
   ff::MpiSession session(&argc, &argv);  // one rank of one unless started by mpirun
   ff::set_mpi(&session);
   CLI::App app{"flexfarm: simulation farm for flexible robot manipulators (PNL Flexible Beam Testbed and kin)"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "flexfarm 0.1.0");
+  // The version and the vector width the kernels run at (common/isa.hpp; FLEXFARM_ISA narrows it).
+  app.set_version_flag("--version", [] { return "flexfarm 0.1.0, kernels " + ff::describe_isa(); });
   ff::add_modes_verb(app);
   ff::add_simulate_verb(app);
   ff::add_run_verb(app);
@@ -26,6 +28,7 @@ int main(int argc, char** argv) {
   ff::add_calibrate_verb(app);
   ff::add_compare_verb(app);
   try {
+    ff::active_isa();  // a bad FLEXFARM_ISA stops here, before any kernel runs
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);  // --help, bad options

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "common/isa.hpp"
 #include "kernel/model.hpp"
 #include "kernel/simulate.hpp"
 
@@ -26,16 +27,43 @@ ff::BatchModel rig_batch(int nseg, int W, ff::Integrator integ, int substeps) {
   return ff::make_batch(models);
 }
 
-// One fixed-step benchmark; args: segments, lanes, substeps (0 = automatic).
-void fixed_step(benchmark::State& state, ff::Integrator integrator) {
-  const auto bm = rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator,
-                            static_cast<int>(state.range(2)));
+// Runs the batch's closed loop as the benchmark's iterations and counts its rates.
+void closed_loop(benchmark::State& state, const ff::BatchModel& bm) {
   const double samples = bm.duration / bm.control_period;
   for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
   state.counters["substeps"] = bm.substeps;
   state.counters["variant_samples/s"] = benchmark::Counter(samples * bm.W, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["x_realtime/core"] = benchmark::Counter(bm.duration * bm.W, benchmark::Counter::kIsIterationInvariantRate);
 }
+
+// One fixed-step benchmark; args: segments, lanes, substeps (0 = automatic).
+void fixed_step(benchmark::State& state, ff::Integrator integrator) {
+  closed_loop(state, rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator,
+                               static_cast<int>(state.range(2))));
+}
+
+// The same closed loop at each vector width (common/isa.hpp: 0 SSE2, 1 AVX2, 2 AVX-512), side by
+// side in one run; args: segments, lanes, width. A width the CPU lacks is skipped.
+void at_width(benchmark::State& state, ff::Integrator integrator) {
+  const ff::Isa was = ff::active_isa(), isa = static_cast<ff::Isa>(state.range(2));
+  if (ff::select_isa(isa) != isa) {
+    ff::select_isa(was);
+    state.SkipWithError("this CPU lacks the width");
+    return;
+  }
+  closed_loop(state, rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator, 0));
+  ff::select_isa(was);
+}
+void BM_MidpointWidth(benchmark::State& state) { at_width(state, ff::Integrator::kMidpoint); }
+BENCHMARK(BM_MidpointWidth)
+    ->ArgNames({"N", "W", "isa"})
+    ->ArgsProduct({{6, 24}, {8}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond);
+void BM_Sdirk2Width(benchmark::State& state) { at_width(state, ff::Integrator::kSdirk2); }
+BENCHMARK(BM_Sdirk2Width)
+    ->ArgNames({"N", "W", "isa"})
+    ->ArgsProduct({{6, 48}, {8}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Rk4ClosedLoop(benchmark::State& state) { fixed_step(state, ff::Integrator::kRk4); }
 BENCHMARK(BM_Rk4ClosedLoop)
@@ -72,6 +100,21 @@ void BM_Sdirk2Threads(benchmark::State& state) {
   state.counters["variant_samples/s"] = benchmark::Counter(samples, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Sdirk2Threads)->ArgNames({"threads"})->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One closed loop of T simulated seconds, run once (midpoint or SDIRK2, W = 8): the runs that
+// bench/count_flops.py counts. The step loop's operations per variant-step are the difference of
+// the counts at T = 2 and T = 1, over the 1000 x 8 variant-steps between (setup cancels out).
+void BM_FlopCount(benchmark::State& state) {
+  const auto integ = state.range(2) == 0 ? ff::Integrator::kMidpoint : ff::Integrator::kSdirk2;
+  ff::BatchModel bm = rig_batch(static_cast<int>(state.range(0)), 8, integ, 0);
+  bm.duration = static_cast<double>(state.range(1));
+  for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
+}
+BENCHMARK(BM_FlopCount)
+    ->ArgNames({"N", "T", "sdirk2"})
+    ->ArgsProduct({{6, 48}, {1, 2}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 void BM_CvodeClosedLoop(benchmark::State& state) {
   const auto integ = state.range(1) == 0 ? ff::Integrator::kCvodeDense : ff::Integrator::kCvodeKlu;

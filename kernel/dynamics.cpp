@@ -3,15 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/isa.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/fastmath.hpp"
 #include "kernel/friction.hpp"
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define FF_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define FF_TARGET_CLONES
-#endif
 
 namespace ff {
 
@@ -33,9 +28,8 @@ double calc_hub_friction_damping(const BatchModel& bm, int l, double w) {
   return calc_friction_damping(hub_friction_map(bm, l), w);
 }
 
-FF_TARGET_CLONES [[gnu::flatten]]
-void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
-                           double* tj) {
+static void compute_joint_torques_kernel(const BatchModel& bm, const double* q, const double* v,
+                                         const double* tau_hub, double* tj) {
   const int W = bm.W, N = bm.nseg;
   const double* k = bm.joint_k.data();
   const double* c = bm.joint_c.data();
@@ -51,6 +45,9 @@ void compute_joint_torques(const BatchModel& bm, const double* q, const double* 
     }
   }
 }
+FF_ISA_DISPATCH(void, compute_joint_torques,
+                (const BatchModel& bm, const double* q, const double* v, const double* tau_hub, double* tj),
+                (bm, q, v, tau_hub, tj))
 
 namespace {
 // s[j] = sin x[j], c[j] = cos x[j] for j < n, in one flat loop: the polynomials of different
@@ -61,9 +58,9 @@ void compute_sincos(int n, const double* x, double* s, double* c) {
 }
 }  // namespace
 
-FF_TARGET_CLONES [[gnu::flatten]]
-void compute_forward_dynamics(const BatchModel& bm, const BodyTable& body, const double* q, const double* v,
-                              const double* tau, const double* arm, double* qdd, Workspace& ws) {
+static void compute_forward_dynamics_kernel(const BatchModel& bm, const BodyTable& body, const double* q,
+                                            const double* v, const double* tau, const double* arm, double* qdd,
+                                            Workspace& ws) {
   const int W = bm.W, N = bm.nseg;
   // Bodies 0..N-2 (the parents pass 2 projects onto) by offset into the table; the tip by its row.
   const double* bmass = body.mass;
@@ -190,6 +187,10 @@ void compute_forward_dynamics(const BatchModel& bm, const BodyTable& body, const
     }
   }
 }
+FF_ISA_DISPATCH(void, compute_forward_dynamics,
+                (const BatchModel& bm, const BodyTable& body, const double* q, const double* v, const double* tau,
+                 const double* arm, double* qdd, Workspace& ws),
+                (bm, body, q, v, tau, arm, qdd, ws))
 
 void compute_forward_dynamics(const BatchModel& bm, const double* q, const double* v, const double* tau,
                               const double* arm, double* qdd, Workspace& ws) {
@@ -208,8 +209,8 @@ void compute_acceleration(const BatchModel& bm, const double* q, const double* v
   compute_acceleration(bm, make_body_table(bm), q, v, z, tau_cmd, qdd, zdot, ws);
 }
 
-FF_TARGET_CLONES [[gnu::flatten]]
-void compute_tip(const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws) {
+static void compute_tip_kernel(const BatchModel& bm, const double* q, double* deflection, double* angle,
+                               Workspace& ws) {
   const int W = bm.W;
   // Running angle of each segment relative to the hub, as cos/sin by angle addition.
   double* cphi = ws.a0.data();
@@ -240,6 +241,9 @@ void compute_tip(const BatchModel& bm, const double* q, double* deflection, doub
   }
   for (int l = 0; l < W; ++l) angle[l] = q[l] + std::atan2(deflection[l], along[l]);
 }
+FF_ISA_DISPATCH(void, compute_tip,
+                (const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws),
+                (bm, q, deflection, angle, ws))
 
 void compute_tip_acceleration(const BatchModel& bm, const double* q, const double* v, const double* qdd,
                               double* accel) {

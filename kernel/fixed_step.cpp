@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/isa.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
 #include "kernel/stage_arithmetic.hpp"
@@ -79,7 +80,7 @@ void solve_drive_stage(const BatchModel& bm, const double* q, const double* v, c
 }
 }  // namespace
 
-void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
+static void step_rk4_kernel(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const std::size_t n = s.q.size(), nz = s.z.size();
   double* q = s.q.data();
   double* v = s.v.data();
@@ -109,8 +110,9 @@ void step_rk4(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const double *kz0 = ws.kz[0].data(), *kz1 = ws.kz[1].data(), *kz2 = ws.kz[2].data(), *kz3 = ws.kz[3].data();
   for (std::size_t j = 0; j < nz; ++j) z[j] += w6 * (kz0[j] + 2.0 * kz1[j] + 2.0 * kz2[j] + kz3[j]);
 }
+FF_ISA_DISPATCH(void, step_rk4, (const BatchModel& bm, BatchState& s, Workspace& ws, double h), (bm, s, ws, h))
 
-void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
+static void step_sdirk2_kernel(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const std::size_t n = s.q.size();
   const double g = kSdirk2Gamma;
   const double gh = g * h;
@@ -148,8 +150,9 @@ void step_sdirk2(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   compute_forward_dynamics(bm, body, qk, vk, ws.tau_joint.data(), ws.armature.data(), A2, ws);
   sdirk2_finish(n, qpre, vpre, A2, gh, q, v, a_prev);
 }
+FF_ISA_DISPATCH(void, step_sdirk2, (const BatchModel& bm, BatchState& s, Workspace& ws, double h), (bm, s, ws, h))
 
-void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
+static void step_midpoint_kernel(const BatchModel& bm, BatchState& s, Workspace& ws, double h) {
   const std::size_t n = s.q.size();
   const double gh = 0.5 * h;
   set_armature(bm, ws, gh);
@@ -174,5 +177,6 @@ void step_midpoint(const BatchModel& bm, BatchState& s, Workspace& ws, double h)
   compute_forward_dynamics(bm, body, qs, vk, ws.tau_joint.data(), ws.armature.data(), A, ws);
   midpoint_finish(n, A, h, gh, q, v, a_prev);
 }
+FF_ISA_DISPATCH(void, step_midpoint, (const BatchModel& bm, BatchState& s, Workspace& ws, double h), (bm, s, ws, h))
 
 }  // namespace ff

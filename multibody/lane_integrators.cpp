@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "common/isa.hpp"
 #include "kernel/stage_arithmetic.hpp"
 
 namespace ff {
@@ -108,8 +109,8 @@ TreeStepWorkspace::TreeStepWorkspace(const TreeLanes& tl) : aba(tl) {
   for (auto& k : kz) k.assign(nz, 0.0);
 }
 
-void step_tree_rk4(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws,
-                   double h) {
+static void step_tree_rk4_kernel(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s,
+                                 TreeStepWorkspace& ws, double h) {
   const std::size_t n = size_of(tl);
   double *q = s.q.data(), *qd = s.qd.data(), *q1 = ws.q1.data(), *qd1 = ws.qd1.data(), *tau = ws.tau.data();
   // Stage derivatives kq = velocity, kv = acceleration (RK4's Butcher tableau).
@@ -141,9 +142,12 @@ void step_tree_rk4(const TreeLanes& tl, const double* tau_applied, TreeLanesStat
   const double *kz0 = ws.kz[0].data(), *kz1 = ws.kz[1].data(), *kz2 = ws.kz[2].data(), *kz3 = ws.kz[3].data();
   for (std::size_t j = 0; j < nz; ++j) z[j] += w6 * (kz0[j] + 2.0 * kz1[j] + 2.0 * kz2[j] + kz3[j]);
 }
+FF_ISA_DISPATCH(void, step_tree_rk4,
+                (const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws, double h),
+                (tl, tau_applied, s, ws, h))
 
-void step_tree_midpoint(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws,
-                        double h) {
+static void step_tree_midpoint_kernel(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s,
+                                      TreeStepWorkspace& ws, double h) {
   const std::size_t n = size_of(tl);
   const double gh = 0.5 * h;
   set_armature(tl, ws, gh);
@@ -164,9 +168,12 @@ void step_tree_midpoint(const TreeLanes& tl, const double* tau_applied, TreeLane
   compute_tree_forward_dynamics(tl, qs, vk, tau, ws.armature.data(), A, ws.aba);
   midpoint_finish(n, A, h, gh, q, qd, a_prev);
 }
+FF_ISA_DISPATCH(void, step_tree_midpoint,
+                (const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws, double h),
+                (tl, tau_applied, s, ws, h))
 
-void step_tree_sdirk2(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws,
-                      double h) {
+static void step_tree_sdirk2_kernel(const TreeLanes& tl, const double* tau_applied, TreeLanesState& s,
+                                    TreeStepWorkspace& ws, double h) {
   const std::size_t n = size_of(tl);
   const double g = kSdirk2Gamma;
   const double gh = g * h;
@@ -202,5 +209,8 @@ void step_tree_sdirk2(const TreeLanes& tl, const double* tau_applied, TreeLanesS
   // The second stage is the new state (stiffly accurate).
   sdirk2_finish(n, qpre, vpre, A2, gh, q, qd, a_prev);
 }
+FF_ISA_DISPATCH(void, step_tree_sdirk2,
+                (const TreeLanes& tl, const double* tau_applied, TreeLanesState& s, TreeStepWorkspace& ws, double h),
+                (tl, tau_applied, s, ws, h))
 
 }  // namespace ff

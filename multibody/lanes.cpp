@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/isa.hpp"
 #include "kernel/fastmath.hpp"
 
 namespace ff {
@@ -12,11 +13,6 @@ namespace ff {
 namespace {
 
 #define FF_INLINE [[gnu::always_inline]] inline
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define FF_TARGET_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define FF_TARGET_CLONES
-#endif
 
 // The lane loops are written in scalar locals only (x0, x1, x2 for a 3-vector, M0..M8 for a 3x3
 // row-major matrix, each a `double`): GCC vectorises a loop over lanes written so, and not one that
@@ -472,13 +468,9 @@ TreeLanesWorkspace::TreeLanesWorkspace(const TreeLanes& tl) : W(tl.W), nb(tl.nb)
   zeros.assign(static_cast<std::size_t>(tl.nv) * tl.W, 0.0);
 }
 
-// Compiled for AVX-512, AVX2 and the baseline, the one the CPU has chosen at load time (GCC/clang
-// function multiversioning), the passes inlined into each (flatten) so that their lane loops use its
-// registers. The same bits on every path: the lanes never mix, and no multiply-add is fused
-// (-ffp-contract=off), so each lane's operations are IEEE's, in the same order, at any width.
-FF_TARGET_CLONES [[gnu::flatten]]
-void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const double* qd, const double* tau,
-                                   const double* extra_armature, double* qdd, TreeLanesWorkspace& ws) {
+static void compute_tree_forward_dynamics_kernel(const TreeLanes& tl, const double* q, const double* qd,
+                                                const double* tau, const double* extra_armature, double* qdd,
+                                                TreeLanesWorkspace& ws) {
   if (ws.W != tl.W || ws.nb != tl.nb)
     throw std::invalid_argument("compute_tree_forward_dynamics: the workspace was made for another batch");
   const double* extra = extra_armature ? extra_armature : ws.zeros.data();
@@ -489,6 +481,12 @@ void compute_tree_forward_dynamics(const TreeLanes& tl, const double* q, const d
     default: aba_passes<0>(tl, q, qd, tau, extra, qdd, ws); break;
   }
 }
+// Compiled for AVX-512, AVX2 and SSE2, the active width's copy called (common/isa.hpp), the passes
+// inlined into each so that their lane loops use its registers; the same bits at every width.
+FF_ISA_DISPATCH(void, compute_tree_forward_dynamics,
+                (const TreeLanes& tl, const double* q, const double* qd, const double* tau,
+                 const double* extra_armature, double* qdd, TreeLanesWorkspace& ws),
+                (tl, q, qd, tau, extra_armature, qdd, ws))
 
 void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const double* qd, const double* tau_applied,
                                  double* tau) {

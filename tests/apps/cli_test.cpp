@@ -392,6 +392,62 @@ TEST_F(Cli, RunShortStudyWritesEveryOutput) {
   expect_no_tmp_files(out);
 }
 
+// ---- vector width (common/isa.hpp) ----------------------------------------------------------
+
+TEST_F(Cli, VersionNamesTheVectorWidthInUse) {
+  const auto r = run_shell("FLEXFARM_ISA=sse2 " + quote(kBinary) + " --version");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.rfind("flexfarm 0.1.0, kernels sse2 (this CPU and build: up to ", 0), 0u) << r.output;
+}
+
+TEST_F(Cli, ABadVectorWidthIsOneErrorLine) {
+  const auto r = run_shell("FLEXFARM_ISA=avx3 " + quote(kBinary) + " simulate configs/fbtb.yaml --out out");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  expect_one_error_line(r, "environment: FLEXFARM_ISA: 'avx3' is not a vector width (sse2, avx2 or avx512)");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+// The same outputs, byte for byte, at every width the CPU runs: a trace of the rig, and a Monte Carlo
+// study of the rig on SDIRK2 in lanes of 3 over 2 threads with its traces.
+TEST_F(Cli, EveryVectorWidthWritesTheSameBytes) {
+  write("study.yaml",
+        "name: widths\n"
+        "seed: 7\n"
+        "model: configs/fbtb.yaml\n"
+        "set:\n"
+        "  trajectory.moves: [{target: 0.3, hold: 0.5}]\n"
+        "  simulation.integrator: sdirk2\n"
+        "variables:\n"
+        "  - path: payload.mass\n"
+        "    distribution: {type: uniform, lower: 100.0, upper: 500.0}\n"
+        "  - path: joints.stiffness\n"
+        "    distribution: {type: uniform, lower: 2.0e4, upper: 6.0e4}\n"
+        "design: {type: monte_carlo, samples: 7}\n");
+  const std::string moves = quote("trajectory.moves=[{target: 0.4, hold: 1}]");
+  std::vector<std::string> widths;
+  for (const char* isa : {"sse2", "avx2", "avx512"}) {
+    const auto v = run_shell(std::string("FLEXFARM_ISA=") + isa + " " + quote(kBinary) + " --version");
+    if (v.output.find(std::string("kernels ") + isa + " ") == std::string::npos) continue;  // not on this CPU
+    widths.push_back(isa);
+    const std::string env = std::string("FLEXFARM_ISA=") + isa + " " + quote(kBinary);
+    ASSERT_EQ(run_shell(env + " simulate configs/fbtb.yaml --set " + moves + " --out sim_" + isa).exit_code, 0);
+    const auto r = run_shell(env + " run study.yaml --lanes 3 --threads 2 --out run_" + isa);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  if (widths.size() < 2) GTEST_SKIP() << "this CPU or build runs one width only";
+  for (std::size_t i = 1; i < widths.size(); ++i) {
+    EXPECT_EQ(read_text(work / ("sim_" + widths[i]) / "trace.csv"), read_text(work / ("sim_" + widths[0]) / "trace.csv"))
+        << widths[i];
+    EXPECT_EQ(read_text(work / ("run_" + widths[i]) / "results.csv"),
+              read_text(work / ("run_" + widths[0]) / "results.csv"))
+        << widths[i];
+    for (const char* trace : {"000000.csv", "000006.csv"})
+      EXPECT_EQ(read_text(work / ("run_" + widths[i]) / "traces" / trace),
+                read_text(work / ("run_" + widths[0]) / "traces" / trace))
+          << widths[i] << " " << trace;
+  }
+}
+
 TEST_F(Cli, CompareModelWithItsOwnTraceWritesEveryOutput) {
   const std::string moves = quote("trajectory.moves=[{target: 0.2, hold: 1}]");
   ASSERT_EQ(run("simulate configs/fbtb.yaml --out sim --set " + moves).exit_code, 0);

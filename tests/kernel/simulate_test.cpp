@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "common/errors.hpp"
+#include "common/isa.hpp"
 #include "kernel/model_io.hpp"
 #include "tests/kernel/test_support.hpp"
 
@@ -280,6 +283,70 @@ TEST(PayloadEvents, NeedAFixedStepIntegrator) {
   spec.payload_events = {{1.0, 0.0, 0.0}};
   spec.simulation.integrator = Integrator::kCvodeDense;
   EXPECT_THROW(make_model(spec), ConfigError);
+}
+
+// Whether two signals hold the same doubles, bit for bit (NaN included).
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+// The rig's kernels are compiled for SSE2, AVX2 and AVX-512 (common/isa.hpp); each width the CPU runs
+// steps random variants (payload, stiffness, friction, move; a notch, a hydraulic or a compliant drive) to the
+// same bits as SSE2, under every fixed-step integrator, at N = 6 and 24, with W = 5 lanes (a partial
+// vector at every width).
+TEST(VectorWidths, EveryWidthTheCpuRunsStepsTheRigToTheSameBits) {
+  if (available_isa() == Isa::sse2) GTEST_SKIP() << "this CPU or build runs SSE2 only";
+  const Isa was = active_isa();
+  std::mt19937_64 rng(20261204);
+  auto uniform = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  int batches = 0, finished = 0;
+  for (Integrator integ : {Integrator::kRk4, Integrator::kSdirk2, Integrator::kMidpoint})
+    for (int n : {6, 24})
+      for (int drive = 0; drive < 3; ++drive) {
+        if (integ == Integrator::kRk4 && n == 24) continue;  // RK4 would take hundreds of substeps
+        std::vector<ModelSpec> specs;
+        for (int l = 0; l < 5; ++l) {
+          ModelSpec spec = test::rig_spec(uniform(-0.8, 0.8), 0.3);
+          spec.segments = n;
+          spec.simulation.integrator = integ;
+          spec.payload_mass = uniform(0.0, 600.0);
+          spec.joints.stiffness *= uniform(0.5, 2.0);
+          spec.friction.viscous = uniform(0.0, 50.0);
+          spec.friction.coulomb = uniform(0.0, 40.0);
+          spec.notch.enabled = drive != 1;
+          spec.hydraulics.enabled = drive == 1;
+          spec.drive.enabled = drive == 2;
+          spec.drive.backlash = drive == 2 ? uniform(0.0, 2e-3) : 0.0;
+          specs.push_back(spec);
+        }
+        // One shape for the batch: every lane at the most substeps any of them asks for.
+        int substeps = 1;
+        for (const ModelSpec& spec : specs) substeps = std::max(substeps, make_model(spec).substeps);
+        std::vector<Model> models;
+        for (ModelSpec& spec : specs) {
+          spec.simulation.substeps = substeps;
+          models.push_back(make_model(spec));
+        }
+        const BatchModel bm = make_batch(models);
+        select_isa(Isa::sse2);
+        const BatchRun base = simulate(bm);
+        for (Isa isa : {Isa::avx2, Isa::avx512}) {
+          if (select_isa(isa) != isa) continue;
+          const BatchRun wide = simulate(bm);
+          for (int l = 0; l < 5; ++l) {
+            const std::string at = std::string(isa_name(isa)) + " " + integrator_name(integ) + " N = " +
+                                   std::to_string(n) + " drive " + std::to_string(drive) + " lane " + std::to_string(l);
+            ASSERT_EQ(wide.status[l], base.status[l]) << at;
+            if (base.status[l] == LaneStatus::kOk) ++finished;
+            for (auto signal : {&Trace::tip_deflection, &Trace::tip_angle, &Trace::hub_rate, &Trace::torque})
+              EXPECT_TRUE(same_bits(wide.traces[l].*signal, base.traces[l].*signal)) << at;
+          }
+        }
+        ++batches;
+      }
+  select_isa(was);
+  EXPECT_EQ(batches, 15);
+  RecordProperty("lanes_finished", finished);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <functional>
 #include <vector>
 
+#include "common/isa.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/flexible_link.hpp"
 #include "multibody/statics.hpp"
@@ -184,6 +185,37 @@ TEST(TreeIntegrators, AVariantStepsToTheSameBitsInAnyLane) {
     };
     EXPECT_EQ(go({trees[3]}, 0), go(trees, 3));
   }
+}
+
+// The tree's lane ABA and steps are compiled for SSE2, AVX2 and AVX-512 (common/isa.hpp): every width
+// the CPU runs steps five variants of the flexible arm to the same bits as SSE2 under each method.
+TEST(TreeIntegrators, EveryWidthTheCpuRunsStepsToTheSameBits) {
+  if (available_isa() == Isa::sse2) GTEST_SKIP() << "this CPU or build runs SSE2 only";
+  const Isa was = active_isa();
+  const VectorXd x0 = start(flexible_arm(4, 1e-5));
+  std::vector<Tree> trees;
+  for (int l = 0; l < 5; ++l) trees.push_back(flexible_arm(4, 1e-5, 1.0 + 0.3 * l));
+  const TreeLanes tl = make_tree_lanes(trees);
+  auto go = [&](const Stepper& st) {
+    TreeLanesState s = make_tree_lanes_state(tl);
+    for (int j = 0; j < tl.nv; ++j)
+      for (int l = 0; l < tl.W; ++l) {
+        s.q[static_cast<std::size_t>(j * tl.W + l)] = x0[j] * (1.0 - 0.05 * l);
+        s.qd[static_cast<std::size_t>(j * tl.W + l)] = x0[tl.nv + j];
+      }
+    TreeStepWorkspace ws(tl);
+    for (int k = 0; k < 200; ++k) st(tl, nullptr, s, ws, 1e-4);
+    std::vector<double> out = s.q;
+    out.insert(out.end(), s.qd.begin(), s.qd.end());
+    return out;
+  };
+  for (const Stepper& st : {Stepper(step_tree_rk4), Stepper(step_tree_midpoint), Stepper(step_tree_sdirk2)}) {
+    select_isa(Isa::sse2);
+    const std::vector<double> base = go(st);
+    for (Isa isa : {Isa::avx2, Isa::avx512})
+      if (select_isa(isa) == isa) EXPECT_EQ(go(st), base) << isa_name(isa);
+  }
+  select_isa(was);
 }
 
 }  // namespace
