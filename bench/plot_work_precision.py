@@ -4,16 +4,14 @@ variant-second, log), one panel per case, one line per simulator and method; MuJ
 (Euler, 1 ms) starred; the settings that were unstable named under each panel.
 
 Usage: plot_work_precision.py CSV [PNG]   (PNG defaults to docs/img/work_precision.png)
-Needs matplotlib (Debian: python3-matplotlib, i.e. /usr/bin/python3).
+       plot_work_precision.py --table CSV  (Markdown tables for docs/performance.md: a row per step,
+                                            a column per method, "error / scale · cost")
+Needs matplotlib (Debian: python3-matplotlib, i.e. /usr/bin/python3) for the PNG.
 """
 import csv
 import sys
 from collections import OrderedDict
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 
 TITLES = {
     "rig6": "reference rig, N = 6\n(tip deflection RMS error / its RMS)",
@@ -31,14 +29,55 @@ STYLE = {  # (colour, marker); flexfarm solid, MuJoCo dashed
 }
 
 
+def read(path):
+    cases = OrderedDict()
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            cases.setdefault(r["case"], []).append(r)
+    return cases
+
+
+def table(cases):
+    for case, rows in cases.items():
+        methods = list(OrderedDict.fromkeys((r["simulator"], r["method"]) for r in rows if r["h_s"]))
+        steps = sorted({float(r["h_s"]) for r in rows if r["h_s"]}, reverse=True)
+        cell = {(r["simulator"], r["method"], float(r["h_s"])): r for r in rows if r["h_s"]}
+        print(f"\n{case}: error / scale · cost (wall s per variant-second)\n")
+        print("| h | " + " | ".join(f"{m[0]} {m[1]}" for m in methods) + " |")
+        print("|---" * (len(methods) + 1) + "|")
+        for h in steps:
+            out = []
+            for m in methods:
+                r = cell.get((m[0], m[1], h))
+                if r is None:
+                    out.append("–")
+                elif r["stable"] != "1":
+                    out.append("unstable")
+                else:
+                    out.append(f"{float(r['rel_error']):.1e} · {float(r['cost_s_per_variant_s']):.2g}")
+            label = f"{h * 1e3:g} ms" if h >= 1e-3 else f"{h * 1e6:g} µs"
+            print(f"| {label} | " + " | ".join(out) + " |")
+        cv = [r for r in rows if not r["h_s"]]
+        if cv:
+            print("\n| CVODE | " + " | ".join(r["setting"] for r in cv) + " |")
+            print("|---" * (len(cv) + 1) + "|")
+            print("| error / scale · cost | " + " | ".join(
+                "unstable" if r["stable"] != "1" else
+                f"{float(r['rel_error']):.1e} · {float(r['cost_s_per_variant_s']):.2g}" for r in cv) + " |")
+
+
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
+    if sys.argv[1] == "--table":
+        return table(read(sys.argv[2]))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     out = sys.argv[2] if len(sys.argv) > 2 else "docs/img/work_precision.png"
-    cases = OrderedDict()
-    with open(sys.argv[1], newline="") as f:
-        for r in csv.DictReader(f):
-            cases.setdefault(r["case"], []).append(r)
+    cases = read(sys.argv[1])
     fig, axes = plt.subplots(1, len(cases), figsize=(5.2 * len(cases), 5.4), squeeze=False)
     for ax, (case, rows) in zip(axes[0], cases.items()):
         lines = OrderedDict()
@@ -63,11 +102,16 @@ def main():
         ax.set_title(TITLES.get(case, case), fontsize=10)
         ax.set_xlabel("cost: wall s per variant-second (M variants, 2 threads)")
         ax.set_ylabel("error / scale")
-        ax.legend(fontsize=7, loc="upper right")
         if unstable:
-            text = "unstable: " + "; ".join(f"{k[0]} {k[1]} {', '.join(v)}" for k, v in unstable.items())
-            ax.text(0.0, -0.2, text, transform=ax.transAxes, fontsize=6.5, va="top", wrap=True)
-    fig.tight_layout()
+            text = "unstable: " + "\n".join(f"{k[0]} {k[1]} at h = {', '.join(v)}" for k, v in unstable.items())
+            ax.text(0.02, 0.1, text, transform=ax.transAxes, fontsize=7, va="bottom")
+    # One legend for all panels, below them.
+    labels = OrderedDict()
+    for ax in axes[0]:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            labels.setdefault(label, handle)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
+    fig.legend(labels.values(), labels.keys(), loc="lower center", ncol=4, fontsize=8, frameon=False)
     fig.savefig(out, dpi=110, bbox_inches="tight")
     print(f"wrote {out}")
 

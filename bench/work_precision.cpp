@@ -94,6 +94,32 @@ std::string h_label(double h) {
   return h >= 1e-3 ? fmt("%gms", h * 1e3) : fmt("%gus", h * 1e6);
 }
 
+Point fixed_step_point(const char* sim, const char* method, double h) {
+  Point p;
+  p.sim = sim;
+  p.method = method;
+  p.h = h;
+  p.setting = "h=" + h_label(h);
+  return p;
+}
+
+Point cvode_point(double rtol) {
+  Point p;
+  p.sim = "flexfarm";
+  p.method = "CVODE";
+  p.setting = fmt("rtol=%g", rtol);
+  return p;
+}
+
+// An integrator of a sweep: its name in the tables, its key, and a guess of its cost a step (the
+// dearest error runs start first).
+template <class Key>
+struct Integrators {
+  const char* name;
+  Key k;
+  double w;
+};
+
 // Runs every error run (in parallel, dearest first as guessed by `weight`), then times the stable
 // settings: each timed run planned to at most opt.budget s from its error run's speed, repeated to
 // ~0.2 s when shorter, the repetitions round-robin.
@@ -206,18 +232,11 @@ CaseResult rig_case(int nseg, double seconds, const Options& opt) {
   const std::vector<double> rtols =
       opt.quick ? std::vector<double>{1e-4, 1e-6, 1e-8} : std::vector<double>{1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
   std::vector<double> weight;
-  const struct {
-    const char* name;
-    ff::Integrator k;
-    double w;
-  } ffm[3] = {{"midpoint", ff::Integrator::kMidpoint, 1}, {"SDIRK2", ff::Integrator::kSdirk2, 2}, {"RK4", ff::Integrator::kRk4, 4}};
+  const Integrators<ff::Integrator> ffm[3] = {
+      {"midpoint", ff::Integrator::kMidpoint, 1}, {"SDIRK2", ff::Integrator::kSdirk2, 2}, {"RK4", ff::Integrator::kRk4, 4}};
   for (const auto& f : ffm)
     for (int K : ff_subs) {
-      Point p;
-      p.sim = "flexfarm";
-      p.method = f.name;
-      p.h = m.control_period / K;
-      p.setting = "h=" + h_label(p.h);
+      Point p = fixed_step_point("flexfarm", f.name, m.control_period / K);
       const ff::ModelSpec s = spec(f.k, K, seconds, 0);
       p.error_run = [=] { return ff_error(s); };
       p.make_timed = ff_timed(s);
@@ -225,28 +244,17 @@ CaseResult rig_case(int nseg, double seconds, const Options& opt) {
       weight.push_back(f.w * K * nseg);
     }
   for (double rtol : rtols) {
-    Point p;
-    p.sim = "flexfarm";
-    p.method = "CVODE";
-    p.setting = fmt("rtol=%g", rtol);
+    Point p = cvode_point(rtol);
     const ff::ModelSpec s = spec(ff::Integrator::kCvodeDense, 0, seconds, rtol);
     p.error_run = [=] { return ff_error(s); };
     p.make_timed = ff_timed(s);
     cr.points.push_back(p);
     weight.push_back(1e9);  // unknown: first
   }
-  const struct {
-    const char* name;
-    int k;
-    double w;
-  } mjm[3] = {{"Euler", mjINT_EULER, 1}, {"implicit", mjINT_IMPLICIT, 2}, {"RK4", mjINT_RK4, 4}};
+  const Integrators<int> mjm[3] = {{"Euler", mjINT_EULER, 1}, {"implicit", mjINT_IMPLICIT, 2}, {"RK4", mjINT_RK4, 4}};
   for (const auto& f : mjm)
     for (int K : mj_subs) {
-      Point p;
-      p.sim = "MuJoCo";
-      p.method = f.name;
-      p.h = m.control_period / K;
-      p.setting = "h=" + h_label(p.h);
+      Point p = fixed_step_point("MuJoCo", f.name, m.control_period / K);
       // A private copy of the model with this integrator and step.
       std::shared_ptr<mjModel> mm(mj_copyModel(nullptr, base), mj_deleteModel);
       mm->opt.integrator = f.k;
@@ -360,20 +368,13 @@ CaseResult arm_case(double seconds, const Options& opt) {
   const std::vector<double> rtols =
       opt.quick ? std::vector<double>{1e-4, 1e-6, 1e-8} : std::vector<double>{1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
   std::vector<double> weight;
-  const struct {
-    const char* name;
-    Method k;
-    double w;
-  } all[6] = {{"midpoint", Method::kFfMidpoint, 1}, {"SDIRK2", Method::kFfSdirk2, 2}, {"RK4", Method::kFfRk4, 4},
-              {"Euler", Method::kMjEuler, 4}, {"implicit", Method::kMjImplicit, 8}, {"RK4", Method::kMjRk4, 16}};
+  const Integrators<Method> all[6] = {
+      {"midpoint", Method::kFfMidpoint, 1}, {"SDIRK2", Method::kFfSdirk2, 2}, {"RK4", Method::kFfRk4, 4},
+      {"Euler", Method::kMjEuler, 4},       {"implicit", Method::kMjImplicit, 8}, {"RK4", Method::kMjRk4, 16}};
   for (const auto& f : all)
     for (double h : hs) {
-      Point p;
       const bool isff = ff::bench::is_flexfarm(f.k);
-      p.sim = isff ? "flexfarm" : "MuJoCo";
-      p.method = f.name;
-      p.h = h;
-      p.setting = "h=" + h_label(h);
+      Point p = fixed_step_point(isff ? "flexfarm" : "MuJoCo", f.name, h);
       const long steps = std::lround(seconds / h);
       const Method k = f.k;
       if (isff) {
@@ -429,10 +430,7 @@ CaseResult arm_case(double seconds, const Options& opt) {
       weight.push_back(f.w / h);
     }
   for (double rtol : rtols) {
-    Point p;
-    p.sim = "flexfarm";
-    p.method = "CVODE";
-    p.setting = fmt("rtol=%g", rtol);
+    Point p = cvode_point(rtol);
     p.error_run = [=] {
       double e = 0.0;
       for (int i = 0; i < 2; ++i) e = std::max(e, end_error(cvode_run((*lanes1)[i], tau1.data(), rtol, rtol * 1e-3, seconds), (*refs)[i]));
