@@ -1,6 +1,7 @@
 // A flexfarm tree as MuJoCo sees it, for the benches that run both (bench/tree_mujoco.cpp,
 // bench/realtime_arm.cpp): MJCF written from a TreeSpec, compiled from memory, and the check that the
 // two are one model (mass matrix and bias forces at a state) before anything is timed.
+// (load_mjcf and quiet_warning: bench/mujoco_util.hpp.)
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -9,14 +10,13 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <cstring>
 #include <functional>
-#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "bench/mujoco_util.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/tree.hpp"
 
@@ -94,22 +94,6 @@ inline std::string tree_mjcf(const TreeSpec& s) {
   x << "  </worldbody>\n</mujoco>\n";
   return x.str();
 }
-
-// Compiles MJCF text through MuJoCo's virtual file system (no temporary file).
-inline mjModel* load_mjcf(const std::string& xml) {
-  auto vfs = std::make_unique<mjVFS>();  // ~2 MB: heap, not stack
-  mj_defaultVFS(vfs.get());
-  if (mj_makeEmptyFileVFS(vfs.get(), "tree.xml", static_cast<int>(xml.size())) != 0)
-    throw std::runtime_error("mj_makeEmptyFileVFS failed");
-  std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), "tree.xml")], xml.data(), xml.size());
-  char err[1000] = "";
-  mjModel* m = mj_loadXML("tree.xml", vfs.get(), err, sizeof err);
-  mj_deleteVFS(vfs.get());
-  if (!m) throw std::runtime_error(std::string("mj_loadXML: ") + err);
-  return m;
-}
-
-inline void quiet_warning(const char*) {}
 
 // The MuJoCo model is the flexfarm tree: M(q) and the bias forces (with the joint springs and
 // dampers, qfrc_bias - qfrc_passive) at a state; the max relative differences.

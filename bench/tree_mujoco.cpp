@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "bench/mujoco_tree.hpp"
+#include "bench/tree_arm.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/flexible_link.hpp"
 #include "multibody/lane_integrators.hpp"
@@ -64,74 +65,17 @@ using ff::bench::tree_mjcf;
 
 // ---------------------------------------------------------------- the two trees
 
-struct Case {
-  std::string name;
-  std::function<ff::TreeSpec(double scale)> spec;  // the variant's tree, scale in [0.9, 1.1]
-  Eigen::VectorXd q0, qd0, tau;                    // initial state and the constant applied torque
-  double ref_h = 1e-6;                             // the reference's RK4 step, s (within its stability limit)
-};
+using Case = ff::bench::TreeCase;
+using ff::bench::Method;
+using ff::bench::is_flexfarm;
+using ff::bench::median;
+using ff::bench::method_name;
+using ff::bench::run_flexfarm;
+using ff::bench::run_mujoco;
+using ff::bench::set_option;
+using ff::bench::variant_scale;
 
-// The 6-DOF arm of tests/multibody/mujoco_test.cpp with its trajectory test's joint drive.
-Case rigid_case() {
-  struct Link {
-    Vec3 position;
-    Mat3 rotation;
-    Vec3 axis;
-    double mass;
-    Vec3 com, principal;
-    Mat3 principal_axes;
-  };
-  const std::vector<Link> links = {
-      {{0.0, 0.0, 0.12}, Mat3::Identity(), Vec3::UnitZ(), 4.0, {0.01, -0.02, 0.08}, {0.030, 0.025, 0.020},
-       ff::rotz(0.3) * ff::rotx(0.2)},
-      {{0.0, 0.06, 0.18}, ff::rotx(0.15), Vec3::UnitY(), 3.2, {0.20, 0.01, 0.02}, {0.010, 0.060, 0.055},
-       ff::roty(-0.4) * ff::rotz(0.1)},
-      {{0.42, 0.0, 0.03}, ff::rotz(-0.25), Vec3::UnitY(), 2.1, {0.16, -0.015, 0.0}, {0.006, 0.030, 0.028},
-       ff::rotx(0.5) * ff::roty(0.2)},
-      {{0.36, 0.02, -0.01}, ff::roty(0.3), Vec3::UnitX(), 1.1, {0.05, 0.0, 0.01}, {0.004, 0.003, 0.0035},
-       ff::rotz(0.7)},
-      {{0.09, 0.0, 0.015}, Mat3::Identity(), Vec3::UnitY(), 0.8, {0.02, 0.01, -0.01}, {0.0015, 0.0012, 0.0010},
-       ff::rotx(-0.6) * ff::rotz(0.4)},
-      {{0.07, -0.01, 0.0}, ff::rotx(-0.35), Vec3::UnitX(), 0.4, {0.03, 0.0, 0.005}, {0.0004, 0.0006, 0.0005},
-       ff::roty(0.9)},
-  };
-  const double armature[6] = {0.05, 0.08, 0.03, 0.01, 0.005, 0.002};
-  const double stiffness[6] = {30.0, 60.0, 40.0, 6.0, 4.0, 1.5};
-  const double damping[6] = {0.8, 1.2, 0.6, 0.08, 0.05, 0.01};
-  const double q_ref[6] = {0.3, -0.6, 0.9, 0.2, -0.4, 0.5};
-  Case c;
-  c.name = "rigid 6-DOF arm";
-  c.spec = [=](double scale) {
-    ff::TreeSpec s;
-    for (int i = 0; i < 6; ++i) {
-      const Link& l = links[i];
-      BodySpec b;
-      b.name = "link" + std::to_string(i + 1);
-      b.parent = i - 1;
-      b.axis = l.axis;
-      b.position = l.position;
-      b.rotation = l.rotation;
-      b.mass = scale * l.mass;
-      b.com = l.com;
-      b.inertia = scale * l.principal_axes * l.principal.asDiagonal() * l.principal_axes.transpose();
-      b.armature = armature[i];
-      b.stiffness = stiffness[i];
-      b.damping = damping[i];
-      b.spring_reference = q_ref[i];
-      s.bodies.push_back(b);
-    }
-    return s;
-  };
-  const ff::Tree nominal = ff::make_tree(c.spec(1.0));
-  ff::TreeWorkspace ws(nominal);
-  c.tau.resize(6);
-  ff::calc_bias_forces(nominal, Eigen::Map<const Eigen::VectorXd>(q_ref, 6), Eigen::VectorXd::Zero(6), c.tau, ws);
-  c.q0.resize(6);
-  c.qd0.resize(6);
-  c.q0 << 0.7, -0.2, 0.4, 0.9, -1.0, 1.2;
-  c.qd0 << 0.5, -0.8, 1.0, -1.5, 2.0, -2.5;
-  return c;
-}
+Case rigid_case() { return ff::bench::rigid_arm_case(); }
 
 // An aluminium strip on edge: width b (along z, vertical), thickness t (along y).
 ff::BeamSection strip(double b, double t, double density) {
@@ -183,24 +127,6 @@ Case flex_case() {
   return c;
 }
 
-// Variant v of M: scale 0.9 .. 1.1.
-double variant_scale(int v, int M) { return M > 1 ? 0.9 + 0.2 * v / (M - 1) : 1.0; }
-
-// ---------------------------------------------------------------- the simulators
-
-enum class Method { kFfRk4, kFfSdirk2, kMjEuler, kMjRk4, kMjImplicit };
-const char* method_name(Method k) {
-  switch (k) {
-    case Method::kFfRk4: return "flexfarm RK4";
-    case Method::kFfSdirk2: return "flexfarm SDIRK2";
-    case Method::kMjEuler: return "MuJoCo Euler";
-    case Method::kMjRk4: return "MuJoCo RK4";
-    case Method::kMjImplicit: return "MuJoCo implicit";
-  }
-  return "?";
-}
-bool is_flexfarm(Method k) { return k == Method::kFfRk4 || k == Method::kFfSdirk2; }
-
 // Everything built once per case: the variants' trees and MuJoCo models.
 struct Rig {
   const Case* c = nullptr;
@@ -215,55 +141,6 @@ struct Rig {
     for (auto* m : models) mj_deleteModel(m);
   }
 };
-
-// flexfarm: `steps` steps of h from the case's initial state in the lanes of tl; q at the end
-// (nv x W) into q_end when given. False if a lane left the finite numbers.
-bool run_flexfarm(const ff::TreeLanes& tl, const double* tau, const Case& c, Method k, double h, long steps,
-                  std::vector<double>* q_end, long check_every = 0) {
-  const int W = tl.W, nv = tl.nv;
-  ff::TreeLanesState s = ff::make_tree_lanes_state(tl);
-  ff::TreeStepWorkspace ws(tl);
-  for (int j = 0; j < nv; ++j)
-    for (int l = 0; l < W; ++l) s.q[j * W + l] = c.q0[j], s.qd[j * W + l] = c.qd0[j];
-  auto finite = [&] {
-    for (double v : s.q)
-      if (!std::isfinite(v) || std::abs(v) > 1e6) return false;
-    return true;
-  };
-  for (long i = 0; i < steps; ++i) {
-    if (k == Method::kFfRk4) ff::step_tree_rk4(tl, tau, s, ws, h);
-    else ff::step_tree_sdirk2(tl, tau, s, ws, h);
-    if (check_every > 0 && i % check_every == 0 && !finite()) return false;  // blown up: stop early
-  }
-  if (q_end) *q_end = s.q;
-  return finite();
-}
-
-// MuJoCo: one variant, `steps` steps of mj_step with the model's option as set. False on a
-// divergence warning (checked every check_every steps when > 0: then it stops early).
-bool run_mujoco(const mjModel* m, mjData* d, const Case& c, long steps, long check_every = 0) {
-  mj_resetData(m, d);
-  const int nv = m->nv;
-  for (int j = 0; j < nv; ++j) d->qpos[j] = c.q0[j], d->qvel[j] = c.qd0[j], d->qfrc_applied[j] = c.tau[j];
-  auto diverged = [&] {
-    for (int w : {mjWARN_BADQPOS, mjWARN_BADQVEL, mjWARN_BADQACC})
-      if (d->warning[w].number > 0) return true;
-    return false;
-  };
-  for (long i = 0; i < steps; ++i) {
-    mj_step(m, d);
-    if (check_every > 0 && i % check_every == 0 && diverged()) return false;
-  }
-  if (diverged()) return false;
-  for (int j = 0; j < nv; ++j)
-    if (!std::isfinite(d->qpos[j])) return false;
-  return true;
-}
-
-void set_option(mjModel* m, Method k, double h) {
-  m->opt.timestep = h;
-  m->opt.integrator = k == Method::kMjEuler ? mjINT_EULER : k == Method::kMjRk4 ? mjINT_RK4 : mjINT_IMPLICIT;
-}
 
 // The end state of variant v alone (flexfarm: one lane, the same bits as in any lane of a batch;
 // MuJoCo: a private model and data). Empty on divergence. Seconds per step into *sec_per_step.
@@ -287,12 +164,6 @@ Eigen::VectorXd end_state(const Rig& rig, int v, Method k, double h, long steps,
   if (sec_per_step)
     *sec_per_step = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps;
   return out;
-}
-
-double median(std::vector<double> x) {
-  std::sort(x.begin(), x.end());
-  const std::size_t n = x.size();
-  return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
 }
 
 struct Options {
