@@ -162,7 +162,9 @@ TEST(Simulate, SampleHookChangesTheStateAndACopiedLaneContinuesAsItsSource) {
   EXPECT_EQ(seen[0], 0);
   EXPECT_EQ(seen.back(), static_cast<long>(a.size()) - 1);
   for (std::size_t k = 0; k < a.size(); ++k) {
-    if (k < 300 || k >= 1000) EXPECT_EQ(a[k], b[k]) << "sample " << k;
+    if (k < 300 || k >= 1000) {
+      EXPECT_EQ(a[k], b[k]) << "sample " << k;
+    }
   }
   EXPECT_GT(std::abs(a[300] - b[300]), 0.005);  // m: the bend shows at the sample it is made
   EXPECT_EQ(run.traces[0].torque[1500], run.traces[1].torque[1500]);
