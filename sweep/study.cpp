@@ -441,8 +441,29 @@ std::vector<Assignment> make_variant_set(const Study& study, const Variant& v) {
   return set;
 }
 
+namespace {
+// build(doc) on a copy of the study's model document: parsed once per thread and cloned for each
+// variant (parsing the text took ~8 % of a 512-variant run). A clone keeps no line marks, so a variant
+// the model rejects is built again from the text, and its error names the line as before.
+template <typename Build>
+auto build_from_model_text(const Study& study, const Build& build) {
+  thread_local std::string text;
+  thread_local YAML::Node doc;
+  if (text != study.model_text || !doc) {
+    doc = YAML::Load(study.model_text);
+    text = study.model_text;
+  }
+  try {
+    return build(YAML::Clone(doc));
+  } catch (const std::exception&) {
+    return build(YAML::Load(study.model_text));
+  }
+}
+}  // namespace
+
 Model make_variant_model(const Study& study, const Variant& v) {
-  Model m = make_model_with(YAML::Load(study.model_text), study.model_path, make_variant_set(study, v));
+  const std::vector<Assignment> set = make_variant_set(study, v);
+  Model m = build_from_model_text(study, [&](YAML::Node doc) { return make_model_with(doc, study.model_path, set); });
   m.spec.simulation.seed = v.seed;  // each variant its own sensor noise
   return m;
 }
@@ -451,7 +472,7 @@ ArmModel make_variant_arm(const Study& study, const Variant& v) {
   // Each variant its own sensor noise, as the rig's: its seed set last.
   std::vector<Assignment> set = make_variant_set(study, v);
   set.push_back({"simulation.seed", YAML::Node(std::to_string(v.seed)), study.source, 0, "the variant's seed"});
-  return make_arm_with(YAML::Load(study.model_text), study.model_path, set);
+  return build_from_model_text(study, [&](YAML::Node doc) { return make_arm_with(doc, study.model_path, set); });
 }
 
 std::string explain_columns_mismatch(const Study& study, const ArmModel& a) {

@@ -30,7 +30,7 @@ struct Study {
   std::string description;
   std::uint64_t seed = 1;
   std::string model_path;       // resolved relative to the study file
-  std::string model_text;       // its contents, parsed afresh per variant (keeps line numbers)
+  std::string model_text;       // its contents: each variant builds on a copy of it (sweep/study.cpp)
   std::vector<Assignment> set;  // study-wide overrides, applied before each variant's own
   DesignSpec design;            // kind, sample counts and seed (ignored for a list of runs)
   bool listed = false;          // runs given one by one (`runs:`) rather than by a design
