@@ -238,7 +238,9 @@ void compute_tip(const BatchModel& bm, const double* q, double* deflection, doub
       along[l] += len[o + l] * cn;
     }
   }
-  for (int l = 0; l < W; ++l) angle[l] = q[l] + std::atan2(deflection[l], along[l]);
+  // Tip angle: hub angle plus the direction of the tip seen from the hub (fastmath.hpp atan2), rad.
+#pragma omp simd
+  for (int l = 0; l < W; ++l) angle[l] = q[l] + calc_atan2(deflection[l], along[l]);
 }
 
 void compute_tip_acceleration(const BatchModel& bm, const double* q, const double* v, const double* qdd,
