@@ -36,8 +36,9 @@ inline void calc_sincos(double x, double& s, double& c) {
 }
 
 // atan2(y, x) in (-pi, pi] for finite x, y with |x| + |y| <= DBL_MAX, within 2 ulp or 1e-15 absolute of
-// std::atan2 (tests/kernel/fastmath_test.cpp: at most 1 ulp on 4e6 random points over all quadrants,
-// the axes, signed zeros and magnitudes 1e-300 .. 1e300); the signed zeros and axes as std::atan2.
+// std::atan2 (on 4e6 random points over all quadrants and magnitudes 1e-300 .. 1e300: 96.6 % the same
+// double, 3.4 % 1 ulp apart, one point 2 ulp; tests/kernel/fastmath_test.cpp); the axes and signed
+// zeros exactly as std::atan2.
 // Reduction: a = min(|x|, |y|) / max(|x|, |y|) in [0, 1], and for a > 0.66 r = (a − 1)/(a + 1)
 // (taken as (min − max)/(min + max); exact difference by Sterbenz) with atan a = pi/4 + atan r, so
 // that |r| <= 0.66; atan r by Cephes' rational approximation (S. L. Moshier, Cephes Math Library,
