@@ -27,19 +27,31 @@ ff::BatchModel rig_batch(int nseg, int W, ff::Integrator integ, int substeps) {
   return ff::make_batch(models);
 }
 
-// Runs the batch's closed loop as the benchmark's iterations and counts its rates.
-void closed_loop(benchmark::State& state, const ff::BatchModel& bm) {
+// Runs the batch's closed loop as the benchmark's iterations and counts its rates. `online`: keep only
+// the run's metrics (kernel/online_metrics.hpp, as `flexfarm run` without traces), no trace.
+void closed_loop(benchmark::State& state, const ff::BatchModel& bm, bool online = false) {
   const double samples = bm.duration / bm.control_period;
-  for (auto _ : state) benchmark::DoNotOptimize(ff::simulate(bm));
+  for (auto _ : state) {
+    if (!online) {
+      benchmark::DoNotOptimize(ff::simulate(bm));
+      continue;
+    }
+    std::vector<ff::OnlineRun> metrics;
+    for (const ff::Model& m : bm.models) metrics.push_back(ff::make_online_run(m));
+    benchmark::DoNotOptimize(ff::simulate(bm, nullptr, nullptr, &metrics));
+    benchmark::DoNotOptimize(metrics.data());
+  }
   state.counters["substeps"] = bm.substeps;
   state.counters["variant_samples/s"] = benchmark::Counter(samples * bm.W, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["x_realtime/core"] = benchmark::Counter(bm.duration * bm.W, benchmark::Counter::kIsIterationInvariantRate);
 }
 
 // One fixed-step benchmark; args: segments, lanes, substeps (0 = automatic).
-void fixed_step(benchmark::State& state, ff::Integrator integrator) {
-  closed_loop(state, rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator,
-                               static_cast<int>(state.range(2))));
+void fixed_step(benchmark::State& state, ff::Integrator integrator, bool online = false) {
+  closed_loop(state,
+              rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator,
+                        static_cast<int>(state.range(2))),
+              online);
 }
 
 // The same closed loop at each vector width (common/isa.hpp: 0 SSE2, 1 AVX2, 2 AVX-512), side by
@@ -83,6 +95,13 @@ BENCHMARK(BM_Sdirk2ClosedLoop)
 // Midpoint (one articulated-body pass per step) at its automatic step: 1 per 1 ms sample at N = 6.
 void BM_MidpointClosedLoop(benchmark::State& state) { fixed_step(state, ff::Integrator::kMidpoint); }
 BENCHMARK(BM_MidpointClosedLoop)
+    ->ArgNames({"N", "W", "sub"})
+    ->Args({6, 1, 0})->Args({6, 4, 0})->Args({6, 8, 0})->Args({6, 16, 0})->Args({24, 8, 0})
+    ->Unit(benchmark::kMillisecond);
+
+// The same, keeping only the metrics.
+void BM_MidpointMetricsOnly(benchmark::State& state) { fixed_step(state, ff::Integrator::kMidpoint, true); }
+BENCHMARK(BM_MidpointMetricsOnly)
     ->ArgNames({"N", "W", "sub"})
     ->Args({6, 1, 0})->Args({6, 4, 0})->Args({6, 8, 0})->Args({6, 16, 0})->Args({24, 8, 0})
     ->Unit(benchmark::kMillisecond);

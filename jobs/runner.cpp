@@ -30,16 +30,27 @@ ResultRow make_invalid_row(const Study& study, int i, std::size_t ncolumns) {
 }
 }  // namespace
 
-ResultRow make_result_row(const Study& study, int i, const Model& model, const Trace& trace, LaneStatus status) {
+namespace {
+// A simulated variant's row from its metric values.
+ResultRow make_row(const Study& study, int i, const Model& model, std::vector<double> values, LaneStatus status) {
   const Variant& v = study.variants[i];
   ResultRow row;
   row.eval_id = v.eval_id;
   row.seed = v.seed;
   row.label = v.label;
   row.params = v.params;
-  row.values = calc_run_metrics(model, trace);
+  row.values = std::move(values);
   row.status = calc_run_status(status, calc_metric_columns(static_cast<int>(model.spec.trajectory.moves.size())), row.values);
   return row;
+}
+}  // namespace
+
+ResultRow make_result_row(const Study& study, int i, const Model& model, const Trace& trace, LaneStatus status) {
+  return make_row(study, i, model, calc_run_metrics(model, trace), status);
+}
+
+ResultRow make_result_row(const Study& study, int i, const Model& model, const OnlineRun& run, LaneStatus status) {
+  return make_row(study, i, model, calc_run_metrics(model, run), status);
 }
 
 std::string explain_invalid_variant(const Study& study, int i) {
@@ -159,11 +170,20 @@ struct RigFamily {
     return make_batches(m, local, lanes);
   }
   void run(const std::vector<Model>& lanes, const std::vector<int>& variants, BatchResult& res) const {
-    BatchRun run = simulate(make_batch(lanes));
-    for (std::size_t l = 0; l < lanes.size(); ++l) {
-      res.rows.push_back(make_result_row(study, variants[l], lanes[l], run.traces[l], run.status[l]));
-      if (keep_traces) res.traces.push_back(std::move(run.traces[l]));
+    if (keep_traces) {
+      BatchRun run = simulate(make_batch(lanes));
+      for (std::size_t l = 0; l < lanes.size(); ++l) {
+        res.rows.push_back(make_result_row(study, variants[l], lanes[l], run.traces[l], run.status[l]));
+        res.traces.push_back(std::move(run.traces[l]));
+      }
+      return;
     }
+    // Traces not written: the metrics accumulate online, the same bits with no per-sample storage.
+    std::vector<OnlineRun> metrics;
+    for (const Model& m : lanes) metrics.push_back(make_online_run(m));
+    const BatchRun run = simulate(make_batch(lanes), nullptr, nullptr, &metrics);
+    for (std::size_t l = 0; l < lanes.size(); ++l)
+      res.rows.push_back(make_result_row(study, variants[l], lanes[l], metrics[l], run.status[l]));
   }
 };
 

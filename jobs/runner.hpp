@@ -17,7 +17,7 @@ namespace ff {
 struct EvalOptions {
   int lanes = 8;                 // W: variants advanced together by one kernel call
   int threads = 0;               // 0 = OpenMP default
-  bool keep_traces = false;
+  bool keep_traces = false;      // keep each variant's trace; without, the rig's metrics accumulate online
 };
 
 // A finished batch: its rows (ascending eval_id), their traces when kept, and its wall time.
@@ -28,8 +28,10 @@ struct BatchResult {
   double seconds = 0.0;
 };
 
-// The result row of one simulated variant (`model` is its model).
+// The result row of one simulated variant (`model` is its model), from its trace or, the same bits,
+// from its online metrics (simulate's `metrics`).
 ResultRow make_result_row(const Study& study, int variant, const Model& model, const Trace& trace, LaneStatus status);
+ResultRow make_result_row(const Study& study, int variant, const Model& model, const OnlineRun& run, LaneStatus status);
 
 // Why variant `variant` has the status `invalid`: the error its model gives (file, line, key), or
 // its number of moves; empty if it is valid.

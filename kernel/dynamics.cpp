@@ -239,7 +239,9 @@ static void compute_tip_kernel(const BatchModel& bm, const double* q, double* de
       along[l] += len[o + l] * cn;
     }
   }
-  for (int l = 0; l < W; ++l) angle[l] = q[l] + std::atan2(deflection[l], along[l]);
+  // Tip angle: hub angle plus the direction of the tip seen from the hub (fastmath.hpp atan2), rad.
+#pragma omp simd
+  for (int l = 0; l < W; ++l) angle[l] = q[l] + calc_atan2(deflection[l], along[l]);
 }
 FF_ISA_DISPATCH(void, compute_tip,
                 (const BatchModel& bm, const double* q, double* deflection, double* angle, Workspace& ws),

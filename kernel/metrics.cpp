@@ -33,11 +33,6 @@ Range samples_in(std::span<const double> t, double t_from, double t_to, const ch
   return {static_cast<std::size_t>(lo - t.begin()), static_cast<std::size_t>(hi - t.begin())};
 }
 
-// Time at which the straight line through (t0, v0), (t1, v1) takes the value `level`.
-double interpolate_crossing(double t0, double t1, double v0, double v1, double level) {
-  return t0 + (t1 - t0) * (level - v0) / (v1 - v0);
-}
-
 // Last exit from the band |e| <= tol over samples [lo, hi), e = y − ref.
 // Returns the interpolated time the response last enters the band, NaN if the sample hi − 1 is
 // still outside, and no value (has_exit = false) when no sample of the range is outside.
@@ -52,7 +47,7 @@ Exit last_band_entry(std::span<const double> t, std::span<const double> y, doubl
     if (!(std::abs(e) > tol)) continue;
     if (k + 1 == hi) return {true, kNaN};
     const double level = e > 0.0 ? tol : -tol;  // the band edge on the side the response comes from
-    return {true, interpolate_crossing(t[k], t[k + 1], e, y[k + 1] - ref, level)};
+    return {true, calc_crossing_time(t[k], t[k + 1], e, y[k + 1] - ref, level)};
   }
   return {false, 0.0};
 }
@@ -67,7 +62,7 @@ Reach first_reach(std::span<const double> t, std::span<const double> y, double y
   double prev = 0.0;
   for (std::size_t k = 0; k < t.size(); ++k) {
     const double yn = (y[k] - y_init) / amp;
-    if (yn >= level) return {k == 0 ? t[0] : interpolate_crossing(t[k - 1], t[k], prev, yn, level), k};
+    if (yn >= level) return {k == 0 ? t[0] : calc_crossing_time(t[k - 1], t[k], prev, yn, level), k};
     prev = yn;
   }
   return {kNaN, t.size()};

@@ -43,6 +43,12 @@ struct MoveWindow {
   double target;        // commanded final value
 };
 
+// Time at which the straight line through (t0, v0), (t1, v1) takes the value `level`: the band
+// crossings of the settling times (kernel/online_metrics.hpp uses it too, for the same bits).
+inline double calc_crossing_time(double t0, double t1, double v0, double v1, double level) {
+  return t0 + (t1 - t0) * (level - v0) / (v1 - v0);
+}
+
 // Settling time after w.t_move_end, s, over the samples with t in [t_move_end, t_window_end].
 // The last sample with |y − target| > band·|amplitude| is found; if it is the last sample of the
 // window the move is not settled (NaN); if there is none the result is 0; otherwise the band

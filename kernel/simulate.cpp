@@ -49,12 +49,20 @@ std::vector<std::string> extra_channels(const BatchModel& bm) {
   return names;
 }
 
-// rec (kRecordedColumns x W): the recorded sensors' output at this sample.
-void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f, double* defl,
-            double* tip_angle, const double* rec, Workspace& ws, std::vector<Trace>& out) {
+// The tip deflection (m) and angle (rad) and the actuator's hub torque (N·m, returned: ws.tau_hub) of
+// every lane at this sample.
+const double* compute_tip_and_torque(const BatchModel& bm, const BatchState& s, double* defl, double* tip_angle,
+                                     Workspace& ws) {
   compute_tip(bm, s.q.data(), defl, tip_angle, ws);
   double* torque = ws.tau_hub.data();
   compute_actuator_torque(bm, s.q.data(), s.v.data(), s.z.data(), s.tau.data(), torque);
+  return torque;
+}
+
+// rec (kRecordedColumns x W): the recorded sensors' output at this sample.
+void record(const BatchModel& bm, const BatchState& s, const double* ref, const double* ref_f, double* defl,
+            double* tip_angle, const double* rec, Workspace& ws, std::vector<Trace>& out) {
+  const double* torque = compute_tip_and_torque(bm, s, defl, tip_angle, ws);
   const int W = bm.W, pr = bm.layout.pressure;
   for (int l = 0; l < W; ++l) {
     Trace& tr = out[l];
@@ -75,6 +83,13 @@ void record(const BatchModel& bm, const BatchState& s, const double* ref, const 
     tr.tip_deflection.push_back(defl[l]);
     tr.tip_angle.push_back(tip_angle[l]);
   }
+}
+
+// The same signals into each lane's online metrics instead of a trace.
+void accumulate(const BatchModel& bm, const BatchState& s, double* defl, double* tip_angle, Workspace& ws,
+                std::vector<OnlineRun>& out) {
+  const double* torque = compute_tip_and_torque(bm, s, defl, tip_angle, ws);
+  for (int l = 0; l < bm.W; ++l) out[l].add(s.t, tip_angle[l], s.q[l], defl[l], torque[l]);
 }
 
 }  // namespace
@@ -115,7 +130,9 @@ void apply_inputs(const SampleInputs& in, long k, BatchState& s, double* ref, do
 }  // namespace
 
 BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe,
-                  const SampleInputs* inputs) {
+                  const SampleInputs* inputs, std::vector<OnlineRun>* metrics) {
+  if (metrics && metrics->size() != static_cast<std::size_t>(bm.W))
+    throw std::invalid_argument("simulate: one OnlineRun per lane expected");
   // The model stays as it is; payload events change the state's tip load (BatchState::tip).
   bool events = false;
   for (const auto& m : bm.models) events |= !m.spec.payload_events.empty();
@@ -130,7 +147,7 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
   if (kind == Integrator::kCvodeDense || kind == Integrator::kCvodeKlu) cvode = std::make_unique<CvodeBatch>(bm, kind);
 
   BatchRun run;
-  run.traces.resize(W);
+  if (!metrics) run.traces.resize(W);
   const auto extra = extra_channels(bm);
   for (auto& tr : run.traces) {
     for (auto* x : {&tr.t, &tr.ref, &tr.ref_filtered, &tr.torque, &tr.hub_angle, &tr.hub_rate, &tr.tip_deflection,
@@ -166,7 +183,8 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
     if (k == 0) reset_controller(bm, s, ref.data());
     compute_control(bm, s, ref.data(), ref_ff.data(), ref_f.data());
     if (inputs && !inputs->torque.empty()) std::fill(s.tau.begin(), s.tau.end(), at_sample(inputs->torque, k));
-    record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), rec.data(), ws, run.traces);
+    if (metrics) accumulate(bm, s, defl.data(), tip_angle.data(), ws, *metrics);
+    else record(bm, s, ref.data(), ref_f.data(), defl.data(), tip_angle.data(), rec.data(), ws, run.traces);
     if (observe) observe(s);
     if (k + 1 == nsamples) break;
     // Plant: integrate to the next sample with the torque held.

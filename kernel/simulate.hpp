@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "kernel/batch.hpp"
+#include "kernel/online_metrics.hpp"
 
 namespace ff {
 
@@ -27,7 +28,7 @@ struct Trace {
 };
 
 struct BatchRun {
-  std::vector<Trace> traces;           // (W)
+  std::vector<Trace> traces;           // (W); empty when simulate fed online metrics instead
   std::vector<LaneStatus> status;      // (W)
 };
 
@@ -46,8 +47,11 @@ struct SampleInputs {
 
 // Runs every lane of the batch to bm.duration with the integrator the models ask for.
 // `observe`, when given, sees the state at every controller sample (after the controller acted).
+// `metrics`, when given (one per lane, from make_online_run), takes each lane's tip angle, hub angle,
+// tip deflection and hub torque at every sample instead of a trace: no per-sample storage, and
+// BatchRun::traces stays empty.
 BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchState&)>& observe = nullptr,
-                  const SampleInputs* inputs = nullptr);
+                  const SampleInputs* inputs = nullptr, std::vector<OnlineRun>* metrics = nullptr);
 
 // Writes one trace as CSV (columns t, ref, ref_filtered, hub_torque, hub_angle, hub_rate,
 // tip_deflection, tip_angle, then the extra channels), atomically.

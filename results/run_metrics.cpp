@@ -1,6 +1,7 @@
 #include "results/run_metrics.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -47,40 +48,62 @@ double over(std::span<const double> t, double from, double to, F f) {
   return any ? f() : std::nan("");
 }
 
-// Settling time, and "not settled" (NaN) unless the response then stays in the band for `dwell`
+// A settling time ts, or "not settled" (NaN) unless the response then stays in the band for `dwell`
 // seconds before the window ends: a response caught inside the band mid-swing is not settled.
-double settled_for(std::span<const double> t, std::span<const double> y, const MoveWindow& w, double dwell) {
-  const double ts = calc_settling_time(t, y, w);
+double confirmed(double ts, const MoveWindow& w, double dwell) {
   return w.t_window_end - (w.t_move_end + ts) >= dwell ? ts : std::nan("");
+}
+
+// The row of a run: per move of the model, move_values(j, move) (the seven metrics before the
+// horizon), then the horizon; all NaN when the run is not finite.
+template <class F>
+std::vector<double> assemble_run_metrics(const Model& model, bool finite, F move_values) {
+  // One column per metric of every move of the model (calc_metric_columns); NaN = "no number".
+  const std::size_t ncols = kMoveMetrics.size() * model.spec.trajectory.moves.size();
+  // A run that stopped being finite has no responses: every metric is "no number".
+  if (!finite) return std::vector<double>(ncols, std::nan(""));
+  // Dwell: one period of the slowest closed-loop resonance.
+  const double dwell = model.resonances.empty() ? 0.0 : 2.0 * std::numbers::pi / model.resonances[0];
+  std::vector<double> out;
+  const std::vector<Move> moves = calc_moves(model.spec.trajectory, model.duration);
+  for (std::size_t j = 0; j < moves.size(); ++j) {
+    const MoveWindow& w = moves[j].window;
+    const std::array<double, 7> v = move_values(j, moves[j]);
+    out.insert(out.end(), {confirmed(v[0], w, dwell), v[1], confirmed(v[2], w, dwell), v[3], v[4], v[5], v[6]});
+    // Horizon: confirmed() keeps ts only when t2 - (t1 + ts) >= dwell, so at most t2 - t1 - dwell.
+    out.push_back(std::max(0.0, w.t_window_end - w.t_move_end - dwell));
+  }
+  out.resize(ncols, std::nan(""));  // moves that start after the run ends (simulation.duration): no number
+  return out;
 }
 }  // namespace
 
 std::vector<double> calc_run_metrics(const Model& model, const Trace& tr) {
-  std::vector<double> out;
-  // One column per metric of every move of the model (calc_metric_columns); NaN = "no number".
-  const std::size_t ncols = kMoveMetrics.size() * model.spec.trajectory.moves.size();
-  // A run that stopped being finite has no responses: every metric is "no number".
+  bool finite = true;
   for (const auto* sig : {&tr.tip_angle, &tr.hub_angle, &tr.tip_deflection, &tr.torque})
-    for (double x : *sig)
-      if (!std::isfinite(x)) return std::vector<double>(ncols, std::nan(""));
-  // Dwell: one period of the slowest closed-loop resonance.
-  const double dwell = model.resonances.empty() ? 0.0 : 2.0 * std::numbers::pi / model.resonances[0];
-  for (const auto& mv : calc_moves(model.spec.trajectory, model.duration)) {
+    finite = finite && std::all_of(sig->begin(), sig->end(), [](double x) { return std::isfinite(x); });
+  const std::span<const double> t = tr.t;
+  return assemble_run_metrics(model, finite, [&](std::size_t, const Move& mv) {
     const auto& w = mv.window;
-    const std::span<const double> t = tr.t;
     const double t0 = mv.t_start, t1 = w.t_move_end, t2 = w.t_window_end;
-    out.push_back(over(t, t1, t2, [&] { return settled_for(t, tr.tip_angle, w, dwell); }));
-    out.push_back(over(t, t0, t2, [&] { return calc_overshoot(t, tr.tip_angle, t0, w); }));
-    out.push_back(over(t, t1, t2, [&] { return settled_for(t, tr.hub_angle, w, dwell); }));
-    out.push_back(over(t, t0, t2, [&] { return calc_overshoot(t, tr.hub_angle, t0, w); }));
-    out.push_back(over(t, t0, t2, [&] { return calc_peak_abs(t, tr.tip_deflection, t0, t2); }));
-    out.push_back(over(t, t1, t2, [&] { return calc_residual_amplitude(t, tr.tip_deflection, t1, t2); }));
-    out.push_back(over(t, t0, t2, [&] { return calc_peak_abs(t, tr.torque, t0, t2); }));
-    // Horizon: settled_for confirms ts only when t2 - (t1 + ts) >= dwell, so at most t2 - t1 - dwell.
-    out.push_back(std::max(0.0, t2 - t1 - dwell));
-  }
-  out.resize(ncols, std::nan(""));  // moves that start after the run ends (simulation.duration): no number
-  return out;
+    return std::array<double, 7>{
+        over(t, t1, t2, [&] { return calc_settling_time(t, tr.tip_angle, w); }),
+        over(t, t0, t2, [&] { return calc_overshoot(t, tr.tip_angle, t0, w); }),
+        over(t, t1, t2, [&] { return calc_settling_time(t, tr.hub_angle, w); }),
+        over(t, t0, t2, [&] { return calc_overshoot(t, tr.hub_angle, t0, w); }),
+        over(t, t0, t2, [&] { return calc_peak_abs(t, tr.tip_deflection, t0, t2); }),
+        over(t, t1, t2, [&] { return calc_residual_amplitude(t, tr.tip_deflection, t1, t2); }),
+        over(t, t0, t2, [&] { return calc_peak_abs(t, tr.torque, t0, t2); })};
+  });
+}
+
+std::vector<double> calc_run_metrics(const Model& model, const OnlineRun& run) {
+  return assemble_run_metrics(model, run.finite, [&](std::size_t j, const Move&) {
+    const OnlineMove& m = run.moves[j];
+    return std::array<double, 7>{m.tip_settling.result(),    m.tip_overshoot.result(),      m.hub_settling.result(),
+                                 m.hub_overshoot.result(),   m.peak_deflection.result(),    m.residual_vibration.result(),
+                                 m.peak_torque.result()};
+  });
 }
 
 std::string calc_run_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "kernel/batch.hpp"
+#include "kernel/online_metrics.hpp"
 #include "kernel/simulate.hpp"
 
 namespace ff {
@@ -37,6 +38,9 @@ std::string calc_horizon_column(const std::string& column);
 // residual vibration (NaN: not settled), its overshoot and peaks over the part that ran; a move that
 // starts after the run ends has no numbers at all.
 std::vector<double> calc_run_metrics(const Model& model, const Trace& trace);
+// The same values, bit for bit, from a run's online accumulators (kernel/online_metrics.hpp; built by
+// make_online_run(model) and fed by simulate) instead of its trace.
+std::vector<double> calc_run_metrics(const Model& model, const OnlineRun& run);
 
 // "ok", "not_settled" (a tip settling time is NaN), or the lane's failure.
 std::string calc_run_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values);

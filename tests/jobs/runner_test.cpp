@@ -69,6 +69,18 @@ TEST(Runner, ResultTableIsIdenticalForAnyThreadCountAndLaneWidth) {
   EXPECT_EQ(format_results_csv(run_study(study, one).table), format_results_csv(run_study(study, two).table));
 }
 
+TEST(Runner, ResultTableWithoutTracesIsTheOneFromTheTraces) {
+  // Without traces the metrics accumulate online (kernel/online_metrics.hpp): the same bits.
+  const Study study = load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  EvalOptions traces, online;
+  traces.keep_traces = true;
+  online.keep_traces = false;
+  const StudyRun a = run_study(study, traces), b = run_study(study, online);
+  EXPECT_EQ(a.traces.size(), study.variants.size());
+  EXPECT_TRUE(b.traces.empty());
+  EXPECT_EQ(format_results_csv(a.table), format_results_csv(b.table));
+}
+
 TEST(Runner, ProgressReachesTheVariantCount) {
   const Study study = load_study(kSource + "/configs/studies/fbtb_paper.yaml");
   EvalOptions opt;
