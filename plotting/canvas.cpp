@@ -3,8 +3,10 @@
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
+#include <dlfcn.h>
+#include <png.h>
+
+#include <opencv2/videoio.hpp>  // the backends' and codecs' names only: the writer is a module
 #pragma GCC diagnostic pop
 
 #include <array>
@@ -570,9 +572,38 @@ void write_atomically(const std::string& who, const std::string& path, const std
 }
 
 void write_png(const std::string& who, const cv::Mat& bgr_image, const std::string& path) {
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", bgr_image, png)) throw std::runtime_error(who + ": PNG encoding failed for '" + path + "'");
-  write_atomically(who, path, png);
+  // libpng directly (not OpenCV's imgcodecs, whose libraries cost every command ~0.2 s to load):
+  // 8-bit RGB rows from the BGR image, into memory, then written atomically.
+  const auto fail = [&] { throw std::runtime_error(who + ": PNG encoding failed for '" + path + "'"); };
+  if (bgr_image.type() != CV_8UC3 || bgr_image.empty()) fail();
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!info) {
+    png_destroy_write_struct(&png, nullptr);
+    fail();
+  }
+  std::vector<uchar> bytes;
+  std::vector<png_bytep> rows(static_cast<std::size_t>(bgr_image.rows));
+  for (int r = 0; r < bgr_image.rows; ++r) rows[static_cast<std::size_t>(r)] = const_cast<png_bytep>(bgr_image.ptr<uchar>(r));
+  if (setjmp(png_jmpbuf(png))) {  // libpng's errors return here
+    png_destroy_write_struct(&png, &info);
+    fail();
+  }
+  png_set_write_fn(
+      png, &bytes,
+      [](png_structp p, png_bytep data, png_size_t n) {
+        auto* out = static_cast<std::vector<uchar>*>(png_get_io_ptr(p));
+        out->insert(out->end(), data, data + n);
+      },
+      nullptr);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(bgr_image.cols), static_cast<png_uint_32>(bgr_image.rows), 8,
+               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_bgr(png);
+  png_write_info(png, info);
+  png_write_image(png, rows.data());
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  write_atomically(who, path, bytes);
 }
 
 std::vector<unsigned char> rgb_bytes(const cv::Mat& bgr_image) {
@@ -607,6 +638,31 @@ std::vector<Codec> codecs_for(const std::string& path) {
   return out;
 }
 
+// The video writer module (plotting/video/video_module.cpp), loaded at the first video: next to the
+// program, else where the build put it.
+using WriteVideo = int (*)(const char*, int, int, double, int, int, int, const std::function<cv::Mat(int)>*, char*,
+                           unsigned long);
+WriteVideo video_writer(const std::string& who) {
+  static const std::pair<WriteVideo, std::string> loaded = [] {
+    std::string tried, why;
+    std::error_code ec;
+    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    for (const std::string& p : {ec ? std::string() : (exe.parent_path() / "libff_video.so").string(),
+                                 std::string(FLEXFARM_VIDEO_MODULE)}) {
+      if (p.empty() || !std::filesystem::exists(p)) continue;
+      if (void* h = dlopen(p.c_str(), RTLD_NOW | RTLD_LOCAL))
+        if (void* f = dlsym(h, "ff_write_video")) return std::make_pair(reinterpret_cast<WriteVideo>(f), std::string());
+      const char* e = dlerror();
+      why = p + ": " + (e ? e : "no ff_write_video");
+    }
+    return std::make_pair(WriteVideo(nullptr), why.empty() ? std::string("libff_video.so not found next to the "
+                                                                         "program or at " FLEXFARM_VIDEO_MODULE)
+                                                            : why);
+  }();
+  if (!loaded.first) throw std::runtime_error(who + ": cannot load the video writer: " + loaded.second);
+  return loaded.first;
+}
+
 }  // namespace
 
 void write_video(const std::string& who, const std::string& path, double fps, cv::Size size, int frames,
@@ -623,6 +679,7 @@ void write_video(const std::string& who, const std::string& path, double fps, cv
     std::error_code ignored;
     std::filesystem::remove(probe, ignored);
   }
+  const WriteVideo write = video_writer(who);
   std::vector<std::string> tried;
   for (const Codec& c : codecs_for(path)) {
     const std::string tmp = path + ".tmp" + (c.ext ? c.ext : lower_extension(path));
@@ -631,18 +688,14 @@ void write_video(const std::string& who, const std::string& path, double fps, cv
       std::filesystem::remove(tmp, ignored);
     };
     tried.push_back(c.name + std::string(c.api == cv::CAP_FFMPEG ? " (FFmpeg)" : " (OpenCV)"));
-    cv::VideoWriter w;
+    const int fourcc = c.name[0] | c.name[1] << 8 | c.name[2] << 16 | c.name[3] << 24;  // VideoWriter::fourcc
+    char why[512] = "";
     try {
-      const int fourcc = cv::VideoWriter::fourcc(c.name[0], c.name[1], c.name[2], c.name[3]);
-      if (!w.open(tmp, c.api, fourcc, fps, size, true)) { discard(); continue; }
-      for (int k = 0; k < frames; ++k) w.write(frame(k));
-      w.release();
-    } catch (const cv::Exception&) {
-      w.release();
-      discard();
-      continue;
+      if (!write(tmp.c_str(), c.api, fourcc, fps, size.width, size.height, frames, &frame, why, sizeof why)) {
+        discard();
+        continue;
+      }
     } catch (...) {
-      w.release();
       discard();
       throw;
     }
