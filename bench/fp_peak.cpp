@@ -6,6 +6,7 @@
 // Run: build/bench/fp_peak --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
+#include "bench/width_scope.hpp"
 #include "common/isa.hpp"
 
 namespace {
@@ -52,12 +53,9 @@ static double fp_peak_avx512_kernel(long n) { return mul_add_chains<v2>(n); }
 namespace {
 
 void BM_Fp64Peak(benchmark::State& state) {
-  const ff::Isa was = ff::active_isa(), isa = static_cast<ff::Isa>(state.range(0));
-  if (ff::select_isa(isa) != isa) {
-    ff::select_isa(was);
-    state.SkipWithError("this CPU lacks the width");
-    return;
-  }
+  const ff::Isa isa = static_cast<ff::Isa>(state.range(0));
+  const ff::bench::WidthScope width(state, isa);
+  if (!width.ok()) return;
   const long n = 1 << 22;
   const int lanes = isa == ff::Isa::avx512 ? 8 : isa == ff::Isa::avx2 ? 4 : 2;
   for (auto _ : state)
@@ -65,7 +63,6 @@ void BM_Fp64Peak(benchmark::State& state) {
                              : isa == ff::Isa::avx2 ? ff::fp_peak_avx2_kernel(n)
                                                     : ff::fp_peak_sse2_kernel(n));
   state.counters["FLOP/s"] = benchmark::Counter(12.0 * lanes * n, benchmark::Counter::kIsIterationInvariantRate);
-  ff::select_isa(was);
 }
 BENCHMARK(BM_Fp64Peak)->ArgNames({"isa"})->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 

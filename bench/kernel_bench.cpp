@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "common/isa.hpp"
+#include "bench/width_scope.hpp"
 #include "kernel/model.hpp"
 #include "kernel/simulate.hpp"
 
@@ -57,14 +57,9 @@ void fixed_step(benchmark::State& state, ff::Integrator integrator, bool online 
 // The same closed loop at each vector width (common/isa.hpp: 0 SSE2, 1 AVX2, 2 AVX-512), side by
 // side in one run; args: segments, lanes, width. A width the CPU lacks is skipped.
 void at_width(benchmark::State& state, ff::Integrator integrator) {
-  const ff::Isa was = ff::active_isa(), isa = static_cast<ff::Isa>(state.range(2));
-  if (ff::select_isa(isa) != isa) {
-    ff::select_isa(was);
-    state.SkipWithError("this CPU lacks the width");
-    return;
-  }
+  const ff::bench::WidthScope width(state, static_cast<ff::Isa>(state.range(2)));
+  if (!width.ok()) return;
   closed_loop(state, rig_batch(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), integrator, 0));
-  ff::select_isa(was);
 }
 void BM_MidpointWidth(benchmark::State& state) { at_width(state, ff::Integrator::kMidpoint); }
 BENCHMARK(BM_MidpointWidth)

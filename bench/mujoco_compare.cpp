@@ -18,7 +18,6 @@
 #include <cstring>
 #include <functional>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -36,6 +35,7 @@ namespace {
 using ff::bench::load_mjcf;
 using ff::bench::mass_matrix_difference;
 using ff::bench::median;
+using ff::bench::parse_list;
 using ff::bench::mujoco_inertia_as_written;
 using ff::bench::quiet_warning;
 using ff::bench::rig_spec;
@@ -206,14 +206,6 @@ bool run_case(int nseg, double seconds, int M, int reps, int mj_sub_override, Su
     std::printf("%sN=%d: %s / MuJoCo(Euler) throughput = %.3g (1 thread), %.3g (2 threads)\n", f ? "" : "\n", nseg,
                 ffs[f].name.c_str(), rows[4 + 2 * f].rate / rows[0].rate, rows[5 + 2 * f].rate / rows[1].rate);
   return true;
-}
-
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> out;
-  std::stringstream ss(s);
-  std::string tok;
-  while (std::getline(ss, tok, ',')) out.push_back(std::stod(tok));
-  return out;
 }
 
 }  // namespace

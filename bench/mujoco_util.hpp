@@ -1,6 +1,7 @@
 // What every bench that runs MuJoCo beside flexfarm shares (bench/mujoco_compare.cpp,
-// bench/tree_mujoco.cpp, bench/realtime_arm.cpp, bench/work_precision.cpp): MJCF compiled from
-// memory, MuJoCo's warnings kept out of the output, and the timing helpers.
+// bench/tree_mujoco.cpp, bench/realtime_arm.cpp, bench/work_precision.cpp, bench/run_vs_mujoco.cpp):
+// MJCF compiled from memory, MuJoCo's warnings kept out of the output, the timing helpers, and
+// comma-separated option values.
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -10,6 +11,7 @@
 #include <cstring>
 #include <functional>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -44,6 +46,15 @@ inline double median(std::vector<double> x) {
   std::sort(x.begin(), x.end());
   const std::size_t n = x.size();
   return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+}
+
+// "6,24,48" -> {6, 24, 48}.
+inline std::vector<double> parse_list(const std::string& s) {
+  std::vector<double> out;
+  std::stringstream ss(s);
+  std::string tok;
+  while (std::getline(ss, tok, ',')) out.push_back(std::stod(tok));
+  return out;
 }
 
 }  // namespace ff::bench

@@ -49,13 +49,6 @@ std::string list(const std::vector<double>& v) {
   return "[" + s.str() + "]";
 }
 
-std::vector<int> parse_ints(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream in(s);
-  for (std::string x; std::getline(in, x, ',');) out.push_back(std::atoi(x.c_str()));
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -66,7 +59,10 @@ int main(int argc, char** argv) {
     const bool has = i + 1 < argc;
     if (a == "--variants" && has) variants = std::atoi(argv[++i]);
     else if (a == "--reps" && has) reps = std::atoi(argv[++i]);
-    else if (a == "--substeps" && has) substeps = parse_ints(argv[++i]);
+    else if (a == "--substeps" && has) {
+      substeps.clear();
+      for (double k : ff::bench::parse_list(argv[++i])) substeps.push_back(static_cast<int>(k));
+    }
     else if (a == "--mujoco-variants" && has) mj_variants = std::atoi(argv[++i]);
     else {
       std::fprintf(stderr, "usage: %s [--variants 512] [--reps 3] [--substeps 1,12] [--mujoco-variants 512]\n", argv[0]);

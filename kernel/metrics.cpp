@@ -70,11 +70,16 @@ Reach first_reach(std::span<const double> t, std::span<const double> y, double y
 
 }  // namespace
 
-double calc_settling_time(std::span<const double> t, std::span<const double> y, const MoveWindow& w, double band) {
-  check_signal(t, y, "calc_settling_time");
+double calc_move_amplitude(const MoveWindow& w, const char* who) {
   const double amplitude = w.target - w.start;
   if (amplitude == 0.0 || !std::isfinite(amplitude))
-    throw std::invalid_argument("calc_settling_time: move amplitude must be finite and non-zero");
+    throw std::invalid_argument(std::string(who) + ": move amplitude must be finite and non-zero");
+  return amplitude;
+}
+
+double calc_settling_time(std::span<const double> t, std::span<const double> y, const MoveWindow& w, double band) {
+  check_signal(t, y, "calc_settling_time");
+  const double amplitude = calc_move_amplitude(w, "calc_settling_time");
   if (!(band > 0.0)) throw std::invalid_argument("calc_settling_time: band must be positive");
 
   // Samples of the window, plus the one just before the move end to interpolate an early crossing.
@@ -89,9 +94,7 @@ double calc_settling_time(std::span<const double> t, std::span<const double> y, 
 
 double calc_overshoot(std::span<const double> t, std::span<const double> y, double t_from, const MoveWindow& w) {
   check_signal(t, y, "calc_overshoot");
-  const double amplitude = w.target - w.start;
-  if (amplitude == 0.0 || !std::isfinite(amplitude))
-    throw std::invalid_argument("calc_overshoot: move amplitude must be finite and non-zero");
+  const double amplitude = calc_move_amplitude(w, "calc_overshoot");
 
   // Largest excursion past the target in the direction of the move.
   const Range r = samples_in(t, t_from, w.t_window_end, "calc_overshoot");

@@ -43,6 +43,10 @@ struct MoveWindow {
   double target;        // commanded final value
 };
 
+// The move amplitude w.target − w.start, which every move metric is relative to. Throws
+// std::invalid_argument "WHO: move amplitude must be finite and non-zero" otherwise.
+double calc_move_amplitude(const MoveWindow& w, const char* who);
+
 // Time at which the straight line through (t0, v0), (t1, v1) takes the value `level`: the band
 // crossings of the settling times (kernel/online_metrics.hpp uses it too, for the same bits).
 inline double calc_crossing_time(double t0, double t1, double v0, double v1, double level) {

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <string>
 
 #include "kernel/trajectory.hpp"
 
@@ -14,20 +13,12 @@ namespace ff {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// The move amplitude target − start, checked as the stored forms check it.
-double checked_amplitude(const MoveWindow& w, const char* where) {
-  const double amplitude = w.target - w.start;
-  if (amplitude == 0.0 || !std::isfinite(amplitude))
-    throw std::invalid_argument(std::string(where) + ": move amplitude must be finite and non-zero");
-  return amplitude;
-}
-
 // t in [from, to], as the stored forms' lower_bound(from) .. upper_bound(to).
 bool in_range(double t, double from, double to) { return t >= from && !(t > to); }
 }  // namespace
 
 OnlineSettling::OnlineSettling(const MoveWindow& w, double band)
-    : w_(w), tol_(band * std::abs(checked_amplitude(w, "OnlineSettling"))) {
+    : w_(w), tol_(band * std::abs(calc_move_amplitude(w, "OnlineSettling"))) {
   if (!(band > 0.0)) throw std::invalid_argument("OnlineSettling: band must be positive");
 }
 
@@ -72,7 +63,7 @@ double OnlineSettling::result() const {
 }
 
 OnlineOvershoot::OnlineOvershoot(double t_from, const MoveWindow& w)
-    : t_from_(t_from), t_to_(w.t_window_end), target_(w.target), amplitude_(checked_amplitude(w, "OnlineOvershoot")),
+    : t_from_(t_from), t_to_(w.t_window_end), target_(w.target), amplitude_(calc_move_amplitude(w, "OnlineOvershoot")),
       dir_(amplitude_ > 0.0 ? 1.0 : -1.0) {}
 
 void OnlineOvershoot::add(double t, double y) {
