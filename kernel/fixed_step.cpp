@@ -27,13 +27,29 @@ void set_armature(const BatchModel& bm, Workspace& ws, double gh) {
   ws.armature_gh = gh;
 }
 
-// The hub friction map linearly implicit, like the joint dampers: the hub's armature gh d(tau_f)/dw at
-// the stage's rate w (calc_hub_friction_damping). A steep map (a small smoothing velocity) is then
-// stable at the step the chain needs, not at h < 2 eps J / F. LuGre's bristles are drive states,
-// implicit in solve_drive_stage; their hub entry stays 0.
-void set_friction_armature(const BatchModel& bm, const double* w, double gh, Workspace& ws) {
-  if (bm.layout.bristle >= 0) return;
-  for (int l = 0; l < bm.W; ++l) ws.armature[l] = gh * calc_hub_friction_damping(bm, l, w[l]);
+// The hub's armature: the friction map and the drive train's transmission linearly implicit, like the
+// joint springs and dampers.
+// - Friction: gh_f d(tau_f)/dw at the stage's rate w (calc_hub_friction_damping). A steep map (a small
+//   smoothing velocity) is then stable at the step the chain needs, not at h < 2 eps J / F. LuGre's
+//   bristles are drive states, implicit in solve_drive_stage: no friction term.
+// - Transmission (a drive train's shaft): gh c_t + gh^2 k_t, its tangent (calc_transmission_tangent) at
+//   the stage's shaft state Z and hub (q, w). The shaft's side is implicit in solve_drive_stage with the
+//   hub held; without this the hub's side would be explicit, and the stiff mesh (k / J_hub ~ 1e7 s^-2)
+//   unstable at the automatic step on some chains. In the backlash gap the tangent is 0.
+void set_hub_armature(const BatchModel& bm, const double* q, const double* w, const double* Z, double gh_f,
+                      double gh, Workspace& ws) {
+  const DriveLayout& L = bm.layout;
+  const int W = bm.W;
+  for (int l = 0; l < W; ++l) {
+    double a = L.bristle >= 0 ? 0.0 : gh_f * calc_hub_friction_damping(bm, l, w[l]);
+    if (L.shaft >= 0) {
+      const LaneDrive& p = bm.drive[l];
+      const TransmissionTangent t =
+          calc_transmission_tangent(p, Z[L.shaft * W + l] / p.n - q[l], Z[(L.shaft + 1) * W + l] / p.n - w[l]);
+      a += gh * t.damping + gh * gh * t.stiffness;
+    }
+    ws.armature[l] = a;
+  }
 }
 
 // The hub drive's part of an SDIRK stage: solves Z = zpre + gh f(q, v, Z) for every lane by
@@ -131,7 +147,7 @@ static void step_sdirk2_kernel(const BatchModel& bm, BatchState& s, Workspace& w
   if (drive) solve_drive_stage(bm, qs, vs, s.tau.data(), z, gh, Z1, ws);
   compute_hub_drive(bm, qs, vs, Z1, s.tau.data(), ws.tau_hub.data(), nullptr);
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
-  set_friction_armature(bm, vs, gh, ws);
+  set_hub_armature(bm, qs, vs, Z1, gh, gh, ws);
   compute_forward_dynamics(bm, body, qk, vk, ws.tau_joint.data(), ws.armature.data(), A1, ws);
   const double b1 = (1.0 - g) * h;
   double* vpre = ws.v1.data();
@@ -146,7 +162,7 @@ static void step_sdirk2_kernel(const BatchModel& bm, BatchState& s, Workspace& w
   }
   compute_hub_drive(bm, qs, vs, z, s.tau.data(), ws.tau_hub.data(), nullptr);
   compute_joint_torques(bm, qs, vs, ws.tau_hub.data(), ws.tau_joint.data());
-  set_friction_armature(bm, vs, gh, ws);
+  set_hub_armature(bm, qs, vs, z, gh, gh, ws);
   compute_forward_dynamics(bm, body, qk, vk, ws.tau_joint.data(), ws.armature.data(), A2, ws);
   sdirk2_finish(n, qpre, vpre, A2, gh, q, v, a_prev);
 }
@@ -172,8 +188,8 @@ static void step_midpoint_kernel(const BatchModel& bm, BatchState& s, Workspace&
   for (std::size_t j = 0; j < s.z.size(); ++j) z[j] = 2.0 * Z[j] - z[j];
   compute_joint_torques(bm, qs, v, ws.tau_hub.data(), ws.tau_joint.data());
   // The friction map backward-Euler implicit (armature h F', not h/2 F'): the midpoint rule is not
-  // L-stable, and a stuck hub would flip its rate's sign every step.
-  set_friction_armature(bm, v, h, ws);
+  // L-stable, and a stuck hub would flip its rate's sign every step. The transmission as the springs.
+  set_hub_armature(bm, qs, v, Z, h, gh, ws);
   compute_forward_dynamics(bm, body, qs, vk, ws.tau_joint.data(), ws.armature.data(), A, ws);
   midpoint_finish(n, A, h, gh, q, v, a_prev);
 }
