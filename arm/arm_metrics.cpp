@@ -30,52 +30,84 @@ double peak_abs(const std::vector<double>& y) {
 
 // Last exit of e(t) >= 0 from [0, band] after t0, interpolated, less t0; NaN (not settled) when it is
 // out at the end or has not stayed in for `dwell` before the end.
-double last_exit(const std::vector<double>& t, const std::vector<double>& e, double t0, double band, double dwell) {
+double last_exit(std::span<const double> t, const std::vector<double>& e, double t0, double band, double dwell) {
   std::size_t last = t.size();
   for (std::size_t k = 0; k < t.size(); ++k)
     if (t[k] >= t0 && e[k] > band) last = k;
   if (last == t.size()) return 0.0;
   if (last + 1 == t.size()) return std::nan("");
-  const double f = (e[last] - band) / (e[last] - e[last + 1]);
-  const double exit = t[last] + f * (t[last + 1] - t[last]);
-  if (exit > t.back() - dwell) return std::nan("");
+  return calc_arm_exit_time(t[last], e[last], t[last + 1], e[last + 1], band, t0, t.back(), dwell);
+}
+
+}  // namespace
+
+ArmSettleRule make_arm_settle_rule(const ArmModel& m) {
+  // The dwell: one period of the slowest closed-loop resonance (the reference rig's rule,
+  // results/run_metrics.hpp), 1 s without one.
+  return {m.move_end, m.spec.band, m.spec.tool_band, m.resonances.empty() ? 1.0 : 2.0 * M_PI / m.resonances.front()};
+}
+
+ArmJointMoves calc_arm_joint_moves(const ArmModel& m, std::size_t j) {
+  double largest = 0.0, start = m.trajectory.start[j], from = start, target = start;
+  for (const JointWaypoint& w : m.trajectory.waypoints) {
+    const double step = w.q[j] - from;
+    largest = std::max(largest, std::abs(step));
+    if (step != 0.0) start = from, target = w.q[j];
+    from = w.q[j];
+  }
+  return {largest, start, target, from};
+}
+
+double calc_arm_exit_time(double t_out, double e_out, double t_next, double e_next, double band, double t0,
+                          double t_end, double dwell) {
+  const double f = (e_out - band) / (e_out - e_next);
+  const double exit = t_out + f * (t_next - t_out);
+  if (exit > t_end - dwell) return std::nan("");
   return std::max(0.0, exit - t0);
 }
 
-// How long a response must stay in its band to count as settled: one period of the slowest
-// closed-loop resonance (the reference rig's rule, results/run_metrics.hpp), 1 s without one.
-double settle_dwell(const ArmModel& m) { return m.resonances.empty() ? 1.0 : 2.0 * M_PI / m.resonances.front(); }
-
-}  // namespace
+ArmToolRest calc_arm_tool_rest(const ArmSettleRule& r, std::span<const double> t, std::span<const double> x,
+                               std::span<const double> y, std::span<const double> z, const Vec3& begin,
+                               const Vec3& target, double largest) {
+  // Settling and overshoot about where the tool comes to rest (its last sample, as stepinfo's yfinal):
+  // a flexible arm's tool rests off the rigid target by its sag, which <tool>_final_error_m reports.
+  const std::size_t n = t.size();
+  const Vec3 goal(x[n - 1], y[n - 1], z[n - 1]);
+  std::vector<double> err(n);
+  double over = 0.0;
+  const Vec3 dir = (target - begin).norm() > 0.0 ? Vec3((target - begin).normalized()) : Vec3::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3 q(x[k], y[k], z[k]);
+    err[k] = (q - goal).norm();
+    if (t[k] >= r.t0) over = std::max(over, dir.dot(q - goal));
+  }
+  const double tool_band = r.tool_band > 0.0 ? r.tool_band : r.band * largest;
+  return {largest > 0.0 ? last_exit(t, err, r.t0, tool_band, r.dwell) : 0.0,
+          (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0};
+}
 
 std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, LaneStatus status) {
   const std::vector<std::string> cols = arm_metric_columns(m);
   std::vector<double> v(cols.size(), std::nan(""));
   if (status != LaneStatus::kOk) return v;
   const std::vector<double>& t = tr.t();
-  const double t0 = m.move_end, band = m.spec.band, dwell = settle_dwell(m);
+  const ArmSettleRule rule = make_arm_settle_rule(m);
+  const double t0 = rule.t0;
   std::size_t c = 0;
   const std::size_t na = m.actuated.size();
   for (std::size_t j = 0; j < na; ++j) {
     const ActuatedJoint& a = m.actuated[j];
     const std::vector<double>& q = tr.column(a.name + ".q");
     // The joint's largest move and its last move (start, target).
-    double largest = 0.0, start = m.trajectory.start[j], from = start, target = start;
-    for (const JointWaypoint& w : m.trajectory.waypoints) {
-      const double step = w.q[j] - from;
-      largest = std::max(largest, std::abs(step));
-      if (step != 0.0) start = from, target = w.q[j];
-      from = w.q[j];
-    }
-    const double final_target = from;
+    const ArmJointMoves mv = calc_arm_joint_moves(m, j);
     std::vector<double> e(q.size());
-    for (std::size_t k = 0; k < q.size(); ++k) e[k] = std::abs(q[k] - final_target);
-    v[c++] = largest > 0.0 ? last_exit(t, e, t0, band * largest, dwell) : 0.0;
+    for (std::size_t k = 0; k < q.size(); ++k) e[k] = std::abs(q[k] - mv.final_target);
+    v[c++] = mv.largest > 0.0 ? last_exit(t, e, t0, rule.band * mv.largest, rule.dwell) : 0.0;
     double over = 0.0;
-    if (target != start) {
-      const double dir = target > start ? 1.0 : -1.0;
-      for (std::size_t k = 0; k < q.size(); ++k) over = std::max(over, dir * (q[k] - target));
-      over = 100.0 * over / std::abs(target - start);
+    if (mv.target != mv.start) {
+      const double dir = mv.target > mv.start ? 1.0 : -1.0;
+      for (std::size_t k = 0; k < q.size(); ++k) over = std::max(over, dir * (q[k] - mv.target));
+      over = 100.0 * over / std::abs(mv.target - mv.start);
     }
     v[c++] = over;
     v[c++] = peak_abs(tr.column(a.name + ".torque"));
@@ -87,26 +119,17 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
     const std::string& p = tool.name;
     const std::vector<double>*x[3] = {&tr.column(p + ".x"), &tr.column(p + ".y"), &tr.column(p + ".z")};
     const std::vector<double>*xr[3] = {&tr.column(p + ".ref_x"), &tr.column(p + ".ref_y"), &tr.column(p + ".ref_z")};
-    // Settling and overshoot about where the tool comes to rest (its last sample, as stepinfo's yfinal):
-    // a flexible arm's tool rests off the rigid target by its sag, which <tool>_final_error_m reports.
-    const Vec3 goal((*x[0])[n - 1], (*x[1])[n - 1], (*x[2])[n - 1]);
     const Vec3 target((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
     const Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
     double largest = 0.0;
     for (std::size_t k = 0; k < n; ++k)
       largest = std::max(largest, (Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k]) - begin).norm());
-    std::vector<double> err(n), track(n);
-    double over = 0.0;
-    const Vec3 dir = (target - begin).norm() > 0.0 ? Vec3((target - begin).normalized()) : Vec3::Zero();
-    for (std::size_t k = 0; k < n; ++k) {
-      const Vec3 q((*x[0])[k], (*x[1])[k], (*x[2])[k]);
-      err[k] = (q - goal).norm();
-      track[k] = (q - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
-      if (t[k] >= t0) over = std::max(over, dir.dot(q - goal));
-    }
-    const double tool_band = m.spec.tool_band > 0.0 ? m.spec.tool_band : band * largest;
-    v[c++] = largest > 0.0 ? last_exit(t, err, t0, tool_band, dwell) : 0.0;
-    v[c++] = (target - begin).norm() > 0.0 ? 100.0 * over / (target - begin).norm() : 0.0;
+    std::vector<double> track(n);
+    for (std::size_t k = 0; k < n; ++k)
+      track[k] = (Vec3((*x[0])[k], (*x[1])[k], (*x[2])[k]) - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
+    const ArmToolRest rest = calc_arm_tool_rest(rule, t, *x[0], *x[1], *x[2], begin, target, largest);
+    v[c++] = rest.settling_s;
+    v[c++] = rest.overshoot_pct;
     v[c++] = peak_abs(track);
     v[c++] = track[n - 1];
     v[c++] = track[0];
@@ -123,7 +146,7 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
                         : std::nan("");
     v[c++] = std::hypot(dy[0], dz[0]);
   }
-  v[c++] = std::max(0.0, t[n - 1] - t0 - dwell);
+  v[c++] = std::max(0.0, t[n - 1] - t0 - rule.dwell);
   return v;
 }
 

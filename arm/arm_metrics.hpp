@@ -23,6 +23,7 @@
 //                             (a NaN settling time is right-censored there, results/censoring.hpp)
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,38 @@ std::vector<std::string> arm_tool_names(const std::vector<std::string>& columns)
 
 // Values in arm_metric_columns order; all NaN when the lane failed.
 std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& trace, LaneStatus status);
+
+// ---- The pieces calc_arm_metrics shares with its online form (arm_online_metrics.hpp) ----
+
+// The settling rule of an arm's metrics.
+struct ArmSettleRule {
+  double t0;         // the settling window's start: the end of the last waypoint, s
+  double band;       // of a joint's largest move (m.spec.band)
+  double tool_band;  // m; 0 = band x the tool's largest move in the rigid reference
+  double dwell;      // s in the band to count as settled: one period of the slowest closed-loop resonance, 1 s without
+};
+ArmSettleRule make_arm_settle_rule(const ArmModel& m);
+
+// Joint j's moves on the trajectory: its largest, its last (start -> target) and where it ends.
+struct ArmJointMoves {
+  double largest, start, target, final_target;
+};
+ArmJointMoves calc_arm_joint_moves(const ArmModel& m, std::size_t j);
+
+// The last exit of e >= 0 from [0, band], interpolated between the last sample outside it (t_out, e_out)
+// and its successor (t_next, e_next), less t0, >= 0; NaN (not settled) when it lies within dwell of the
+// run's last sample t_end.
+double calc_arm_exit_time(double t_out, double e_out, double t_next, double e_next, double band, double t0,
+                          double t_end, double dwell);
+
+// A tool's settling time and overshoot (%) about where it comes to rest, its last sample (x, y, z at the
+// samples t), from its reference's start `begin` and final `target` and its largest move in the reference.
+struct ArmToolRest {
+  double settling_s, overshoot_pct;
+};
+ArmToolRest calc_arm_tool_rest(const ArmSettleRule& r, std::span<const double> t, std::span<const double> x,
+                               std::span<const double> y, std::span<const double> z, const Vec3& begin,
+                               const Vec3& target, double largest);
 
 // "ok", "not_settled" (a tool's settling time is NaN), or the lane's failure.
 std::string calc_arm_status(const ArmModel& m, LaneStatus lane, const std::vector<std::string>& columns,

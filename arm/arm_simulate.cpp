@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "arm/arm_online_metrics.hpp"
 #include "common/errors.hpp"
 #include "common/files.hpp"
 #include "kernel/sensors.hpp"
@@ -520,17 +521,20 @@ void mark_arm_trace_failure(const ArmLanes& a, ArmTrace& tr) {
 }
 
 ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options) {
+  if (options.online && options.online->size() != lanes.size())
+    throw std::invalid_argument("simulate_arms: one OnlineArmRun per lane expected");
   ArmLanes a = make_arm_lanes(lanes, options);
   const int W = a.W, nv = a.nv;
   const long samples = a.samples;
   ArmRun run;
-  run.traces.assign(static_cast<size_t>(W), make_arm_trace(a));
+  if (!options.online) run.traces.assign(static_cast<size_t>(W), make_arm_trace(a));
   if (options.keep_q) run.q.assign(static_cast<size_t>(W), Eigen::MatrixXd::Zero(nv, samples));
   for (long k = 0; k < samples; ++k) {
     step_arm_controllers(a, k);
-    // The trace at this sample.
+    // The trace at this sample, or the lanes' online metrics.
     for (int l = 0; l < W; ++l) {
-      store_arm_row(a, l, k, run.traces[static_cast<size_t>(l)]);
+      if (options.online) (*options.online)[static_cast<size_t>(l)].add(a.row.data() + l, static_cast<size_t>(W));
+      else store_arm_row(a, l, k, run.traces[static_cast<size_t>(l)]);
       if (!options.keep_q) continue;
       if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk)
         for (int j = 0; j < nv; ++j) run.q[static_cast<size_t>(l)](j, k) = a.s.q[static_cast<size_t>(j * W + l)];
@@ -541,8 +545,9 @@ ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& optio
     step_arm_plant(a, k);
   }
   run.status = a.status;
-  // A failed lane's trace is NaN from the sample it failed at: mark what it recorded after.
-  for (int l = 0; l < W; ++l)
+  // A failed lane's trace is NaN from the sample it failed at: mark what it recorded after. (Its online
+  // metrics need no marking: a failed lane's are all NaN.)
+  for (int l = 0; l < W && !options.online; ++l)
     if (run.status[static_cast<size_t>(l)] != LaneStatus::kOk) mark_arm_trace_failure(a, run.traces[static_cast<size_t>(l)]);
   return run;
 }

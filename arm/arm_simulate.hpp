@@ -15,6 +15,8 @@
 
 namespace ff {
 
+class OnlineArmRun;  // arm_online_metrics.hpp
+
 // One lane's signals at every controller sample (column 0 is the time `t`, s), sampled at the instant
 // before that sample's torque is applied; the torque columns hold the torque applied from it on.
 //   <joint>.ref, <joint>.q, <joint>.qd, <joint>.torque    per actuated joint (rad, rad/s, N·m; prismatic m, N)
@@ -36,7 +38,7 @@ struct ArmTrace {
 };
 
 struct ArmRun {
-  std::vector<ArmTrace> traces;      // (W)
+  std::vector<ArmTrace> traces;      // (W); empty with ArmRunOptions::online
   std::vector<LaneStatus> status;    // (W)
   // With ArmRunOptions::keep_q, each lane's full joint state at every sample: q[l] is nv x samples,
   // column k the coordinates (tree dof order: actuated, passive and elastic) at the trace's sample k
@@ -53,6 +55,10 @@ struct ArmRunOptions {
   // to the samples (at rest before the first and after the last). Its size must be the actuated joints',
   // each non-empty (std::invalid_argument otherwise). Unlike keep_q, it changes the results.
   const std::vector<std::vector<double>>* reference = nullptr;
+  // The lanes' metrics accumulated while they run (one OnlineArmRun per lane, made from its model; the
+  // caller takes result(status) after): each lane's row is fed at every sample instead of stored, and
+  // ArmRun::traces stays empty. Its size must be the lanes' (std::invalid_argument otherwise).
+  std::vector<OnlineArmRun>* online = nullptr;
 };
 
 // Why arms a and b cannot share a batch ("" when they can): their trees differ in topology, or their
@@ -64,8 +70,8 @@ std::vector<std::string> arm_trace_names(const ArmModel& m);
 
 // Runs every lane to its duration. Throws std::invalid_argument when the lanes' shapes differ.
 // A lane whose state stops being finite is frozen with the status kNonfinite (its trace NaN from then).
-// keep_q changes only what is kept, never the results (ArmRun::q is stored into memory reserved
-// before the first step); `reference` replaces the reference (above).
+// keep_q and online change only what is kept, never the results (ArmRun::q is stored into memory
+// reserved before the first step); `reference` replaces the reference (above).
 ArmRun simulate_arms(std::span<const ArmModel> lanes, const ArmRunOptions& options = {});
 
 // The sample loop of simulate_arms one controller sample at a time, for callers that act between

@@ -10,6 +10,7 @@
 #include "jobs/batches.hpp"
 #include "common/errors.hpp"
 #include "arm/arm_metrics.hpp"
+#include "arm/arm_online_metrics.hpp"
 #include "results/run_metrics.hpp"
 
 namespace ff {
@@ -199,10 +200,16 @@ struct ArmFamily {
     return make_arm_batches(m, local, lanes);
   }
   void run(const std::vector<Model>& lanes, const std::vector<int>& variants, BatchResult& res) const {
-    ArmRun run = simulate_arms(lanes);
+    // Traces not written: the metrics accumulate online (arm/arm_online_metrics.hpp), the same bits
+    // without storing every column of every sample.
+    std::vector<OnlineArmRun> online;
+    if (!keep_traces)
+      for (const Model& m : lanes) online.emplace_back(m);
+    ArmRun run = simulate_arms(lanes, {.online = keep_traces ? nullptr : &online});
     for (std::size_t l = 0; l < lanes.size(); ++l) {
       const Variant& v = study.variants[static_cast<std::size_t>(variants[l])];
-      ResultRow row{v.eval_id, v.seed, v.label, "", v.params, calc_arm_metrics(lanes[l], run.traces[l], run.status[l])};
+      ResultRow row{v.eval_id, v.seed, v.label, "", v.params,
+                    keep_traces ? calc_arm_metrics(lanes[l], run.traces[l], run.status[l]) : online[l].result(run.status[l])};
       row.status = calc_arm_status(lanes[l], run.status[l], columns, row.values);
       res.rows.push_back(std::move(row));
       if (keep_traces) res.arm_traces.push_back(std::move(run.traces[l]));

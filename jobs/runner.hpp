@@ -17,7 +17,7 @@ namespace ff {
 struct EvalOptions {
   int lanes = 8;                 // W: variants advanced together by one kernel call
   int threads = 0;               // 0 = OpenMP default
-  bool keep_traces = false;      // keep each variant's trace; without, the rig's metrics accumulate online
+  bool keep_traces = false;      // keep each variant's trace; without, its metrics accumulate online (rig and arms)
 };
 
 // A finished batch: its rows (ascending eval_id), their traces when kept, and its wall time.

@@ -9,6 +9,7 @@
 
 #include "results/summaries.hpp"
 #include "results/table.hpp"
+#include "tests/temp_dir.hpp"
 
 namespace ff {
 namespace {
@@ -79,6 +80,45 @@ TEST(Runner, ResultTableWithoutTracesIsTheOneFromTheTraces) {
   EXPECT_EQ(a.traces.size(), study.variants.size());
   EXPECT_TRUE(b.traces.empty());
   EXPECT_EQ(format_results_csv(a.table), format_results_csv(b.table));
+}
+
+TEST(Runner, ArmResultTableWithoutTracesIsTheOneFromTheTraces) {
+  // Without traces an arm study's metrics accumulate online (arm/arm_online_metrics.hpp): the same
+  // bytes. The two-link flexible arm with its payload and gains drawn and 4.5 s to settle (some variants
+  // settle, some do not), crossed with a case that diverges (nonfinite, its metrics empty); lanes not
+  // dividing the variants.
+  const test::TempDir dir("runner_arm_online");
+  const Study study = load_study(dir.write("study.yaml", "name: arm online\n"
+                                                         "model: " + kSource + "/configs/two_link_flexible.yaml\n"
+                                                         "seed: 5\n"
+                                                         "set: {simulation.settle: 4.5}\n"
+                                                         "cases:\n"
+                                                         "  - label: drawn\n"
+                                                         "  - label: diverging\n"
+                                                         "    set:\n"
+                                                         "      joints.shoulder.controller.kp: 1.0e12\n"
+                                                         "      simulation.integrator: rk4\n"
+                                                         "      simulation.substeps: 1\n"
+                                                         "variables:\n"
+                                                         "  - path: bodies[forearm].flexible.payload.mass\n"
+                                                         "    distribution: {type: uniform, lower: 0.05, upper: 0.6}\n"
+                                                         "  - path: joints.shoulder.controller.kd\n"
+                                                         "    distribution: {type: uniform, lower: 0.7, upper: 10.0}\n"
+                                                         "  - path: joints.elbow.controller.kp\n"
+                                                         "    distribution: {type: uniform, lower: 2.0, upper: 10.0}\n"
+                                                         "design: {type: monte_carlo, samples: 7}\n"));
+  EvalOptions traces, online;
+  traces.keep_traces = true;
+  online.keep_traces = false;
+  traces.lanes = online.lanes = 3;
+  traces.threads = online.threads = 2;
+  const StudyRun a = run_study(study, traces), b = run_study(study, online);
+  EXPECT_EQ(a.arm_traces.size(), study.variants.size());
+  EXPECT_TRUE(b.arm_traces.empty());
+  const std::string csv = format_results_csv(a.table);
+  for (const char* status : {",ok,", ",not_settled,", ",nonfinite,"})
+    EXPECT_NE(csv.find(status), std::string::npos) << status << "\n" << csv;
+  EXPECT_EQ(format_results_csv(b.table), csv);
 }
 
 TEST(Runner, ProgressReachesTheVariantCount) {
