@@ -128,12 +128,6 @@ double calc_drive_rate(const Model& m) {
   if (L.shaft >= 0) {
     const double inv = 1.0 / (p.ja * p.n * p.n) + 1.0 / j0;  // shaft reflected to the output, and the hub
     coupled = std::max({coupled, std::sqrt(p.k * inv), p.c * inv});
-    // Free play in the loop: the mesh closes and opens within a step, and SDIRK2 and the midpoint rule
-    // take its stiffness at the stage's start (solve_drive_stage, set_hub_armature), so an impact is
-    // integrated explicitly: h rate <= 1/2. Measured on the rig (1 mrad, N = 6-48, 20 s under PD):
-    // at h rate ~ 0.7-1 SDIRK2 diverges from N = 16, the midpoint rule from N = 12; RK4 holds at 1.
-    const Integrator integ = m.spec.simulation.integrator;
-    if (p.b > 0.0 && (integ == Integrator::kSdirk2 || integ == Integrator::kMidpoint)) coupled *= 2.0;
   }
   // The static friction map's slope at rest, (F_s or F_c) / eps, on the hub's own inertia: a real
   // eigenvalue, which RK4 keeps stable up to h rate = 2.78 (allowed 2.5). SDIRK and the midpoint rule

@@ -32,17 +32,20 @@ void set_armature(const BatchModel& bm, Workspace& ws, double gh) {
 // - Friction: gh_f d(tau_f)/dw at the stage's rate w (calc_hub_friction_damping). A steep map (a small
 //   smoothing velocity) is then stable at the step the chain needs, not at h < 2 eps J / F. LuGre's
 //   bristles are drive states, implicit in solve_drive_stage: no friction term.
-// - Transmission (a drive train's shaft): gh c_t + gh^2 k_t, its tangent (calc_transmission_tangent) at
-//   the stage's shaft state Z and hub (q, w). The shaft's side is implicit in solve_drive_stage with the
-//   hub held; without this the hub's side would be explicit, and the stiff mesh (k / J_hub ~ 1e7 s^-2)
-//   unstable at the automatic step on some chains. In the backlash gap the tangent is 0.
+// - Transmission (a drive train's shaft without free play): gh c_t + gh^2 k_t, its tangent
+//   (calc_transmission_tangent) at the stage's shaft state Z and hub (q, w). The shaft's side is
+//   implicit in solve_drive_stage with the hub held; without this the hub's side would be explicit, and
+//   the stiff mesh unstable at the automatic step on some chains (the midpoint rule on configs/fbtb.yaml
+//   with the drive at N = 12). With free play the mesh's hub side stays explicit: a tangent switching
+//   on and off at the gap's edges made diagnose's backlash fits rougher and 1.5 times slower, and did
+//   not cure the free play's own divergence at N >= 12 (the session note of 2026-12-04).
 void set_hub_armature(const BatchModel& bm, const double* q, const double* w, const double* Z, double gh_f,
                       double gh, Workspace& ws) {
   const DriveLayout& L = bm.layout;
   const int W = bm.W;
   for (int l = 0; l < W; ++l) {
     double a = L.bristle >= 0 ? 0.0 : gh_f * calc_hub_friction_damping(bm, l, w[l]);
-    if (L.shaft >= 0) {
+    if (L.shaft >= 0 && bm.drive[l].b == 0.0) {
       const LaneDrive& p = bm.drive[l];
       const TransmissionTangent t =
           calc_transmission_tangent(p, Z[L.shaft * W + l] / p.n - q[l], Z[(L.shaft + 1) * W + l] / p.n - w[l]);

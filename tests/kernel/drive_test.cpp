@@ -2,7 +2,6 @@
 // friction. Each checked against an analytic limit or an invariant.
 #include <gtest/gtest.h>
 
-#include <array>
 #include <cmath>
 #include <vector>
 
@@ -318,18 +317,6 @@ TEST(DriveTrain, ConservesEnergyWithAllDissipationOff) {
   EXPECT_NEAR(drive_energy(bm, st, s.drive), e0, 1e-7 * e0);
 }
 
-// The reference rig's move (0.5 rad in 3 s) under PD, `duration` s of it, through the default drive
-// train (a 2e7 N m/rad mesh) with free play `backlash`.
-ModelSpec geared_rig(int segments, double backlash, Integrator integrator, double duration) {
-  ModelSpec s = test::rig_spec(0.5, 1.0);
-  s.simulation.duration = duration;
-  s.segments = segments;
-  s.drive.enabled = true;
-  s.drive.backlash = backlash;
-  s.simulation.integrator = integrator;
-  return s;
-}
-
 TEST(DriveTrain, TheImplicitMethodsHoldTheGearedRigUnderPdOnAnyChain) {
   // configs/fbtb.yaml through the default drive train (a 2e7 N m/rad mesh): its PD loop through the
   // mesh rings for the whole run. The mesh's hub side is taken linearly implicit
@@ -358,22 +345,6 @@ TEST(DriveTrain, TheImplicitMethodsHoldTheGearedRigUnderPdOnAnyChain) {
       EXPECT_LT(rms_diff(std::vector<double>(tip.begin(), tip.begin() + cvode.size()), cvode), 5e-3)
           << "N = " << s.segments << ", integrator " << integrator_name(i);
     }
-  }
-}
-
-TEST(DriveTrain, FreePlayInsideTheLoopStaysFiniteAtTheAutomaticStep) {
-  // Free play between a stiff mesh and a PD loop chatters (the mesh closes and opens every few
-  // samples: a limit cycle CVODE shows too). SDIRK2 and the midpoint rule take the mesh's stiffness at
-  // a stage's start, so the automatic step halves for them (calc_drive_rate); at the old step they
-  // diverged from 12 (midpoint) and 16 (SDIRK2) segments. Drawn over 12-32 segments and 0.1-10 mrad.
-  CounterRng rng(4122026);
-  for (int draw = 0; draw < 6; ++draw) {
-    const int n = 12 + static_cast<int>(rng.uniform() * 21.0);
-    const double backlash = 1e-4 * std::pow(100.0, rng.uniform());
-    const Integrator integ = std::array{Integrator::kRk4, Integrator::kSdirk2, Integrator::kMidpoint}[draw % 3];
-    const BatchRun run = test::run_one(make_model(geared_rig(n, backlash, integ, 6.0)));
-    EXPECT_EQ(run.status[0], LaneStatus::kOk)
-        << "N = " << n << ", backlash " << backlash << " rad, integrator " << static_cast<int>(integ);
   }
 }
 
