@@ -248,8 +248,12 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     modes.insert(modes.end(), closed_loop.begin(), closed_loop.end());
     m.substeps = calc_auto_substeps(modes, m.control_period, spec.simulation.integrator);
     // The hub drive's own rates (hydraulics, drive train, LuGre): h rate <= 1.
-    const double rate = calc_drive_rate(m);
-    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(rate * m.control_period)));
+    const double drive = std::ceil(calc_drive_rate(m) * m.control_period);
+    m.substeps = !(drive < 1e9) ? 1000000000 : std::max(m.substeps, static_cast<int>(drive));
+    if (m.substeps > 100000)
+      throw ConfigError(source, 0, "simulation.substeps",
+                        "the automatic step would need " + (m.substeps >= 1000000000 ? std::string("more than 1e9") : std::to_string(m.substeps)) +
+                            " substeps per controller sample (more than 100000): a mode or the drive is far too fast for the controller's rate; check the model's values");
   }
   m.omega_z[0] = spec.notch.omega_z[0];
   m.omega_z[1] = spec.notch.omega_z[1];

@@ -127,7 +127,9 @@ int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, In
       need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
     }
   }
-  return std::max(1, static_cast<int>(std::ceil(need * control_period)));
+  // Saturated at 1e9 (and NaN there too) before the cast: make_model refuses more than 100000.
+  const double n = std::ceil(need * control_period);
+  return !(n < 1e9) ? 1000000000 : std::max(1, static_cast<int>(n));
 }
 
 int calc_auto_substeps(const Model& m) {

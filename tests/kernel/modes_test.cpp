@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
+#include "common/errors.hpp"
 #include "kernel/cantilever.hpp"
 #include "tests/kernel/test_support.hpp"
 
@@ -43,6 +45,22 @@ TEST(Model, BeamMassAndCantileverStiffnessMatchSeed) {
   // The seed's joint stiffness lies between them, as a series combination must.
   EXPECT_GT(39.5e3, calc_cantilever_stiffness(b, 4.1656));
   EXPECT_LT(39.5e3, calc_cantilever_stiffness(b, 0.83312));
+}
+
+TEST(Model, AnAutomaticStepBeyondAHundredThousandSubstepsIsAnErrorOfTheSubsteps) {
+  // A payload of 4e38 kg (found by fuzz_set) puts a mode at ~1e71 rad/s: the substep count no longer
+  // fits an int. One error naming simulation.substeps, not undefined behaviour in the cast.
+  ModelSpec s = test::rig_spec();
+  s.payload_mass = 4e38;
+  s.notch.enabled = true;
+  s.notch.order = 2;
+  try {
+    make_model(s);
+    FAIL() << "accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.substeps"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("more than 100000"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Modes, ClampedModesMatchPaper) {
