@@ -468,7 +468,11 @@ ArmModel make_arm(const ArmSpec& spec) {
                      m.integrator == Integrator::kCvodeGmres;
   m.substeps = cvode ? 1 : spec.substeps > 0 ? spec.substeps : calc_auto_substeps(kernel_modes, m.control_period, m.integrator);
   if (!cvode && spec.substeps == 0)
-    m.substeps = std::max(m.substeps, static_cast<int>(std::ceil(calc_joint_rate(m, m.q0, m.integrator) * m.control_period)));
+    m.substeps = std::max(m.substeps, calc_substeps_for_rate(calc_joint_rate(m, m.q0, m.integrator), m.control_period));
+  if (m.substeps > kMaxSubsteps)
+    throw ConfigError(src, 0, "simulation.substeps",
+                      "the automatic step would need more than 100000 substeps per controller sample: a mode or a "
+                      "joint's drive is far too fast for the controller's rate; check the model's values");
   for (ActuatedJoint& a : m.actuated) {
     const ShaperSpec& sh = a.control.shaper;
     const ShaperKind kind = parse_shaper_kind(sh.type);

@@ -13,6 +13,7 @@
 #include "common/errors.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/model_io.hpp"
+#include "kernel/modes.hpp"  // kMaxSubsteps
 
 namespace ff {
 
@@ -395,7 +396,7 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   if (!known)
     sim.fail("integrator", "unknown integrator '" + sb.integrator +
                                "' (auto, rk4, midpoint, sdirk2, cvode_dense, cvode_klu, cvode_gmres)");
-  if (s.substeps > 100000) sim.fail("substeps", "must be between 0 (automatic) and 100000");
+  if (s.substeps > kMaxSubsteps) sim.fail("substeps", "must be between 0 (automatic) and 100000");
 
   YamlReader metrics = top.child("metrics");
   read_present(metrics, kMetricsFields, s);

@@ -102,7 +102,7 @@ void validate(const ModelSpec& s, const std::string& src) {
     previous = m.target;
   }
   non_negative(s.simulation.duration, "simulation.duration");
-  if (s.simulation.substeps < 0 || s.simulation.substeps > 100000)
+  if (s.simulation.substeps < 0 || s.simulation.substeps > kMaxSubsteps)
     throw ConfigError(src, 0, "simulation.substeps", "must be between 0 (automatic) and 100000");
   positive(s.simulation.rtol, "simulation.rtol");
   non_negative(s.friction.viscous, "friction.viscous");
@@ -248,12 +248,11 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
     modes.insert(modes.end(), closed_loop.begin(), closed_loop.end());
     m.substeps = calc_auto_substeps(modes, m.control_period, spec.simulation.integrator);
     // The hub drive's own rates (hydraulics, drive train, LuGre): h rate <= 1.
-    const double drive = std::ceil(calc_drive_rate(m) * m.control_period);
-    m.substeps = !(drive < 1e9) ? 1000000000 : std::max(m.substeps, static_cast<int>(drive));
-    if (m.substeps > 100000)
+    m.substeps = std::max(m.substeps, calc_substeps_for_rate(calc_drive_rate(m), m.control_period));
+    if (m.substeps > kMaxSubsteps)
       throw ConfigError(source, 0, "simulation.substeps",
-                        "the automatic step would need " + (m.substeps >= 1000000000 ? std::string("more than 1e9") : std::to_string(m.substeps)) +
-                            " substeps per controller sample (more than 100000): a mode or the drive is far too fast for the controller's rate; check the model's values");
+                        "the automatic step would need more than 100000 substeps per controller sample: a mode or "
+                        "the drive is far too fast for the controller's rate; check the model's values");
   }
   m.omega_z[0] = spec.notch.omega_z[0];
   m.omega_z[1] = spec.notch.omega_z[1];

@@ -127,9 +127,12 @@ int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, In
       need = std::max(need, md.oscillatory ? md.omega_n : md.omega_n / 2.5);
     }
   }
-  // Saturated at 1e9 (and NaN there too) before the cast: make_model refuses more than 100000.
-  const double n = std::ceil(need * control_period);
-  return !(n < 1e9) ? 1000000000 : std::max(1, static_cast<int>(n));
+  return calc_substeps_for_rate(need, control_period);
+}
+
+int calc_substeps_for_rate(double rate, double control_period) {
+  const double n = std::ceil(rate * control_period);
+  return !(n <= kMaxSubsteps) ? kMaxSubsteps + 1 : std::max(1, static_cast<int>(n));
 }
 
 int calc_auto_substeps(const Model& m) {

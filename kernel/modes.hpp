@@ -39,4 +39,11 @@ std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop);
 int calc_auto_substeps(const Model& m);
 int calc_auto_substeps(const std::vector<Mode>& modes, double control_period, Integrator integrator);
 
+// The most fixed steps per controller sample a model may take, given or automatic (the rig's and the
+// arm's `simulation.substeps`).
+inline constexpr int kMaxSubsteps = 100000;
+// Steps per controller sample for h rate <= 1: ceil(rate T), at least 1; kMaxSubsteps + 1 for anything
+// beyond kMaxSubsteps (a NaN rate too), so that an absurd rate never overflows the int.
+int calc_substeps_for_rate(double rate, double control_period);
+
 }  // namespace ff
