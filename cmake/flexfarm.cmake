@@ -1,12 +1,13 @@
-# flexfarm_library(NAME PUBLIC deps...): the folder NAME/ becomes the static library ff_NAME.
+# flexfarm_library(NAME PUBLIC deps... [PRIVATE deps...]): the folder NAME/ becomes the static library
+# ff_NAME (PRIVATE: libraries only its sources use; their headers stay out of its users' builds).
 # A folder without sources yet becomes an interface library, so later folders can already link it.
 function(flexfarm_library name)
-  cmake_parse_arguments(ARG "" "" "PUBLIC" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "PUBLIC;PRIVATE" ${ARGN})
   file(GLOB srcs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/${name}/*.cpp)
   if(srcs)
     add_library(ff_${name} STATIC ${srcs})
     target_include_directories(ff_${name} PUBLIC ${PROJECT_SOURCE_DIR})
-    target_link_libraries(ff_${name} PUBLIC ${ARG_PUBLIC})
+    target_link_libraries(ff_${name} PUBLIC ${ARG_PUBLIC} PRIVATE ${ARG_PRIVATE})
     # Under FLEXFARM_FUZZ the libraries carry libFuzzer's coverage hooks (the test programs do not).
     if(FLEXFARM_FUZZ)
       target_compile_options(ff_${name} PRIVATE -fsanitize=fuzzer-no-link)
