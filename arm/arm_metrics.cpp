@@ -16,6 +16,11 @@ std::vector<std::string> arm_metric_columns(const ArmModel& m) {
     for (const char* s : kToolMetricSuffixes) c.push_back(t.name + s);
   for (const LinkTip& l : m.links)
     for (const char* s : {"_peak_deflection_m", "_residual_m", "_sag_m"}) c.push_back(l.name + s);
+  if (m.collision.active()) {
+    for (const char* s : {"min_clearance_m", "min_clearance_time_s", "first_contact_s", "contacts"}) c.push_back(s);
+    for (const std::string& p : m.collision.parts) c.push_back(p + "_clearance_m");
+    for (const Obstacle& o : m.collision.world.obstacles) c.push_back(o.name + "_clearance_m");
+  }
   c.push_back("settling_horizon_s");
   return c;
 }
@@ -146,8 +151,43 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
                         : std::nan("");
     v[c++] = std::hypot(dy[0], dz[0]);
   }
+  if (m.collision.active()) {
+    const std::size_t nc = m.collision.columns();
+    std::vector<const std::vector<double>*> cols{&tr.column("clearance")};
+    for (const std::string& p : m.collision.parts) cols.push_back(&tr.column(p + ".clearance"));
+    for (const Obstacle& o : m.collision.world.obstacles) cols.push_back(&tr.column(o.name + ".clearance"));
+    ClearanceMetrics cm(nc);
+    std::vector<double> row(nc);
+    for (std::size_t k = 0; k < n; ++k) {
+      for (std::size_t i = 0; i < nc; ++i) row[i] = (*cols[i])[k];
+      cm.add(t[k], row.data(), 1);
+    }
+    cm.result(&v[c]);
+    c = v.size() - 1;
+  }
   v[c++] = std::max(0.0, t[n - 1] - t0 - rule.dwell);
   return v;
+}
+
+void ClearanceMetrics::add(double t, const double* c, std::size_t stride) {
+  const double now = c[0];
+  if (now < mins_[0]) t_min_ = t;
+  for (std::size_t i = 0; i < mins_.size(); ++i) mins_[i] = std::min(mins_[i], c[i * stride]);
+  // A contact begins where the clearance reaches 0 from above (or is there at the start).
+  if (now <= 0.0 && (!started_ || c_prev_ > 0.0)) {
+    ++contacts_;
+    if (std::isnan(first_contact_))
+      first_contact_ = started_ && std::isfinite(c_prev_) ? t_prev_ + (t - t_prev_) * c_prev_ / (c_prev_ - now) : t;
+  }
+  t_prev_ = t, c_prev_ = now, started_ = true;
+}
+
+void ClearanceMetrics::result(double* out) const {
+  out[0] = mins_[0];
+  out[1] = t_min_;
+  out[2] = first_contact_;
+  out[3] = static_cast<double>(contacts_);
+  for (std::size_t i = 1; i < mins_.size(); ++i) out[kLeading + i - 1] = mins_[i];
 }
 
 std::string calc_arm_status(const ArmModel& m, LaneStatus lane, const std::vector<std::string>& columns,

@@ -19,10 +19,19 @@
 //   <link>_peak_deflection_m  largest |tip deflection| of a flexible link
 //   <link>_residual_m         half the peak-to-peak of its tip deflection after the move (the larger plane)
 //   <link>_sag_m              |tip deflection| at the start (the static sag under gravity, held)
+// With a world (or two arms), the clearances (arm_collision.hpp) over the run:
+//   min_clearance_m           the least clearance of any part to the world or another arm, m (< 0: overlap;
+//                             inf: nothing ever constrained it)
+//   min_clearance_time_s      when it was least (the first such sample)
+//   first_contact_s           when the clearance first reached 0, interpolated between samples; NaN = never
+//   contacts                  how many times it reached 0 (from above, or at the start)
+//   <part>_clearance_m        each part's least clearance (a rigid body or a flexible link)
+//   <obstacle>_clearance_m    each obstacle's least clearance to the arm
 //   settling_horizon_s        the longest settling time the run can confirm: its window less that dwell
 //                             (a NaN settling time is right-censored there, results/censoring.hpp)
 #pragma once
 
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -75,6 +84,25 @@ struct ArmToolRest {
 ArmToolRest calc_arm_tool_rest(const ArmSettleRule& r, std::span<const double> t, std::span<const double> x,
                                std::span<const double> y, std::span<const double> z, const Vec3& begin,
                                const Vec3& target, double largest);
+
+// The clearance metrics (above), fed the trace's clearance columns one sample at a time: calc_arm_metrics
+// and its online form both use it.
+class ClearanceMetrics {
+ public:
+  explicit ClearanceMetrics(std::size_t columns) : mins_(columns, std::numeric_limits<double>::infinity()) {}
+  // Sample at t: c[i * stride] for the trace's columns "clearance", "<part>.clearance", ...
+  void add(double t, const double* c, std::size_t stride);
+  // min_clearance_m, min_clearance_time_s, first_contact_s, contacts, then each part's and obstacle's.
+  void result(double* out) const;
+  static constexpr std::size_t kLeading = 4;
+
+ private:
+  std::vector<double> mins_;
+  double t_min_ = std::numeric_limits<double>::quiet_NaN(), first_contact_ = std::numeric_limits<double>::quiet_NaN();
+  double t_prev_ = 0.0, c_prev_ = std::numeric_limits<double>::infinity();
+  long contacts_ = 0;
+  bool started_ = false;
+};
 
 // "ok", "not_settled" (a tool's settling time is NaN), or the lane's failure.
 std::string calc_arm_status(const ArmModel& m, LaneStatus lane, const std::vector<std::string>& columns,

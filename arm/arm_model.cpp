@@ -352,6 +352,8 @@ ArmModel make_arm(const ArmSpec& spec) {
   }
   m.tool_body = m.tools.front().body;
   m.tool_point = m.tools.front().point;
+  // What the arm can touch: its capsules, the world's obstacles, the pairs between arms.
+  m.collision = make_arm_collision(m, spec.world, spec.collision);
 
   // The trajectory: joint waypoints as written, tool waypoints by IK on the rigid arm (flexible links
   // straight), each from the pose before it.

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "arm/arm_collision.hpp"
 #include "description/tree_description.hpp"
 #include "kernel/model.hpp"  // NotchSpec, ShaperSpec, FrictionSpec, ChannelSpec, Integrator
 #include "kernel/notch.hpp"
@@ -104,6 +105,8 @@ struct ArmSpec {
   double band = 0.02;                // settling band, fraction of each move's amplitude
   double tool_band = 0.0;            // the tool's settling band, m; 0 = band x the tool's largest move
   std::uint64_t seed = 1;            // sensor noise (simulation.seed); a study gives each variant its own
+  World world;                       // `world:` (world/world_yaml.hpp): the obstacles
+  std::vector<CollisionPartSpec> collision;  // `collision:`: the parts' overrides
 };
 
 // A flexible link's tip, for its deflection.
@@ -164,6 +167,7 @@ struct ArmModel {
   Integrator integrator = Integrator::kRk4;
   std::vector<double> resonances;    // closed-loop resonances at q0 (zeta < 0.3), ascending, rad/s
   double move_end = 0.0;             // the last waypoint's time, s
+  ArmCollision collision;            // the capsules, obstacles and pairs between arms (arm_collision.hpp)
 };
 
 // Derives and validates the model. Throws ConfigError naming spec.source and the key: an unknown or

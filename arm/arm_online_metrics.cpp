@@ -63,6 +63,10 @@ OnlineArmRun::OnlineArmRun(const ArmModel& m)
   for (const LinkTip& l : m.links)
     links_.push_back({column_index(names, l.name + ".deflection_y"), column_index(names, l.name + ".deflection_z"),
                       OnlineResidual(rule_.t0, kInf), OnlineResidual(rule_.t0, kInf)});
+  if (m.collision.active()) {
+    clearance_column_ = column_index(names, "clearance");
+    clearance_.emplace(m.collision.columns());
+  }
 }
 
 void OnlineArmRun::add(const double* row, std::size_t stride) {
@@ -100,6 +104,7 @@ void OnlineArmRun::add(const double* row, std::size_t stride) {
     l.residual_z.add(t, dz);
     if (n_ == 0) l.sag = std::hypot(dy, dz);
   }
+  if (clearance_) clearance_->add(t, row + clearance_column_ * stride, stride);
   t_last_ = t;
   ++n_;
 }
@@ -128,6 +133,10 @@ std::vector<double> OnlineArmRun::result(LaneStatus status) const {
     v[c++] = l.peak.result();
     v[c++] = t0 < t_last_ ? std::max(l.residual_y.result(), l.residual_z.result()) : std::nan("");
     v[c++] = l.sag;
+  }
+  if (clearance_) {
+    clearance_->result(&v[c]);
+    c = v.size() - 1;
   }
   v[c++] = std::max(0.0, t_last_ - t0 - rule_.dwell);
   return v;

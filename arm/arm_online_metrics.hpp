@@ -9,7 +9,8 @@
 //           x, y, z at every sample (and the run the sample times): 3 doubles a tool a sample, plus 1,
 //           where the trace keeps every column;
 //   links   peak deflection by running max, residual by running min and max after the move, sag from
-//           the first sample.
+//           the first sample;
+//   world   the clearances by ClearanceMetrics, as the stored form.
 // simulate_arms feeds it (ArmRunOptions::online) when a study writes no traces (jobs/runner.cpp).
 #pragma once
 
@@ -79,6 +80,8 @@ class OnlineArmRun {
   std::vector<Joint> joints_;
   std::vector<Tool> tools_;
   std::vector<Link> links_;
+  std::optional<ClearanceMetrics> clearance_;  // with a world: from the trace's column "clearance" on
+  std::size_t clearance_column_ = 0;
   std::vector<double> t_;  // the sample times (kept with tools only)
   double t_last_ = 0.0;
   long n_ = 0;             // samples added

@@ -32,6 +32,11 @@ std::vector<std::string> arm_trace_names(const ArmModel& m) {
     for (const char* s : {".x", ".y", ".z", ".ref_x", ".ref_y", ".ref_z"}) n.push_back(t.name + s);
   for (const LinkTip& l : m.links)
     for (const char* s : {".deflection_y", ".deflection_z"}) n.push_back(l.name + s);
+  if (m.collision.active()) {
+    n.push_back("clearance");
+    for (const std::string& p : m.collision.parts) n.push_back(p + ".clearance");
+    for (const Obstacle& o : m.collision.world.obstacles) n.push_back(o.name + ".clearance");
+  }
   for (const ActuatedJoint& a : m.actuated)
     for (const char* s : {".q_measured", ".qd_measured"}) n.push_back(a.name + s);
   for (const ActuatedJoint& a : m.actuated)
@@ -54,6 +59,8 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
         (a.actuated[j].control.friction.model == "lugre") != (b.actuated[j].control.friction.model == "lugre"))
       return "joint " + a.actuated[j].name + "'s control differs in shape";
   if (a.links.size() != b.links.size()) return "the flexible links differ";
+  if (a.collision.columns() != b.collision.columns() || a.collision.parts != b.collision.parts)
+    return "the world or the collision shapes differ";
   if (a.tools.size() != b.tools.size()) return "the tools differ";
   for (std::size_t t = 0; t < a.tools.size(); ++t)
     if (a.tools[t].name != b.tools[t].name) return "the tools differ";
@@ -68,7 +75,7 @@ namespace {
 using std::size_t;
 
 // The lane's tool points and, per flexible link, its tip deflection in the root frame (out[3 t .. 3 t + 2]
-// per tool t, then two per link).
+// per tool t, then two per link), then the clearances (arm_collision.hpp, calc_arm_clearances).
 void calc_plant_kinematics(const ArmModel& m, const Eigen::VectorXd& q, std::vector<Pose>& poses, double* out) {
   calc_body_poses(m.tree, q, poses);
   int k = 0;
@@ -83,6 +90,7 @@ void calc_plant_kinematics(const ArmModel& m, const Eigen::VectorXd& q, std::vec
     out[k++] = d.y();
     out[k++] = d.z();
   }
+  if (m.collision.active()) calc_arm_clearances(m.collision, poses, out + k);
 }
 
 // Where the rigid arm at the reference puts each tool point (calc_body_poses first).
@@ -118,7 +126,7 @@ void eval_lane_references(ArmLanes& a, long k) {
 }
 
 // Trace columns: t, 4 per actuated joint, the kinematics (6 per tool: its point and the reference's, then
-// 2 per link), 2 measured per joint, 2 pressures per hydraulic joint.
+// 2 per link, then the clearances), 2 measured per joint, 2 pressures per hydraulic joint.
 size_t kinematics_column(const ArmLanes& a) { return 1 + 4 * static_cast<size_t>(a.na); }
 size_t pressure_column(const ArmLanes& a) { return a.names.size() - 2 * static_cast<size_t>(a.nh); }
 size_t measured_column(const ArmLanes& a) { return pressure_column(a) - 2 * static_cast<size_t>(a.na); }
@@ -292,7 +300,7 @@ void calc_arm_outputs(ArmLanes& a) {
       put(col + 1, l, a.s.z[z + 3 * static_cast<size_t>(W)] * kPressureUnit);
     }
     // The tools (<tool>.x/y/z, each before its reference's three columns) and the links' deflections.
-    const size_t nt = m.tools.size(), n_plant = 3 * nt + 2 * m.links.size();
+    const size_t nt = m.tools.size(), n_plant = 3 * nt + 2 * m.links.size() + m.collision.columns();
     if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
       for (int j = 0; j < nv; ++j) a.q_lane[j] = a.s.q[static_cast<size_t>(j * W + l)];
       calc_plant_kinematics(m, a.q_lane, a.poses, a.kin.data());

@@ -14,6 +14,7 @@
 #include "kernel/drive.hpp"
 #include "kernel/model_io.hpp"
 #include "kernel/modes.hpp"  // kMaxSubsteps
+#include "world/world_yaml.hpp"
 
 namespace ff {
 
@@ -153,6 +154,29 @@ const std::array<Field<ArmSpec>, 2> kMetricsFields{{
      .fallback = "0: band x the tool's largest move"},
 }};
 
+// A part's collision override (`collision: {NAME: {radius, enabled}}`, arm_collision.hpp).
+const std::array<Field<CollisionPartSpec>, 2> kCollisionFields{{
+    {.key = "radius", .member = &CollisionPartSpec::radius, .unit = "m", .bound = Bound::kNonNegative,
+     .fallback = "0: from the geometry"},
+    {.key = "enabled", .member = &CollisionPartSpec::enabled},
+}};
+
+// A map of named blocks of one field table (T has `name` and `line`), in file order.
+template <class T, std::size_t N>
+std::vector<T> read_named_blocks(YamlReader& top, const std::string& key, const std::string& expected,
+                                 const std::array<Field<T>, N>& fields, const char* name_rule = nullptr) {
+  std::vector<T> out;
+  for (auto& [name, one] : top.named_blocks(key, expected, name_rule)) {
+    T t;
+    t.name = name;
+    t.line = one.line();
+    read_present(one, fields, t);
+    one.finish();
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 std::string resolve(const std::string& source, const std::string& path) {
   if (path.empty() || std::filesystem::path(path).is_absolute()) return path;
   return (std::filesystem::path(source).parent_path() / path).lexically_normal().string();
@@ -219,23 +243,10 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   s.tool_point_given = tool.has("point");
   tool.finish();
   // Several tool points by name, instead of `tool`.
-  if (const YAML::Node tv = top.raw("tools"); tv) {
-    if (top.has("tool")) top.fail("tools", "give either `tool` (one tool point) or `tools` (several, by name), not both");
-    if (!tv.IsMap() || tv.size() == 0) top.fail("tools", "expected a map from tool name to its {body, point}");
-    YamlReader tr(tv, source, "tools", &lines);
-    for (const auto& kv : tv) {
-      ToolSpec t;
-      t.name = kv.first.as<std::string>();
-      YamlReader one = tr.child(t.name);
-      t.line = one.line();
-      if (t.name.empty() || t.name.find_first_of(". ,\"") != std::string::npos)
-        tr.fail(t.name, "a tool's name heads its columns (NAME.x) and metrics: no dots, spaces, commas or quotes");
-      read_present(one, kToolsFields, t);
-      one.finish();
-      s.tools.push_back(std::move(t));
-    }
-    tr.finish();
-  }
+  if (top.has("tools") && top.has("tool"))
+    top.fail("tools", "give either `tool` (one tool point) or `tools` (several, by name), not both");
+  s.tools = read_named_blocks(top, "tools", "a map from tool name to its {body, point}", kToolsFields,
+                              "a tool's name heads its columns (NAME.x) and metrics: no dots, spaces, commas or quotes");
 
   YamlReader controller = top.child("controller");
   read_present(controller, kControllerFields, s);
@@ -398,6 +409,11 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
                                "' (auto, rk4, midpoint, sdirk2, cvode_dense, cvode_klu, cvode_gmres)");
   if (s.substeps > kMaxSubsteps) sim.fail("substeps", "must be between 0 (automatic) and 100000");
 
+  // The world around the arm, and the parts' collision overrides.
+  s.world = read_world(top, source);
+  s.collision = read_named_blocks(top, "collision", "a map from part name (a body or flexible link) to its {radius, enabled}",
+                                  kCollisionFields);
+
   YamlReader metrics = top.child("metrics");
   read_present(metrics, kMetricsFields, s);
   metrics.finish();
@@ -436,6 +452,9 @@ std::vector<KeyDoc> arm_yaml_keys() {
   add_keys(out, "simulation.", kIntegratorFields);
   out.push_back({"simulation.seed", "", "no", "1"});
   add_keys(out, "metrics.", kMetricsFields);
+  const std::vector<KeyDoc> world = world_yaml_keys();
+  out.insert(out.end(), world.begin(), world.end());
+  add_keys(out, "collision.NAME.", kCollisionFields);
   return out;
 }
 

@@ -93,7 +93,7 @@ void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) 
                           [&](Vec3 T::*m) {
                             read_vec3(r, f.key, out.*m);
                             if (f.bound == Bound::kNonZero && (out.*m).norm() == 0.0)
-                              r.fail(f.key, "is zero: a joint axis needs a direction");
+                              r.fail(f.key, "is zero: an axis needs a direction");
                           },
                           [&](std::string T::*m) {
                             r.optional(f.key, out.*m);

@@ -129,6 +129,22 @@ std::vector<YamlReader> YamlReader::sequence(const std::string& key, bool requir
   return out;
 }
 
+std::vector<std::pair<std::string, YamlReader>> YamlReader::named_blocks(const std::string& key,
+                                                                          const std::string& expected,
+                                                                          const char* name_rule) {
+  std::vector<std::pair<std::string, YamlReader>> out;
+  const YAML::Node v = value(key, false);
+  if (!v || v.IsNull()) return out;
+  if (!v.IsMap() || v.size() == 0) fail(key, "expected " + expected);
+  YamlReader map(v, file_, full_key(key), lines_);
+  for (const auto& kv : v) {
+    const std::string name = kv.first.as<std::string>();
+    if (name_rule && (name.empty() || name.find_first_of(". ,\"") != std::string::npos)) map.fail(name, name_rule);
+    out.emplace_back(name, map.child(name));
+  }
+  return out;
+}
+
 template <class Known>
 void YamlReader::reject_unknown(Known known) const {
   if (!node_ || !node_.IsMap()) return;

@@ -8,6 +8,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ff {
@@ -36,6 +37,11 @@ class YamlReader {
   YAML::Node raw(const std::string& key) { return has(key) ? value(key, false) : YAML::Node(YAML::NodeType::Undefined); }
   // Elements of a sequence of maps.
   std::vector<YamlReader> sequence(const std::string& key, bool required = false);
+  // The entries of a map of named blocks (`tools: {NAME: {body, point}}`), in file order: each name and
+  // its block's reader. Absent or null: none; not a map, or empty: the error "expected <expected>".
+  // With `name_rule`, a name that heads columns: empty or with a dot, space, comma or quote is that error.
+  std::vector<std::pair<std::string, YamlReader>> named_blocks(const std::string& key, const std::string& expected,
+                                                               const char* name_rule = nullptr);
   // Throws for any key that was not read.
   void finish() const;
   // Throws for any key not in `known`, before they are read: a misspelt required key is then reported

@@ -50,6 +50,13 @@ struct Obstacle {
   std::shared_ptr<const MeshGeometry> mesh;  // mesh: in the obstacle's frame (scaled), m
   // A sphere about the origin holding the whole obstacle (infinity: a plane), m: the broad phase's bound.
   double bound = 0.0;
+  int line = 0;                      // where it is written, for errors
+};
+
+// The obstacles of a model, in file order (world_yaml.hpp reads them).
+struct World {
+  std::vector<Obstacle> obstacles;
+  bool empty() const { return obstacles.empty(); }
 };
 
 // A capsule's clearance to an obstacle and where it is least: the closest points on the capsule's

@@ -155,7 +155,7 @@ TEST(TreeYaml, ANegativeMassIsNamedAtItsLine) {
 
 TEST(TreeYaml, MakeTreesChecksAreNamedAtTheLineOfWhatTheyConcern) {
   EXPECT_EQ(yaml_error(with_line(kArm, 8, "      axis: [0, 0, 0]")),
-            "arm.yaml:8: bodies[0].joint.axis: is zero: a joint axis needs a direction");
+            "arm.yaml:8: bodies[0].joint.axis: is zero: an axis needs a direction");
   EXPECT_EQ(yaml_error(with_line(kArm, 20, "    inertia: {ixx: 0.004, iyy: 0.02, izz: 0.03}")),
             "arm.yaml:20: bodies[1].inertia: inertia tensor violates the triangle inequality I_a + I_b >= I_c "
             "(principal moments 0.004, 0.02, 0.03 kg·m²)");
