@@ -65,6 +65,19 @@ ff::ViewScene swinging_scene() {
   floor.name = "floor", floor.type = "plane";
   floor.pose(2, 3) = -0.05;
   s.shapes = {box, floor};
+  // Every other type, behind the arm's swing (x, y < 0): each drawn without a JavaScript error.
+  const auto at = [](const std::string& type, double x, double y) {
+    ff::ViewShape sh;
+    sh.name = sh.type = type;
+    sh.pose.topRightCorner<3, 1>() << x, y, 0.2;
+    sh.radius = 0.12, sh.length = 0.3;
+    return sh;
+  };
+  for (const char* type : {"sphere", "cylinder", "capsule", "bore"}) s.shapes.push_back(at(type, -0.5, -0.6 + 0.4 * double(s.shapes.size() - 2)));
+  ff::ViewShape tetrahedron = at("mesh", -0.9, 0);
+  tetrahedron.vertices = {{0, 0, 0}, {0.2f, 0, 0}, {0, 0.2f, 0}, {0, 0, 0.2f}};
+  tetrahedron.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  s.shapes.push_back(tetrahedron);
   s.capsules = {{"upper arm", 0.05}, {"forearm", 0.04}};
   s.variants = {swinging_arm("variant 0: nominal", 0, 0.03), swinging_arm("variant 1: ghost", 0.15, 0.03)};
   ff::ViewVariant& v = s.variants[0];
@@ -131,7 +144,7 @@ TEST(ViewHtml, ArraysNotMatchingTheSamplesAndCapsulesAreErrors) {
   }
   {
     ff::ViewScene s = swinging_scene();
-    s.variants[0].worst_shape = 2;
+    s.variants[0].worst_shape = 7;
     expect_invalid(s, "worst_shape out of range");
   }
   {
