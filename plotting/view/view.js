@@ -277,7 +277,10 @@ const shapeName = (j) => (j >= 0 ? data.shapes[j].name : j <= -2 ? capsules[-(j 
 const clearanceText = hasWorst
   ? `min clearance ${fmt(v0.min_clearance)} m at t = ${fmt(v0.worst_time)} s: ${capsules[v0.worst_capsule].name} to ${shapeName(v0.worst_shape)}`
   : v0.min_clearance === null ? '' : `min clearance ${fmt(v0.min_clearance)} m`;
-const ghostText = variants.length > 1 ? `${variants.length - 1} ghost${variants.length > 2 ? 's' : ''}` : '';
+// The ghosts, and the lowest clearance of any variant when a ghost's is lower than variants[0]'s.
+const lowest = variants.reduce((a, v) => (v.min_clearance !== null && (a === null || v.min_clearance < a.min_clearance) ? v : a), null);
+const ghostText = variants.length < 2 ? '' : `${variants.length - 1} ghost${variants.length > 2 ? 's' : ''}` +
+  (lowest && lowest !== v0 && lowest.min_clearance < (v0.min_clearance ?? Infinity) ? `, lowest ${fmt(lowest.min_clearance)} m: ${lowest.label}` : '');
 
 // ---- Each frame: advance the time, place the arms, the highlight and the text, render.
 const frame = new Float32Array(nc * 6), tool = new Float32Array(3);

@@ -84,6 +84,7 @@ ff::ViewScene swinging_scene() {
   v.min_clearance = 0.12, v.worst_capsule = 1, v.worst_shape = 0, v.worst_time = 1.0;
   v.worst_a << 0.55, 0.55, 0.3;
   v.worst_b << 0.6, 0.6, 0.3;
+  s.variants[1].min_clearance = 0.08;  // the ghost comes closer: the status line says so
   return s;
 }
 
@@ -357,6 +358,9 @@ TEST(ViewHtml, TheExaggerationBendsTheDeflectedCapsuleInHeadlessChromium) {
   std::cout << "view changed: " << 100 * changed_share(a.image, b.image) << " %\n";
   EXPECT_GT(changed_share(a.image, b.image), 0.005);
   EXPECT_NE(b.dom.find("<span id=\"exaggeration-value\">10.0</span>"), std::string::npos);
+  EXPECT_NE(b.dom.find("t = 0.500 s | variant 0: nominal | min clearance 0.1200 m at t = 1.000 s: forearm to box | "
+                       "1 ghost, lowest 0.08000 m: variant 1: ghost</div>"),
+            std::string::npos);
 }
 
 }  // namespace
