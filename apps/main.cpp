@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   ff::add_table_verb(app);
   ff::add_plot_verb(app);
   ff::add_animate_verb(app);
+  ff::add_view_verb(app);
   ff::add_record_verb(app);
   ff::add_diagnose_verb(app);
   ff::add_calibrate_verb(app);

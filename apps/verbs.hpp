@@ -25,6 +25,7 @@ void add_merge_verb(CLI::App& app);
 void add_table_verb(CLI::App& app);
 void add_plot_verb(CLI::App& app);
 void add_animate_verb(CLI::App& app);
+void add_view_verb(CLI::App& app);
 void add_diagnose_verb(CLI::App& app);
 void add_calibrate_verb(CLI::App& app);
 void add_record_verb(CLI::App& app);

@@ -90,6 +90,12 @@ ArmCollision make_arm_collision(const ArmModel& m, World world, const std::vecto
     for (const Vec3& e : ends)
       if (e.norm() > 1e-9 && std::none_of(kept.begin(), kept.end(), [&](const Vec3& k) { return (k - e).norm() <= 1e-9; }))
         kept.push_back(e);
+    // An end on the segment to another (a tool point inside the link) adds nothing.
+    std::erase_if(kept, [&](const Vec3& e) {
+      return std::any_of(kept.begin(), kept.end(), [&](const Vec3& f) {
+        return &f != &e && e.cross(f).norm() <= 1e-9 * f.squaredNorm() && e.dot(f) < f.squaredNorm();
+      });
+    });
     if (kept.empty() && !flexible) kept.push_back(Vec3::Zero());  // a sphere
     for (const Vec3& e : kept) {
       CollisionCapsule k;

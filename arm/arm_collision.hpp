@@ -4,7 +4,8 @@
 // Capsules, in the body's frame (the `collision:` block overrides a part's radius or leaves it out):
 //   a rigid body with mass   one capsule from its origin to each of: each child's joint origin, twice its
 //                            centre of mass (a uniform body's far end), each tool point on it (points at
-//                            the origin or repeated dropped; none left: a sphere at the origin); radius
+//                            the origin, repeated or on another's segment dropped; none left: a sphere
+//                            at the origin); radius
 //                            sqrt(d' I d / m), I its inertia about the centre of mass and d the capsule's
 //                            direction (a thin tube's outer radius), a sphere's sqrt(5 tr(I) / 6 m);
 //   a flexible link          per segment body, from its origin to its child's joint origin (the tip

@@ -17,7 +17,7 @@ std::vector<std::string> arm_metric_columns(const ArmModel& m) {
   for (const LinkTip& l : m.links)
     for (const char* s : {"_peak_deflection_m", "_residual_m", "_sag_m"}) c.push_back(l.name + s);
   if (m.collision.active()) {
-    for (const char* s : {"min_clearance_m", "min_clearance_time_s", "first_contact_s", "contacts"}) c.push_back(s);
+    for (const char* s : {"min_clearance_m", "min_clearance_time_s", "first_contact_s", "contacts", "contact"}) c.push_back(s);
     for (const std::string& p : m.collision.parts) c.push_back(p + "_clearance_m");
     for (const Obstacle& o : m.collision.world.obstacles) c.push_back(o.name + "_clearance_m");
   }
@@ -187,6 +187,7 @@ void ClearanceMetrics::result(double* out) const {
   out[1] = t_min_;
   out[2] = first_contact_;
   out[3] = static_cast<double>(contacts_);
+  out[4] = contacts_ > 0 ? 1.0 : 0.0;
   for (std::size_t i = 1; i < mins_.size(); ++i) out[kLeading + i - 1] = mins_[i];
 }
 

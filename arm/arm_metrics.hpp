@@ -25,6 +25,7 @@
 //   min_clearance_time_s      when it was least (the first such sample)
 //   first_contact_s           when the clearance first reached 0, interpolated between samples; NaN = never
 //   contacts                  how many times it reached 0 (from above, or at the start)
+//   contact                   1 when it did at all, else 0 (its mean over a Monte Carlo study is P(contact))
 //   <part>_clearance_m        each part's least clearance (a rigid body or a flexible link)
 //   <obstacle>_clearance_m    each obstacle's least clearance to the arm
 //   settling_horizon_s        the longest settling time the run can confirm: its window less that dwell
@@ -92,9 +93,10 @@ class ClearanceMetrics {
   explicit ClearanceMetrics(std::size_t columns) : mins_(columns, std::numeric_limits<double>::infinity()) {}
   // Sample at t: c[i * stride] for the trace's columns "clearance", "<part>.clearance", ...
   void add(double t, const double* c, std::size_t stride);
-  // min_clearance_m, min_clearance_time_s, first_contact_s, contacts, then each part's and obstacle's.
+  // min_clearance_m, min_clearance_time_s, first_contact_s, contacts, contact, then each part's and
+  // obstacle's.
   void result(double* out) const;
-  static constexpr std::size_t kLeading = 4;
+  static constexpr std::size_t kLeading = 5;
 
  private:
   std::vector<double> mins_;

@@ -130,6 +130,7 @@ struct KeyMetrics {
   std::string settling, overshoot, deflection, residual, torque;  // result columns
   std::string what;                                               // "tip" or "tool", for titles
   std::string deflection_title;
+  bool clearance = false;  // an arm with a world: min_clearance_m and contact too (arm/arm_metrics.hpp)
   std::vector<std::string> all() const { return {settling, overshoot, deflection, residual, torque}; }
 };
 
@@ -150,7 +151,52 @@ KeyMetrics key_metrics(const ResultTable& t) {
     if (c.ends_with("_residual_m") && k.residual == tool + "_final_error_m") k.residual = c;
     if (c.ends_with("_peak_torque_Nm") && k.torque.empty()) k.torque = c;
   }
+  k.clearance = std::find(t.columns.begin(), t.columns.end(), "min_clearance_m") != t.columns.end();
   return k;
+}
+
+// A heat map over parameters x and y of the table: each cell's value from its rows (NaN: none).
+template <class Cell>
+HeatMap make_heat_map(const ResultTable& t, const std::string& x, const std::string& y, const Cell& cell) {
+  HeatMap h;
+  h.x_label = x;
+  h.y_label = y;
+  const auto groups = make_groups({column_values(t, x), column_values(t, y)});
+  for (const auto& g : groups) {
+    if (std::find(h.x.begin(), h.x.end(), g.key[0]) == h.x.end()) h.x.push_back(g.key[0]);
+    if (std::find(h.y.begin(), h.y.end(), g.key[1]) == h.y.end()) h.y.push_back(g.key[1]);
+  }
+  std::sort(h.x.begin(), h.x.end());
+  std::sort(h.y.begin(), h.y.end());
+  h.values.assign(h.x.size() * h.y.size(), NAN);
+  for (const auto& g : groups) {
+    const auto ix = std::find(h.x.begin(), h.x.end(), g.key[0]) - h.x.begin();
+    const auto iy = std::find(h.y.begin(), h.y.end(), g.key[1]) - h.y.begin();
+    h.values[iy * h.x.size() + ix] = cell(g.rows);
+  }
+  return h;
+}
+
+// An arm with a world: the least clearance and contact by the first two parameters, and its heat
+// map (the least over the other parameters: the worst case of each cell).
+std::string report_clearance_grid(const Study& study, const ResultTable& t, const std::string& dir) {
+  const auto& p = t.params;
+  std::string md = "## Least clearance and contact by " + p[0] + (p.size() > 1 ? " and " + p[1] : "") + "\n\n";
+  md += format_groupby_md(t, std::vector<std::string>(p.begin(), p.begin() + std::min<std::size_t>(2, p.size())),
+                          {"min_clearance_m", "contact"}, study.specs);
+  if (p.size() >= 2) {
+    const auto clearance = column_values(t, "min_clearance_m");
+    HeatMap h = make_heat_map(t, p[0], p[1], [&](const std::vector<int>& rows) {
+      double least = INFINITY;
+      for (int r : rows) least = std::min(least, clearance[r]);
+      return least;
+    });
+    h.title = "least clearance of the arm (m; <= 0: contact), the least over the other parameters";
+    h.value_label = "least clearance (m)";
+    render_heat_map(h, dir + "/heatmap_clearance.png");
+    md += "Heat map: heatmap_clearance.png.\n\n";
+  }
+  return md;
 }
 
 // Grid and centred designs: settling time over the first two parameters, and against each.
@@ -178,26 +224,13 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   for (std::size_t r = 0; r < settle.size() && !horizon.empty(); ++r) censored |= std::isnan(settle[r]) && !std::isnan(horizon[r]);
   if (p.size() >= 2) {
     // Heat map: mean settling over the other parameters (restricted mean where some did not settle).
-    HeatMap h;
+    HeatMap h = make_heat_map(t, p[0], p[1], [&](const std::vector<int>& rows) {
+      const Summary s = summary_of(rows);
+      return at_most_horizon(s.mean, s);
+    });
     h.title = censored ? km.what + " settling time (restricted mean over the other parameters; not settled counted at the horizon)"
                        : km.what + " settling time (mean over the other parameters)";
-    h.x_label = p[0];
-    h.y_label = p[1];
     h.value_label = km.what + " settling time (s)";
-    const auto groups = make_groups({column_values(t, p[0]), column_values(t, p[1])});
-    for (const auto& g : groups) {
-      if (std::find(h.x.begin(), h.x.end(), g.key[0]) == h.x.end()) h.x.push_back(g.key[0]);
-      if (std::find(h.y.begin(), h.y.end(), g.key[1]) == h.y.end()) h.y.push_back(g.key[1]);
-    }
-    std::sort(h.x.begin(), h.x.end());
-    std::sort(h.y.begin(), h.y.end());
-    h.values.assign(h.x.size() * h.y.size(), NAN);
-    for (const auto& g : groups) {
-      const auto ix = std::find(h.x.begin(), h.x.end(), g.key[0]) - h.x.begin();
-      const auto iy = std::find(h.y.begin(), h.y.end(), g.key[1]) - h.y.begin();
-      const Summary s = summary_of(g.rows);
-      h.values[iy * h.x.size() + ix] = at_most_horizon(s.mean, s);
-    }
     render_heat_map(h, dir + "/heatmap_settling.png");
   }
   // Settling against each parameter: median with the 5-95 % band over the others.
@@ -311,6 +344,7 @@ std::string report_monte_carlo(const Study& study, const ResultTable& t, const s
   std::vector<std::string> shown;
   for (const std::string& c : km.all())
     if (!c.empty()) shown.push_back(c);
+  if (km.clearance) shown.insert(shown.end(), {"min_clearance_m", "contact"});
   md += format_monte_carlo_md(t, shown, study.specs, study.seed);
   const auto settle = column_values(t, km.settling);
   const auto horizon = horizon_values(t, km.settling);
@@ -341,6 +375,15 @@ std::string report_monte_carlo(const Study& study, const ResultTable& t, const s
   d.x_label = km.deflection_title + " (m)";
   d.values = column_values(t, km.deflection);
   render_histogram(d, dir + "/hist_peak_deflection.png");
+  if (km.clearance) {
+    Histogram c;
+    c.title = "least clearance of the arm (<= 0: contact)";
+    c.x_label = "least clearance (m)";
+    c.values = column_values(t, "min_clearance_m");
+    c.markers.push_back(0.0);
+    c.marker_labels.push_back("contact");
+    render_histogram(c, dir + "/hist_clearance.png");
+  }
   return md;
 }
 
@@ -425,7 +468,10 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     if (!study.case_labels.empty()) md += report_cases(study, table, dir);
     else switch (study.design.kind) {
       case DesignKind::kGrid:
-      case DesignKind::kCentered: md += report_grid(study, table, dir); break;
+      case DesignKind::kCentered:
+        md += report_grid(study, table, dir);
+        if (key_metrics(table).clearance) md += report_clearance_grid(study, table, dir);
+        break;
       case DesignKind::kSaltelli:
       case DesignKind::kMorris: md += report_sensitivity(study, table, dir); break;
       default: md += report_monte_carlo(study, table, dir); break;

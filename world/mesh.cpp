@@ -50,6 +50,10 @@ std::shared_ptr<const MeshGeometry> make_mesh(std::vector<Vec3> vertices, std::v
   m->vertices = std::move(vertices);
   m->triangles = std::move(triangles);
   m->bvh = std::move(bvh);
+  Vec3 lo = m->vertices.front(), hi = lo;
+  for (const Vec3& v : m->vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  m->box_centre = 0.5 * (lo + hi);
+  m->box_size = hi - lo;
   return m;
 }
 

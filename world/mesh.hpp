@@ -16,6 +16,8 @@ struct MeshGeometry {
   std::vector<Vec3> vertices;                 // the obstacle's frame, m (scaled)
   std::vector<std::array<int, 3>> triangles;  // vertex indices
   std::shared_ptr<const void> bvh;            // FCL's BVHModel<OBBRSSd> (mesh.cpp keeps FCL's headers)
+  Vec3 box_centre = Vec3::Zero();             // the vertices' axis-aligned bounding box, the obstacle's frame, m
+  Vec3 box_size = Vec3::Zero();
 };
 
 // The mesh of vertices and triangles (the obstacle's frame, m) with its bounding-volume tree. Throws

@@ -164,6 +164,14 @@ double calc_signed_distance(const Obstacle& o, const Vec3& p) {
 
 double calc_clearance_bound(const Obstacle& o, const Vec3& a, const Vec3& b, double r) {
   if (o.type == ShapeType::kPlane || o.type == ShapeType::kBore) return -kInf;
+  if (o.type == ShapeType::kMesh) {  // the clearance to the mesh's bounding box (exact for a box, cheap)
+    Obstacle box;
+    box.type = ShapeType::kBox;
+    box.rotation = o.rotation;
+    box.position = o.position + o.rotation * o.mesh->box_centre;
+    box.size = o.mesh->box_size;
+    return calc_clearance(box, a, b, r).distance;
+  }
   return (0.5 * (a + b) - o.position).norm() - 0.5 * (b - a).norm() - r - o.bound;
 }
 

@@ -78,7 +78,7 @@ Clearance calc_capsule_clearance(const Vec3& a0, const Vec3& b0, double r0, cons
                                  double r1);
 
 // A lower bound of calc_clearance (the broad phase): the distance of the segment's bounding sphere to
-// the obstacle's. -infinity for a plane.
+// the obstacle's; a mesh's: the clearance to its bounding box. -infinity for a plane and a bore.
 double calc_clearance_bound(const Obstacle& o, const Vec3& a, const Vec3& b, double r);
 
 // The closest points of segments [p0, q0] and [p1, q1]: the parameters s, t in [0, 1] of

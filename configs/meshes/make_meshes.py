@@ -3,7 +3,7 @@
 python3 make_meshes.py
   pump.stl  a mixer pump hanging in the tank: a 12-sided column 0.25 m across and 5 m tall over a
             12-sided head 0.7 m across and 1 m tall, its origin at the head's top centre;
-  dome.stl  the tank's concrete dome around the riser: a 48-sided ring 0.3 m thick from the riser's
+  dome.stl  the tank's concrete dome around the riser: a 24-sided ring 0.3 m thick from the riser's
             bore (0.3 m radius) out to 3 m, its origin at the centre of its underside."""
 import math
 
@@ -47,5 +47,5 @@ def write(path, name, tris):
         f.write("endsolid %s\n" % name)
 
 write("pump.stl", "pump", prism(0.125, 0.0, 5.0) + prism(0.35, -1.0, 0.0))
-# The ring's bore a little wider than the riser's (its flats at the riser's radius, 0.3 / cos(pi / 48)).
-write("dome.stl", "dome", ring(0.3 / math.cos(math.pi / 48), 3.0, 0.0, 0.3))
+# The ring's bore a little wider than the riser's (its flats at the riser's radius, 0.3 / cos(pi / 24)).
+write("dome.stl", "dome", ring(0.3 / math.cos(math.pi / 24), 3.0, 0.0, 0.3, n=24))

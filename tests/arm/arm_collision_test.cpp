@@ -105,6 +105,7 @@ TEST(ArmCollision, ARunThroughTheFloorFirstTouchesWhereTheLinksAngleCrossesTheTo
   EXPECT_LE(metric("first_contact_s"), t[k]);
   EXPECT_NEAR(metric("first_contact_s"), t[k - 1] + (t[k] - t[k - 1]) * c[k - 1] / (c[k - 1] - c[k]), 1e-15);
   EXPECT_EQ(metric("contacts"), 1.0);  // it stays down there
+  EXPECT_EQ(metric("contact"), 1.0);
   EXPECT_GT(metric("min_clearance_time_s"), 0.9);
   // Short of the floor: never a contact.
   const ArmModel short_of_it = arm_from(pendulum_over_floor(0.7));
@@ -112,7 +113,8 @@ TEST(ArmCollision, ARunThroughTheFloorFirstTouchesWhereTheLinksAngleCrossesTheTo
   const std::vector<double> v2 = calc_arm_metrics(short_of_it, r2.traces[0], r2.status[0]);
   const std::size_t first = static_cast<std::size_t>(std::find(cols.begin(), cols.end(), "first_contact_s") - cols.begin());
   EXPECT_TRUE(std::isnan(v2[first]));
-  EXPECT_EQ(v2[first + 1], 0.0);
+  EXPECT_EQ(v2[first + 1], 0.0);  // contacts
+  EXPECT_EQ(v2[first + 2], 0.0);  // contact
   EXPECT_GT(v2[first - 2], 0.1);
 }
 
