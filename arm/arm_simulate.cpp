@@ -63,11 +63,11 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
   if (a.collision.columns() != b.collision.columns() || a.collision.parts != b.collision.parts)
     return "the world or the collision shapes differ";
   if (a.tools.size() != b.tools.size()) return "the tools differ";
+  for (std::size_t t = 0; t < a.tools.size(); ++t)
+    if (a.tools[t].name != b.tools[t].name) return "the tools differ";
   if (a.monitors.size() != b.monitors.size()) return "the monitors differ";
   for (std::size_t i = 0; i < a.monitors.size(); ++i)
     if (a.monitors[i].name != b.monitors[i].name) return "the monitors differ";
-  for (std::size_t t = 0; t < a.tools.size(); ++t)
-    if (a.tools[t].name != b.tools[t].name) return "the tools differ";
   if (a.control_period != b.control_period || a.duration != b.duration || a.substeps != b.substeps ||
       a.integrator != b.integrator || a.spec.rtol != b.spec.rtol || a.spec.atol != b.spec.atol)
     return "the rate, duration, substeps, integrator or its tolerances differ";
