@@ -21,6 +21,10 @@ std::vector<std::string> arm_metric_columns(const ArmModel& m) {
     for (const std::string& p : m.collision.parts) c.push_back(p + "_clearance_m");
     for (const Obstacle& o : m.collision.world.obstacles) c.push_back(o.name + "_clearance_m");
   }
+  if (!m.monitors.empty()) {
+    for (const ArmMonitor& o : m.monitors) c.push_back(o.name + "_trip_s");
+    for (const char* s : {"trip_s", "trip_cause", "stopping_distance_m", "stop_time_s"}) c.push_back(s);
+  }
   c.push_back("settling_horizon_s");
   return c;
 }
@@ -163,7 +167,24 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
       cm.add(t[k], row.data(), 1);
     }
     cm.result(&v[c]);
-    c = v.size() - 1;
+    c += ClearanceMetrics::kLeading + nc - 1;
+  }
+  if (!m.monitors.empty()) {
+    const std::size_t nm = m.monitors.size();
+    std::vector<const std::vector<double>*> tripped;
+    for (const ArmMonitor& o : m.monitors) tripped.push_back(&tr.column(o.name + ".tripped"));
+    const std::string& p = m.tools.front().name;
+    const std::vector<double>*x[3] = {&tr.column(p + ".x"), &tr.column(p + ".y"), &tr.column(p + ".z")};
+    MonitorMetrics mm(m);
+    std::vector<double> row(nm);
+    double tool[3];
+    for (std::size_t k = 0; k < n; ++k) {
+      for (std::size_t i = 0; i < nm; ++i) row[i] = (*tripped[i])[k];
+      for (std::size_t i = 0; i < 3; ++i) tool[i] = (*x[i])[k];
+      mm.add(t[k], row.data(), tool, 1);
+    }
+    mm.result(&v[c]);
+    c += nm + MonitorMetrics::kTrailing;
   }
   v[c++] = std::max(0.0, t[n - 1] - t0 - rule.dwell);
   return v;
@@ -189,6 +210,58 @@ void ClearanceMetrics::result(double* out) const {
   out[3] = static_cast<double>(contacts_);
   out[4] = contacts_ > 0 ? 1.0 : 0.0;
   for (std::size_t i = 1; i < mins_.size(); ++i) out[kLeading + i - 1] = mins_[i];
+}
+
+MonitorMetrics::MonitorMetrics(const ArmModel& m) : trip_t_(m.monitors.size(), std::nan("")) {
+  for (const ArmMonitor& o : m.monitors) {
+    actions_.push_back(o.action);
+    delays_.push_back(o.delay_samples);
+  }
+}
+
+void MonitorMetrics::Path::add(long k, double t, double step, double dt) {
+  if (start < 0 || k < start) return;
+  if (k == start) {
+    started = true;
+    t_start = t_moved = t;
+    return;
+  }
+  distance += step;
+  moving = step / dt >= kRestSpeed;
+  if (moving) t_moved = t;
+}
+
+void MonitorMetrics::add(double t, const double* tripped, const double* tool, std::size_t stride) {
+  // The trips at this sample (in monitor order: the lowest index first among those of one sample).
+  for (std::size_t i = 0; i < trip_t_.size(); ++i) {
+    if (!(tripped[i * stride] != 0.0) || !std::isnan(trip_t_[i])) continue;
+    trip_t_[i] = t;
+    if (first_ < 0) {
+      first_ = static_cast<int>(i);
+      from_first_.start = n_ + delays_[i];
+    }
+    if (acting_ < 0 && actions_[i] != MonitorAction::kRecord) {
+      acting_ = static_cast<int>(i);
+      from_acting_.start = n_ + delays_[i];
+    }
+  }
+  const Vec3 x(tool[0], tool[stride], tool[2 * stride]);
+  const double step = n_ > 0 ? (x - previous_).norm() : 0.0, dt = t - t_previous_;
+  from_first_.add(n_, t, step, dt);
+  from_acting_.add(n_, t, step, dt);
+  previous_ = x;
+  t_previous_ = t;
+  ++n_;
+}
+
+void MonitorMetrics::result(double* out) const {
+  const std::size_t nm = trip_t_.size();
+  for (std::size_t i = 0; i < nm; ++i) out[i] = trip_t_[i];
+  const Path& p = acting_ >= 0 ? from_acting_ : from_first_;
+  out[nm] = first_ >= 0 ? trip_t_[static_cast<std::size_t>(first_)] : std::nan("");
+  out[nm + 1] = static_cast<double>(first_ + 1);
+  out[nm + 2] = p.started ? p.distance : std::nan("");
+  out[nm + 3] = p.started && !p.moving ? p.t_moved - p.t_start : std::nan("");
 }
 
 std::string calc_arm_status(const ArmModel& m, LaneStatus lane, const std::vector<std::string>& columns,

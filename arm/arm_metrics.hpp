@@ -28,6 +28,17 @@
 //   contact                   1 when it did at all, else 0 (its mean over a Monte Carlo study is P(contact))
 //   <part>_clearance_m        each part's least clearance (a rigid body or a flexible link)
 //   <obstacle>_clearance_m    each obstacle's least clearance to the arm
+// With safety monitors (`monitors:`), from the trace's <monitor>.tripped columns and the first tool's point:
+//   <monitor>_trip_s          when each monitor tripped, s; NaN = never
+//   trip_s                    the first trip of any monitor; NaN = none
+//   trip_cause                the 1-based index (in `monitors:` order) of the monitor that tripped first, 0 = none
+//   stopping_distance_m       the first tool's path length (the sum of its steps between samples) from the
+//                             action's start (the acting monitor's trip plus its delay; the acting monitor
+//                             is the first to trip whose action is not `record`, else the first to trip)
+//                             to the end of the run; NaN without a trip or when the action has not started
+//   stop_time_s               from the action's start to the last sample at which the first tool still moved
+//                             (its step from the sample before, over the sample time, >= 1 mm/s), 0 when it
+//                             never moved after; NaN without a trip, or when it still moved at the last sample
 //   settling_horizon_s        the longest settling time the run can confirm: its window less that dwell
 //                             (a NaN settling time is right-censored there, results/censoring.hpp)
 #pragma once
@@ -104,6 +115,37 @@ class ClearanceMetrics {
   double t_prev_ = 0.0, c_prev_ = std::numeric_limits<double>::infinity();
   long contacts_ = 0;
   bool started_ = false;
+};
+
+// The monitor metrics (above), fed the trace's monitor columns one sample at a time: calc_arm_metrics and
+// its online form both use it.
+class MonitorMetrics {
+ public:
+  explicit MonitorMetrics(const ArmModel& m);
+  // Sample at t: tripped[i * stride] the column <monitor i>.tripped, tool[0], tool[stride], tool[2 stride]
+  // the first tool's x, y, z.
+  void add(double t, const double* tripped, const double* tool, std::size_t stride);
+  // <monitor>_trip_s per monitor, then trip_s, trip_cause, stopping_distance_m, stop_time_s.
+  void result(double* out) const;
+  static constexpr std::size_t kTrailing = 4;
+  static constexpr double kRestSpeed = 1e-3;  // m/s: the tool at rest below it
+
+ private:
+  // The first tool's path from an action's start (a sample) on.
+  struct Path {
+    long start = -1;                  // -1: not known yet
+    double distance = 0.0, t_start = 0.0, t_moved = 0.0;
+    bool started = false, moving = false;  // the start reached / the last step a move
+    void add(long k, double t, double step, double dt);
+  };
+  std::vector<MonitorAction> actions_;
+  std::vector<long> delays_;
+  std::vector<double> trip_t_;
+  int first_ = -1, acting_ = -1;
+  Path from_first_, from_acting_;
+  Vec3 previous_ = Vec3::Zero();
+  double t_previous_ = 0.0;
+  long n_ = 0;
 };
 
 // "ok", "not_settled" (a tool's settling time is NaN), or the lane's failure.

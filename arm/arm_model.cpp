@@ -62,6 +62,73 @@ std::string tool_names(const ArmModel& m) {
   return s;
 }
 
+// The safety monitors (`monitors:`): each one's type, action, watched joint, link or tool by index, its
+// samples; errors at monitors.NAME.KEY on the block's line. After the tools, links, collision, period.
+void make_monitors(ArmModel& m) {
+  const ArmSpec& spec = m.spec;
+  const double T = m.control_period;
+  // Whole controller samples of a time, rounded up (within 1e-9 of a sample: as calc_arm_samples).
+  auto samples_of = [&](double t) { return static_cast<long>(std::ceil(t / T - 1e-9)); };
+  for (const MonitorSpec& s : spec.monitors) {
+    const std::string key = "monitors." + s.name + ".";
+    auto fail = [&](const std::string& k, const std::string& why) { throw ConfigError(spec.source, s.line, key + k, why); };
+    ArmMonitor o;
+    o.name = s.name;
+    if (!parse_monitor_type(s.type, o.type))
+      fail("type", "unknown monitor type '" + s.type + "' (" + std::string(kMonitorTypes) + ")");
+    if (!parse_monitor_action(s.action, o.action))
+      fail("action", "unknown action '" + s.action + "' (record, hold, stop, brake)");
+    if (o.type == MonitorType::kJointTorque || o.type == MonitorType::kJointSpeed) {
+      for (std::size_t j = 0; j < m.actuated.size(); ++j)
+        if (m.actuated[j].name == s.joint) o.joint = static_cast<int>(j);
+      if (o.joint < 0) {
+        std::string names;
+        for (const ActuatedJoint& a : m.actuated) names += (names.empty() ? "" : ", ") + a.name;
+        fail("joint", "no actuated joint named '" + s.joint + "' (actuated: " + names + ")");
+      }
+    }
+    if (o.type == MonitorType::kDeflection) {
+      for (std::size_t i = 0; i < m.links.size(); ++i)
+        if (m.links[i].name == s.link) o.link = static_cast<int>(i);
+      if (o.link < 0) fail("link", "no flexible link named '" + s.link + "'");
+    }
+    if (!s.tool.empty()) {
+      o.tool = -1;
+      for (std::size_t t = 0; t < m.tools.size(); ++t)
+        if (m.tools[t].name == s.tool) o.tool = static_cast<int>(t);
+      if (o.tool < 0) fail("tool", "no tool named '" + s.tool + "' (tools: " + tool_names(m) + ")");
+    }
+    if (o.type == MonitorType::kClearance && !m.collision.active())
+      fail("type", "a clearance monitor needs a world (`world:`) or another arm to measure the clearance to");
+    if (o.type == MonitorType::kWorkspace)
+      for (int i = 0; i < 3; ++i)
+        if (!(s.lower[i] < s.upper[i])) fail("upper", "must exceed lower in x, y and z");
+    if (!std::isfinite(s.limit)) fail("limit", "must be finite");
+    o.limit = s.limit;
+    o.lower = s.lower;
+    o.upper = s.upper;
+    o.command_sample = samples_of(s.time);
+    o.delay_samples = samples_of(s.delay);
+    o.deceleration = s.deceleration;
+    o.brake_torque = s.brake_torque;
+    if (o.action == MonitorAction::kBrake && o.brake_torque == 0.0)
+      for (const ActuatedJoint& a : m.actuated)
+        if (!(a.torque_limit > 0.0))
+          fail("brake_torque", "missing: joint " + a.name + " has no torque limit to saturate the brake at");
+    for (const ArmMonitor& p : m.monitors)
+      if (p.name == o.name) fail("type", "a monitor of that name is given already");
+    m.monitors.push_back(std::move(o));
+  }
+  // The brakes' gains: each actuated joint's own inertia at the start over the sample time.
+  bool brake = false;
+  for (const ArmMonitor& o : m.monitors) brake |= o.action == MonitorAction::kBrake;
+  if (!brake) return;
+  Eigen::MatrixXd M(m.tree.nv(), m.tree.nv());
+  TreeWorkspace ws(m.tree);
+  calc_mass_matrix(m.tree, m.q0, M, ws);
+  for (const ActuatedJoint& a : m.actuated) m.brake_gain.push_back(M(a.dof, a.dof) / T);
+}
+
 // The joint info of the body whose joint is `dof`.
 const JointInfo& joint_info(const ArmSpec& spec, const Tree& tree, int dof) {
   for (int i = 0; i < tree.num_bodies(); ++i)
@@ -453,6 +520,7 @@ ArmModel make_arm(const ArmSpec& spec) {
   m.q0 = calc_arm_sag(m, start).q;
   m.qd0 = Eigen::VectorXd::Zero(nv);
   set_hold_torques(m, m.q0);
+  make_monitors(m);
 
   // Closed-loop modes: the integrator's substeps, and the notches and shapers designed on them.
   m.integrator = spec.integrator_given ? spec.integrator : (m.links.empty() ? Integrator::kRk4 : Integrator::kSdirk2);
@@ -518,6 +586,27 @@ ArmModel make_arm(const ArmSpec& spec) {
     }
   }
   return m;
+}
+
+bool parse_monitor_type(const std::string& name, MonitorType& out) {
+  static const std::pair<const char*, MonitorType> types[] = {
+      {"joint_torque", MonitorType::kJointTorque}, {"joint_speed", MonitorType::kJointSpeed},
+      {"deflection", MonitorType::kDeflection},    {"tool_speed", MonitorType::kToolSpeed},
+      {"workspace", MonitorType::kWorkspace},      {"clearance", MonitorType::kClearance},
+      {"command", MonitorType::kCommand}};
+  for (const auto& [n, t] : types)
+    if (name == n) return out = t, true;
+  return false;
+}
+
+bool parse_monitor_action(const std::string& name, MonitorAction& out) {
+  static const std::pair<const char*, MonitorAction> actions[] = {{"record", MonitorAction::kRecord},
+                                                                  {"hold", MonitorAction::kHold},
+                                                                  {"stop", MonitorAction::kStop},
+                                                                  {"brake", MonitorAction::kBrake}};
+  for (const auto& [n, a] : actions)
+    if (name == n) return out = a, true;
+  return false;
 }
 
 StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& pose) {

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,6 +52,10 @@ struct JointControlSpec {
   double torque_offset = 0.0;  // a constant load torque the drive must supply, N·m (N): the joint gets
                                // tau - torque_offset (the rig's hub_torque_offset)
   ChannelSpec angle_sensor;    // what the controller measures of q (sensors.angle), rad (m)
+  // A slipped encoder (sensors.angle.fault_time, fault_offset): from the first controller sample at or
+  // after fault_time the measured angle is off by fault_offset (added to what the channel gives).
+  double angle_fault_time = std::numeric_limits<double>::infinity();  // s; infinity = never
+  double angle_fault_offset = 0.0;                                    // rad (m)
   ChannelSpec rate_sensor;     // and of qd (sensors.rate), rad/s (m/s)
   bool drive = false;          // a compliant drive train (`drive:`): the tree holds the joint's rotor and
                                // its twist "<joint>.twist" (insert_drive_train); the joint is the rotor's
@@ -82,6 +87,24 @@ struct ToolSpec {
   int line = 0;                      // where it is written, for errors
 };
 
+// One safety monitor as the user writes it (`monitors: {NAME: {type, ...}}`, docs/formats.md, "Safety
+// monitors"): what it watches, its limit, and what the arm does when it trips.
+struct MonitorSpec {
+  std::string name;                  // heads its trace column NAME.tripped and metric NAME_trip_s
+  std::string type;                  // joint_torque, joint_speed, deflection, tool_speed, workspace, clearance, command
+  std::string joint;                 // joint_torque, joint_speed: an actuated joint
+  std::string link;                  // deflection: a flexible link
+  std::string tool;                  // tool_speed, workspace: "" = the first tool
+  double limit = 0.0;                // N·m (N), rad/s (m/s), m, m/s or m by type
+  Vec3 lower = Vec3::Zero(), upper = Vec3::Zero();  // workspace: the box, base frame, m
+  double time = 0.0;                 // command: when the operator's stop comes, s
+  std::string action = "record";     // record, hold, stop, brake
+  double deceleration = 0.0;         // stop: rad/s² (m/s²)
+  double delay = 0.0;                // s from the trip to the action (whole controller samples, rounded up)
+  double brake_torque = 0.0;         // brake: N·m (N); 0 = each joint's torque limit
+  int line = 0;                      // where it is written, for errors
+};
+
 struct ArmSpec {
   std::string source;                // the file, for errors
   std::string description;
@@ -107,6 +130,7 @@ struct ArmSpec {
   std::uint64_t seed = 1;            // sensor noise (simulation.seed); a study gives each variant its own
   World world;                       // `world:` (world/world_yaml.hpp): the obstacles
   std::vector<CollisionPartSpec> collision;  // `collision:`: the parts' overrides
+  std::vector<MonitorSpec> monitors; // `monitors:` in file order
 };
 
 // A flexible link's tip, for its deflection.
@@ -147,6 +171,31 @@ struct ArmTool {
   Vec3 point = Vec3::Zero();         // in body's frame, m
 };
 
+// A safety monitor, derived (arm_simulate.hpp evaluates it at every controller sample from the
+// outputs row, before the control law).
+inline constexpr const char* kMonitorTypes =
+    "joint_torque, joint_speed, deflection, tool_speed, workspace, clearance, command";
+enum class MonitorType { kJointTorque, kJointSpeed, kDeflection, kToolSpeed, kWorkspace, kClearance, kCommand };
+enum class MonitorAction { kRecord, kHold, kStop, kBrake };
+// A type's or action's name (as `monitors:` writes it) to its value; false when unknown.
+bool parse_monitor_type(const std::string& name, MonitorType& out);
+bool parse_monitor_action(const std::string& name, MonitorAction& out);
+
+struct ArmMonitor {
+  std::string name;
+  MonitorType type = MonitorType::kCommand;
+  MonitorAction action = MonitorAction::kRecord;
+  int joint = -1;                    // index in ArmModel::actuated (joint_torque, joint_speed)
+  int link = -1;                     // index in ArmModel::links (deflection)
+  int tool = 0;                      // index in ArmModel::tools (tool_speed, workspace)
+  double limit = 0.0;
+  Vec3 lower = Vec3::Zero(), upper = Vec3::Zero();
+  long command_sample = 0;           // command: the first sample at or after its time
+  long delay_samples = 0;            // ceil(delay / T)
+  double deceleration = 0.0;         // stop
+  double brake_torque = 0.0;         // brake: 0 = each joint's torque limit
+};
+
 struct ArmModel {
   ArmSpec spec;
   Tree tree;
@@ -168,6 +217,11 @@ struct ArmModel {
   std::vector<double> resonances;    // closed-loop resonances at q0 (zeta < 0.3), ascending, rad/s
   double move_end = 0.0;             // the last waypoint's time, s
   ArmCollision collision;            // the capsules, obstacles and pairs between arms (arm_collision.hpp)
+  std::vector<ArmMonitor> monitors;  // `monitors:` in file order
+  // A brake's rate gain per actuated joint, k_b = M_jj(q0) / T: the joint's own inertia at the start over
+  // the sample time (in its linear zone a sampled brake kills the joint's rate in about one sample).
+  // N·m·s/rad (N·s/m); empty without a brake monitor.
+  std::vector<double> brake_gain;
 };
 
 // Derives and validates the model. Throws ConfigError naming spec.source and the key: an unknown or

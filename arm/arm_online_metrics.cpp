@@ -65,7 +65,14 @@ OnlineArmRun::OnlineArmRun(const ArmModel& m)
                       OnlineResidual(rule_.t0, kInf), OnlineResidual(rule_.t0, kInf)});
   if (m.collision.active()) {
     clearance_column_ = column_index(names, "clearance");
+    clearance_columns_ = m.collision.columns();
     clearance_.emplace(m.collision.columns());
+  }
+  if (!m.monitors.empty()) {
+    monitor_column_ = column_index(names, m.monitors.front().name + ".tripped");
+    monitor_tool_ = column_index(names, m.tools.front().name + ".x");
+    monitors_.emplace(m);
+    monitor_count_ = m.monitors.size();
   }
 }
 
@@ -105,6 +112,7 @@ void OnlineArmRun::add(const double* row, std::size_t stride) {
     if (n_ == 0) l.sag = std::hypot(dy, dz);
   }
   if (clearance_) clearance_->add(t, row + clearance_column_ * stride, stride);
+  if (monitors_) monitors_->add(t, row + monitor_column_ * stride, row + monitor_tool_ * stride, stride);
   t_last_ = t;
   ++n_;
 }
@@ -136,7 +144,11 @@ std::vector<double> OnlineArmRun::result(LaneStatus status) const {
   }
   if (clearance_) {
     clearance_->result(&v[c]);
-    c = v.size() - 1;
+    c += ClearanceMetrics::kLeading + clearance_columns_ - 1;
+  }
+  if (monitors_) {
+    monitors_->result(&v[c]);
+    c += monitor_count_ + MonitorMetrics::kTrailing;
   }
   v[c++] = std::max(0.0, t_last_ - t0 - rule_.dwell);
   return v;

@@ -10,7 +10,8 @@
 //           where the trace keeps every column;
 //   links   peak deflection by running max, residual by running min and max after the move, sag from
 //           the first sample;
-//   world   the clearances by ClearanceMetrics, as the stored form.
+//   world   the clearances by ClearanceMetrics, as the stored form;
+//   monitors  the trips, stopping distance and time by MonitorMetrics, as the stored form.
 // simulate_arms feeds it (ArmRunOptions::online) when a study writes no traces (jobs/runner.cpp).
 #pragma once
 
@@ -81,7 +82,9 @@ class OnlineArmRun {
   std::vector<Tool> tools_;
   std::vector<Link> links_;
   std::optional<ClearanceMetrics> clearance_;  // with a world: from the trace's column "clearance" on
-  std::size_t clearance_column_ = 0;
+  std::size_t clearance_column_ = 0, clearance_columns_ = 0;
+  std::optional<MonitorMetrics> monitors_;   // with monitors: from the first <monitor>.tripped column on
+  std::size_t monitor_column_ = 0, monitor_tool_ = 0, monitor_count_ = 0;  // and the first tool's x
   std::vector<double> t_;  // the sample times (kept with tools only)
   double t_last_ = 0.0;
   long n_ = 0;             // samples added

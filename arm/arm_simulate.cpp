@@ -42,6 +42,7 @@ std::vector<std::string> arm_trace_names(const ArmModel& m) {
   for (const ActuatedJoint& a : m.actuated)
     if (a.control.hydraulics.enabled)
       for (const char* s : {".pressure_a", ".pressure_b"}) n.push_back(a.name + s);
+  for (const ArmMonitor& o : m.monitors) n.push_back(o.name + ".tripped");
   return n;
 }
 
@@ -64,6 +65,9 @@ std::string explain_arm_shape_mismatch(const ArmModel& a, const ArmModel& b) {
   if (a.tools.size() != b.tools.size()) return "the tools differ";
   for (std::size_t t = 0; t < a.tools.size(); ++t)
     if (a.tools[t].name != b.tools[t].name) return "the tools differ";
+  if (a.monitors.size() != b.monitors.size()) return "the monitors differ";
+  for (std::size_t i = 0; i < a.monitors.size(); ++i)
+    if (a.monitors[i].name != b.monitors[i].name) return "the monitors differ";
   if (a.control_period != b.control_period || a.duration != b.duration || a.substeps != b.substeps ||
       a.integrator != b.integrator || a.spec.rtol != b.spec.rtol || a.spec.atol != b.spec.atol)
     return "the rate, duration, substeps, integrator or its tolerances differ";
@@ -126,10 +130,96 @@ void eval_lane_references(ArmLanes& a, long k) {
 }
 
 // Trace columns: t, 4 per actuated joint, the kinematics (6 per tool: its point and the reference's, then
-// 2 per link, then the clearances), 2 measured per joint, 2 pressures per hydraulic joint.
+// 2 per link, then the clearances), 2 measured per joint, 2 pressures per hydraulic joint, 1 per monitor.
 size_t kinematics_column(const ArmLanes& a) { return 1 + 4 * static_cast<size_t>(a.na); }
-size_t pressure_column(const ArmLanes& a) { return a.names.size() - 2 * static_cast<size_t>(a.nh); }
+size_t monitor_column(const ArmLanes& a) { return a.names.size() - static_cast<size_t>(a.nmon); }
+size_t pressure_column(const ArmLanes& a) { return monitor_column(a) - 2 * static_cast<size_t>(a.nh); }
 size_t measured_column(const ArmLanes& a) { return pressure_column(a) - 2 * static_cast<size_t>(a.na); }
+
+// ---- The safety monitors (ArmModel::monitors) ----
+// Whether monitor o of lane l trips at sample k, from the lane's outputs row (calc_arm_outputs's columns)
+// before the control law.
+bool eval_monitor(const ArmLanes& a, const ArmModel& m, const ArmMonitor& o, int l, long k) {
+  const size_t W = static_cast<size_t>(a.W), kin0 = kinematics_column(a), nt = m.tools.size();
+  auto at = [&](size_t c) { return a.row[c * W + static_cast<size_t>(l)]; };
+  const size_t j = static_cast<size_t>(o.joint), tool = kin0 + 6 * static_cast<size_t>(o.tool);
+  switch (o.type) {
+    case MonitorType::kJointTorque:
+      // The torque the joint gets now: an electric joint's held since the previous sample, a hydraulic
+      // joint's its actuator's at this sample (in the row already).
+      return std::abs(m.actuated[j].control.hydraulics.enabled ? at(4 + 4 * j) : a.tau_held[j * W + static_cast<size_t>(l)]) >
+             o.limit;
+    case MonitorType::kJointSpeed: return std::abs(at(3 + 4 * j)) > o.limit;
+    case MonitorType::kDeflection: {
+      const size_t c = kin0 + 6 * nt + 2 * static_cast<size_t>(o.link);
+      return std::hypot(at(c), at(c + 1)) > o.limit;
+    }
+    case MonitorType::kToolSpeed: {
+      if (k == 0) return false;
+      const double* prev = &a.tool_prev[3 * static_cast<size_t>(o.tool) * W + static_cast<size_t>(l)];
+      const Vec3 step(at(tool) - prev[0], at(tool + 1) - prev[W], at(tool + 2) - prev[2 * W]);
+      return step.norm() / a.T > o.limit;
+    }
+    case MonitorType::kWorkspace:
+      for (int i = 0; i < 3; ++i)
+        if (at(tool + static_cast<size_t>(i)) < o.lower[i] || at(tool + static_cast<size_t>(i)) > o.upper[i]) return true;
+      return false;
+    case MonitorType::kClearance: return at(kin0 + 6 * nt + 2 * m.links.size()) < o.limit;
+    case MonitorType::kCommand: return k >= o.command_sample;
+  }
+  return false;
+}
+
+// A joint's reference tau s into a controlled stop at deceleration `dec` from r0 moving at v0: r0 + v0 tau
+// - dec sign(v0) tau^2 / 2 until its rate is zero, then held there (dec 0: a hold, r0 at once).
+void eval_stop_reference(double r0, double v0, double dec, double tau, double& r, double& rd, double& rdd) {
+  const double sign = (v0 > 0.0) - (v0 < 0.0);
+  const double t_stop = dec > 0.0 ? std::abs(v0) / dec : 0.0;
+  const double u = std::min(tau, t_stop);
+  r = r0 + v0 * u - 0.5 * dec * sign * u * u;
+  rd = tau < t_stop ? v0 - dec * sign * tau : 0.0;
+  rdd = tau < t_stop ? -dec * sign : 0.0;
+}
+
+// Sample k of every lane's monitors: their trips from the row, the acting monitor and its start, the
+// tools' points kept for the next sample; then a hold or stop in force replaces the lane's reference.
+void update_arm_monitors(ArmLanes& a, long k) {
+  const size_t W = static_cast<size_t>(a.W), na = static_cast<size_t>(a.na), kin0 = kinematics_column(a);
+  for (int l = 0; l < a.W; ++l) {
+    const size_t lu = static_cast<size_t>(l);
+    const ArmModel& m = a.models[lu];
+    for (size_t i = 0; i < m.monitors.size(); ++i) {
+      const ArmMonitor& o = m.monitors[i];
+      double& tripped = a.tripped[i * W + lu];
+      if (tripped != 0.0 || !eval_monitor(a, m, o, l, k)) continue;
+      tripped = 1.0;
+      if (a.act_monitor[lu] < 0 && o.action != MonitorAction::kRecord) {
+        a.act_monitor[lu] = static_cast<int>(i);
+        a.act_sample[lu] = k + o.delay_samples;
+      }
+    }
+    for (size_t c = 0; c < 3 * m.tools.size(); ++c)
+      a.tool_prev[c * W + lu] = a.row[(kin0 + 6 * (c / 3) + c % 3) * W + lu];
+    if (a.act_monitor[lu] < 0 || k < a.act_sample[lu]) continue;
+    const ArmMonitor& o = m.monitors[static_cast<size_t>(a.act_monitor[lu])];
+    if (o.action != MonitorAction::kHold && o.action != MonitorAction::kStop) continue;
+    double *r = &a.r[lu * na], *rd = &a.rd[lu * na], *rdd = &a.rdd[lu * na];
+    const double tau = static_cast<double>(k - a.act_sample[lu]) * a.T;
+    for (size_t j = 0; j < na; ++j) {
+      if (k == a.act_sample[lu]) a.act_r0[j * W + lu] = r[j], a.act_v0[j * W + lu] = rd[j];
+      eval_stop_reference(a.act_r0[j * W + lu], a.act_v0[j * W + lu], o.action == MonitorAction::kStop ? o.deceleration : 0.0,
+                          tau, r[j], rd[j], rdd[j]);
+    }
+  }
+}
+
+// The brake of lane l's acting monitor on the control law from its start on (nullptr when none).
+const ArmMonitor* active_brake(const ArmLanes& a, int l, long k) {
+  const int i = a.act_monitor[static_cast<size_t>(l)];
+  if (i < 0 || k < a.act_sample[static_cast<size_t>(l)]) return nullptr;
+  const ArmMonitor& o = a.models[static_cast<size_t>(l)].monitors[static_cast<size_t>(i)];
+  return o.action == MonitorAction::kBrake ? &o : nullptr;
+}
 
 }  // namespace
 
@@ -274,6 +364,14 @@ ArmLanes make_arm_lanes(std::span<const ArmModel> lanes, const ArmRunOptions& op
   a.qd_meas = a.q_meas;
   a.ring_q.assign(static_cast<size_t>(na), std::vector<double>(static_cast<size_t>(a.H * W), 0.0));
   a.ring_qd = a.ring_q;
+  // The monitors: none tripped, none acting.
+  a.nmon = static_cast<int>(m0.monitors.size());
+  a.tripped.assign(static_cast<size_t>(a.nmon * W), 0.0);
+  a.tool_prev.assign(3 * m0.tools.size() * static_cast<size_t>(W), 0.0);
+  a.act_monitor.assign(static_cast<size_t>(W), -1);
+  a.act_sample.assign(static_cast<size_t>(W), 0);
+  a.act_r0.assign(static_cast<size_t>(na * W), 0.0);
+  a.act_v0 = a.act_r0;
   return a;
 }
 
@@ -328,12 +426,17 @@ void step_arm_controllers(ArmLanes& a, long k) {
       const size_t jl = static_cast<size_t>(j * W + l), dl = static_cast<size_t>(d * W + l);
       a.q_meas[jl] = sample_channel(s.q[dl], ca.noise, aj.angle_key, ca.resolution, ca.delay, aj.angle_hold, k, a.H, W, l,
                                     a.ring_q[static_cast<size_t>(j)].data());
+      // A slipped encoder, from the first sample at or after its fault time.
+      if (static_cast<double>(k) >= aj.control.angle_fault_time / T - 1e-9) a.q_meas[jl] += aj.control.angle_fault_offset;
       a.qd_meas[jl] = sample_channel(s.qd[dl], cr.noise, aj.rate_key, cr.resolution, cr.delay, aj.rate_hold, k, a.H, W, l,
                                      a.ring_qd[static_cast<size_t>(j)].data());
     }
   }
-  // The reference of every lane (its own trajectory and shapers).
+  // The outputs that are the plant's (the monitors watch them), the reference of every lane (its own
+  // trajectory and shapers), and the monitors: their trips, and a hold or stop in force on the reference.
+  calc_arm_outputs(a);
   eval_lane_references(a, k);
+  update_arm_monitors(a, k);
   // The notch on each joint's reference or feedback, all lanes at once.
   for (int j = 0; j < na; ++j) {
     const ActuatedJoint& a0 = m0.actuated[static_cast<size_t>(j)];
@@ -353,7 +456,7 @@ void step_arm_controllers(ArmLanes& a, long k) {
           a0.notch_on_feedback ? ref - a.notch_out[static_cast<size_t>(l)] : a.notch_out[static_cast<size_t>(l)] - q;
     }
   }
-  const size_t kin0 = kinematics_column(a), meas0 = measured_column(a);
+  const size_t kin0 = kinematics_column(a), meas0 = measured_column(a), mon0 = monitor_column(a);
   double* row = a.row.data();
   auto put = [&](size_t c, int l, double v) { row[c * static_cast<size_t>(W) + static_cast<size_t>(l)] = v; };
   for (int l = 0; l < W; ++l) {
@@ -365,10 +468,16 @@ void step_arm_controllers(ArmLanes& a, long k) {
     if (need_ff)
       calc_arm_feedforward(m, rl, rdl, &a.rdd[static_cast<size_t>(l * na)], a.tau_id.data(), a.tau_g.data(),
                            a.ff[static_cast<size_t>(l)]);
-    // PID with clamping anti-windup, saturation, feed-forward.
+    // PID with clamping anti-windup, saturation, feed-forward; or a monitor's brake, the integral frozen.
+    const ArmMonitor* brake = active_brake(a, l, k);
     for (int j = 0; j < na; ++j) {
       const ActuatedJoint& aj = m.actuated[static_cast<size_t>(j)];
       const size_t jl = static_cast<size_t>(j * W + l);
+      if (brake) {
+        const double limit = brake->brake_torque > 0.0 ? brake->brake_torque : aj.torque_limit;
+        a.tau_held[jl] = std::clamp(-m.brake_gain[static_cast<size_t>(j)] * s.qd[static_cast<size_t>(aj.dof * W + l)], -limit, limit);
+        continue;
+      }
       const double qd = a.qd_meas[jl];
       const double err = a.e[jl];
       double u = aj.control.kp * err + aj.control.ki * a.integral[jl] - aj.control.kd * qd;
@@ -385,12 +494,15 @@ void step_arm_controllers(ArmLanes& a, long k) {
       a.tau_held[jl] = tau;
     }
     // The outputs at this sample that are the controller's: the time, each joint's reference and
-    // torque, the reference's tool point, the measurements.
+    // torque (a hydraulic joint's is its actuator's, the plant's), the reference's tool point, the
+    // measurements, the monitors' trips.
     put(0, l, t);
     for (int j = 0; j < na; ++j) {
       put(static_cast<size_t>(1 + 4 * j), l, rl[j]);
-      put(static_cast<size_t>(4 + 4 * j), l, a.tau_held[static_cast<size_t>(j * W + l)]);
+      if (!m.actuated[static_cast<size_t>(j)].control.hydraulics.enabled)
+        put(static_cast<size_t>(4 + 4 * j), l, a.tau_held[static_cast<size_t>(j * W + l)]);
     }
+    for (int i = 0; i < a.nmon; ++i) put(mon0 + static_cast<size_t>(i), l, a.tripped[static_cast<size_t>(i * W + l)]);
     if (a.status[static_cast<size_t>(l)] == LaneStatus::kOk) {
       a.q_ref.setZero();
       for (int j = 0; j < na; ++j) a.q_ref[m.actuated[static_cast<size_t>(j)].dof] = rl[j];
@@ -408,7 +520,6 @@ void step_arm_controllers(ArmLanes& a, long k) {
       put(meas0 + 2 * static_cast<size_t>(j) + 1, l, a.qd_meas[static_cast<size_t>(j * W + l)]);
     }
   }
-  calc_arm_outputs(a);
 }
 
 void step_arm_plant(ArmLanes& a, long k) {
@@ -483,7 +594,8 @@ void set_arm_state(ArmLanes& a, int l, const double* x) {
 }
 
 void copy_arm_lane(const ArmLanes& a, int from, ArmLanes& b, int to) {
-  if (a.nv != b.nv || a.na != b.na || a.tl.nz() != b.tl.nz() || a.H != b.H || a.notch_state.size() != b.notch_state.size())
+  if (a.nv != b.nv || a.na != b.na || a.tl.nz() != b.tl.nz() || a.H != b.H || a.notch_state.size() != b.notch_state.size() ||
+      a.nmon != b.nmon || a.tool_prev.size() / static_cast<size_t>(a.W) != b.tool_prev.size() / static_cast<size_t>(b.W))
     throw std::invalid_argument("copy_arm_lane: lanes of another shape");
   // Row i of a (rows x a.W) array into row i of b's (rows x b.W).
   auto rows = [&](const std::vector<double>& x, std::vector<double>& y, size_t n) {
@@ -497,6 +609,12 @@ void copy_arm_lane(const ArmLanes& a, int from, ArmLanes& b, int to) {
   rows(a.s.z, b.s.z, static_cast<size_t>(a.tl.nz()));
   rows(a.integral, b.integral, na);
   rows(a.tau_held, b.tau_held, na);
+  rows(a.tripped, b.tripped, static_cast<size_t>(a.nmon));
+  rows(a.tool_prev, b.tool_prev, a.tool_prev.size() / static_cast<size_t>(a.W));
+  rows(a.act_r0, b.act_r0, na);
+  rows(a.act_v0, b.act_v0, na);
+  b.act_monitor[static_cast<size_t>(to)] = a.act_monitor[static_cast<size_t>(from)];
+  b.act_sample[static_cast<size_t>(to)] = a.act_sample[static_cast<size_t>(from)];
   for (size_t j = 0; j < na; ++j) {
     if (a.notch_state[j].size() / static_cast<size_t>(a.W) != b.notch_state[j].size() / static_cast<size_t>(b.W))
       throw std::invalid_argument("copy_arm_lane: notches of another shape");

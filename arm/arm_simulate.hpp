@@ -28,6 +28,8 @@ class OnlineArmRun;  // arm_online_metrics.hpp
 //   <joint>.q_measured, <joint>.qd_measured              per actuated joint, what its controller measured
 //                                                        at this sample (joints.NAME.sensors), rad, rad/s
 //   <joint>.pressure_a, <joint>.pressure_b               per hydraulic joint, its chamber pressures, Pa
+//   <monitor>.tripped                                    per safety monitor (`monitors:`), 0 before its
+//                                                        trip, 1 from the sample it tripped at on
 // A hydraulic joint's torque column is its actuator's torque D (p_a - p_b) at the sample (the joint's
 // own torque, not the controller's demand, which is the valve loop's command).
 struct ArmTrace {
@@ -107,18 +109,29 @@ struct ArmLanes {
   std::vector<ArmFeedforward> ff;
   std::vector<Pose> poses;
   Eigen::VectorXd q_lane, q_ref;
+  // The safety monitors (ArmModel::monitors; monitor i, lane l at [i * W + l]): evaluated at every sample
+  // from the outputs row before the control law. The first monitor to trip whose action is not `record`
+  // acts, from act_sample on (its trip sample plus its delay).
+  int nmon = 0;
+  std::vector<double> tripped;       // (nmon x W) 0, then 1 from the trip on
+  std::vector<double> tool_prev;     // (3 x tools x W) each tool point at the previous sample (tool_speed)
+  std::vector<int> act_monitor;      // (W) the acting monitor, -1 none
+  std::vector<long> act_sample;      // (W) the sample its action starts at
+  std::vector<double> act_r0, act_v0;  // (na x W) each joint's reference and its rate there
 };
 
 // The lanes at their initial state, sample 0 next. Throws std::invalid_argument as simulate_arms does.
 ArmLanes make_arm_lanes(std::span<const ArmModel> lanes, const ArmRunOptions& options = {});
 // Controller samples of an arm's run: floor(duration / T) + 1.
 long calc_arm_samples(const ArmModel& m);
-// Sample k (t = k T) of the controllers: the sensors read the plant, the reference, notch and control
-// law give the torque held until the next sample; `row` then holds every trace column at sample k.
+// Sample k (t = k T) of the controllers: the sensors read the plant, calc_arm_outputs puts the plant's
+// columns in `row`, the safety monitors trip from them (a hold or stop then replaces the reference, a
+// brake the control law), the reference, notch and control law give the torque held until the next
+// sample; `row` then holds every trace column at sample k.
 void step_arm_controllers(ArmLanes& a, long k);
 // The columns of `row` that are functions of the plant state alone (every <joint>.q and .qd, a
-// hydraulic joint's .torque and pressures, tool.x/y/z, the deflections), from the state now; NaN
-// kinematics in a failed lane. step_arm_controllers calls it.
+// hydraulic joint's .torque and pressures, tool.x/y/z, the deflections, the clearances), from the state
+// now; NaN kinematics in a failed lane. step_arm_controllers calls it first.
 void calc_arm_outputs(ArmLanes& a);
 // The plant from sample k to k + 1 with the held torques; a lane gone non-finite (or whose solver
 // failed) is frozen at rest with its status set.

@@ -98,6 +98,12 @@ const std::array<Field<ChannelSpec>, 4> kAngleSensorFields{{
     {.key = "rate", .member = &ChannelSpec::rate, .unit = "Hz", .bound = Bound::kNonNegative,
      .fallback = "0: controller.rate"},
 }};
+// A slipped encoder: the angle sensor's fault (a perturbation a safety monitor may catch).
+const std::array<Field<JointControlSpec>, 2> kAngleFaultFields{{
+    {.key = "fault_time", .member = &JointControlSpec::angle_fault_time, .unit = "s", .bound = Bound::kNonNegative,
+     .fallback = "none"},
+    {.key = "fault_offset", .member = &JointControlSpec::angle_fault_offset, .unit = "rad (m)"},
+}};
 const std::array<Field<ChannelSpec>, 4> kRateSensorFields{{
     {.key = "resolution", .member = &ChannelSpec::resolution, .unit = "rad/s (m/s)", .bound = Bound::kNonNegative,
      .fallback = "0: none"},
@@ -160,6 +166,71 @@ const std::array<Field<CollisionPartSpec>, 2> kCollisionFields{{
      .fallback = "0: from the geometry"},
     {.key = "enabled", .member = &CollisionPartSpec::enabled},
 }};
+
+// A safety monitor (`monitors: {NAME: {type, ...}}`): one table for every type; which keys a type takes
+// is monitor_uses / monitor_needs.
+const std::array<Field<MonitorSpec>, 12> kMonitorFields{{
+    {.key = "type", .member = &MonitorSpec::type, .required = true},
+    {.key = "joint", .member = &MonitorSpec::joint, .fallback = "joint_torque, joint_speed: required"},
+    {.key = "link", .member = &MonitorSpec::link, .fallback = "deflection: required"},
+    {.key = "tool", .member = &MonitorSpec::tool, .fallback = "the first tool"},
+    {.key = "limit", .member = &MonitorSpec::limit, .unit = "N·m (N), rad/s (m/s), m/s or m", .bound = Bound::kNonNegative,
+     .fallback = "required but by workspace and command"},
+    {.key = "lower", .member = &MonitorSpec::lower, .unit = "m", .fallback = "workspace: required"},
+    {.key = "upper", .member = &MonitorSpec::upper, .unit = "m", .fallback = "workspace: required"},
+    {.key = "time", .member = &MonitorSpec::time, .unit = "s", .bound = Bound::kNonNegative, .fallback = "command: required"},
+    {.key = "action", .member = &MonitorSpec::action},
+    {.key = "deceleration", .member = &MonitorSpec::deceleration, .unit = "rad/s² (m/s²)", .bound = Bound::kPositive,
+     .fallback = "stop: required"},
+    {.key = "delay", .member = &MonitorSpec::delay, .unit = "s", .bound = Bound::kNonNegative},
+    {.key = "brake_torque", .member = &MonitorSpec::brake_torque, .unit = "N·m (N)", .bound = Bound::kNonNegative,
+     .fallback = "0: each joint's torque limit"},
+}};
+
+// Which keys a monitor of `type` with `action` takes, and which it must have.
+bool monitor_uses(const std::string& type, const std::string& action, const std::string& key) {
+  if (key == "type" || key == "action" || key == "delay") return true;
+  if (key == "deceleration") return action == "stop";
+  if (key == "brake_torque") return action == "brake";
+  if (type == "joint_torque" || type == "joint_speed") return key == "joint" || key == "limit";
+  if (type == "deflection") return key == "link" || key == "limit";
+  if (type == "tool_speed") return key == "tool" || key == "limit";
+  if (type == "workspace") return key == "tool" || key == "lower" || key == "upper";
+  if (type == "clearance") return key == "limit";
+  return key == "time";  // command
+}
+bool monitor_needs(const std::string& type, const std::string& action, const std::string& key) {
+  return key != "tool" && key != "action" && key != "delay" && key != "brake_torque" &&
+         (key != "deceleration" || action == "stop") && monitor_uses(type, action, key);
+}
+
+std::vector<MonitorSpec> read_monitors(YamlReader& top) {
+  std::vector<MonitorSpec> out;
+  for (auto& [name, one] : top.named_blocks("monitors", "a map from monitor name to its {type, limit, action, ...}",
+                                            "a monitor's name heads its column (NAME.tripped) and metric "
+                                            "(NAME_trip_s): no dots, spaces, commas or quotes")) {
+    MonitorSpec s;
+    s.name = name;
+    s.line = one.line();
+    only_keys(one, kMonitorFields);
+    if (!one.has("type")) one.fail("type", std::string("missing required value (") + kMonitorTypes + ")");
+    read_present(one, kMonitorFields, s);
+    MonitorType type;
+    MonitorAction action;
+    if (!parse_monitor_type(s.type, type)) one.fail("type", "unknown monitor type '" + s.type + "' (" + kMonitorTypes + ")");
+    if (!parse_monitor_action(s.action, action))
+      one.fail("action", "unknown action '" + s.action + "' (record, hold, stop, brake)");
+    for (const auto& f : kMonitorFields) {
+      if (one.has(f.key) && !monitor_uses(s.type, s.action, f.key))
+        one.fail(f.key, std::string("is not a key of a ") + s.type + " monitor with action " + s.action);
+      if (!one.has(f.key) && monitor_needs(s.type, s.action, f.key))
+        one.fail(f.key, std::string("missing: a ") + s.type + " monitor" + (f.key == std::string("deceleration") ? " that stops" : "") + " needs it");
+    }
+    one.finish();
+    out.push_back(std::move(s));
+  }
+  return out;
+}
 
 // A map of named blocks of one field table (T has `name` and `line`), in file order.
 template <class T, std::size_t N>
@@ -284,6 +355,7 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       YamlReader sensors = one.child("sensors");
       YamlReader angle = sensors.child("angle");
       read_present(angle, kAngleSensorFields, c.angle_sensor);
+      read_present(angle, kAngleFaultFields, c);
       angle.finish();
       YamlReader rate = sensors.child("rate");
       read_present(rate, kRateSensorFields, c.rate_sensor);
@@ -413,6 +485,7 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   s.world = read_world(top, source);
   s.collision = read_named_blocks(top, "collision", "a map from part name (a body or flexible link) to its {radius, enabled}",
                                   kCollisionFields);
+  s.monitors = read_monitors(top);
 
   YamlReader metrics = top.child("metrics");
   read_present(metrics, kMetricsFields, s);
@@ -440,6 +513,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   add_keys(out, "joints.NAME.", kJointFields);
   add_keys(out, "joints.NAME.friction.", kFrictionFields);
   add_keys(out, "joints.NAME.sensors.angle.", kAngleSensorFields);
+  add_keys(out, "joints.NAME.sensors.angle.", kAngleFaultFields);
   add_keys(out, "joints.NAME.sensors.rate.", kRateSensorFields);
   add_keys(out, "joints.NAME.drive.", kDriveFields);
   add_keys(out, "joints.NAME.hydraulics.", hydraulic_fields());
@@ -455,6 +529,7 @@ std::vector<KeyDoc> arm_yaml_keys() {
   const std::vector<KeyDoc> world = world_yaml_keys();
   out.insert(out.end(), world.begin(), world.end());
   add_keys(out, "collision.NAME.", kCollisionFields);
+  add_keys(out, "monitors.NAME.", kMonitorFields);
   return out;
 }
 

@@ -5,7 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -29,19 +28,8 @@ const std::string kConfigs = std::string(FLEXFARM_SOURCE_DIR) + "/configs/";
 // The pendulum (a 1 m capsule of radius 0.05 from the hinge, turning about y: +q tips its end down)
 // above a floor 0.8 m below the hinge, moving to `q_end` in 1 s; `more` obstacles after the floor.
 std::string pendulum_over_floor(double q_end, const std::string& more = "") {
-  return pendulum_arm(R"(
-controller: {rate: 1000}
-joints:
-  arm: {controller: {kp: 4000, kd: 120, feedforward: 1, gravity_compensation: 1}}
-trajectory:
-  waypoints:
-    - {time: 1.0, joints: {arm: )" + std::to_string(q_end) + R"(}}
-simulation: {settle: 1.0}
-world:
-  floor: {type: plane, position: [0, 0, -0.8]}
-)" + more + R"(collision:
-  arm: {radius: 0.05}
-)");
+  return test::tracking_pendulum(
+      q_end, "", "world:\n  floor: {type: plane, position: [0, 0, -0.8]}\n" + more + "collision:\n  arm: {radius: 0.05}\n");
 }
 
 // The clearances at pose q.
@@ -139,17 +127,11 @@ TEST(ArmCollision, EveryLaneOfABatchGivesTheClearancesItGivesAloneAndOnlineMetri
   const ArmRun batch_online = simulate_arms(lanes, {.online = &online});
   for (std::size_t l = 0; l < lanes.size(); ++l) {
     const ArmRun alone = simulate_arms(std::span<const ArmModel>(&lanes[l], 1));
-    for (const std::string& name : alone.traces[0].names) {
-      if (!name.ends_with("clearance")) continue;
-      const std::vector<double>&a = alone.traces[0].column(name), &b = batch.traces[l].column(name);
-      for (std::size_t k = 0; k < a.size(); ++k)
-        ASSERT_EQ(std::bit_cast<std::uint64_t>(a[k]), std::bit_cast<std::uint64_t>(b[k])) << name << " lane " << l << " sample " << k;
-    }
-    const std::vector<double> stored = calc_arm_metrics(lanes[l], batch.traces[l], batch.status[l]);
-    const std::vector<double> live = online[l].result(batch_online.status[l]);
-    ASSERT_EQ(stored.size(), live.size());
-    for (std::size_t i = 0; i < stored.size(); ++i)
-      EXPECT_EQ(std::bit_cast<std::uint64_t>(stored[i]), std::bit_cast<std::uint64_t>(live[i])) << i;
+    for (const std::string& name : alone.traces[0].names)
+      if (name.ends_with("clearance"))
+        test::expect_same_bits(alone.traces[0].column(name), batch.traces[l].column(name), name + " lane " + std::to_string(l));
+    test::expect_same_bits(calc_arm_metrics(lanes[l], batch.traces[l], batch.status[l]), online[l].result(batch_online.status[l]),
+                           "metrics lane " + std::to_string(l));
   }
   // The lanes differ (the post and the crate move), so their clearances do.
   EXPECT_NE(calc_arm_metrics(lanes[0], batch.traces[0], batch.status[0]),
