@@ -35,7 +35,9 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
   for (std::size_t i = 0; i < table.columns.size(); ++i) {
     char v[64];
     std::snprintf(v, sizeof v, "%.6g", row.values[i]);
-    md += "| " + table.columns[i] + " | " + (std::isnan(row.values[i]) ? std::string("not settled") : std::string(v)) + " |\n";
+    // No number: a settling time the run could not confirm, or (first contact, a trip) an event that did not happen.
+    const std::string none = table.columns[i].ends_with("_settling_s") ? "not settled" : "-";
+    md += "| " + table.columns[i] + " | " + (std::isnan(row.values[i]) ? none : std::string(v)) + " |\n";
   }
   make_directories(out);
   write_arm_trace_csv(run.traces[0], out + "/trace.csv");

@@ -204,3 +204,35 @@ TEST(ArmCollision, APartLeftOutOrAnArmWithoutAWorldMeasuresNothing) {
 
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+
+TEST(ArmCollision, TheTankRisersMastClearsTheRiserAndTheDomesHoleByTheBoreLessItsOwnRadius) {
+  // configs/tank_riser.yaml hanging straight down with the mast 0.6 m deployed: the mast (a 425 kg tube
+  // with I_zz 7.5 kg m^2 about its axis: radius sqrt(7.5 / 425)) runs up the 0.3 m bore's axis, and the
+  // boom (radius sqrt((I_y + I_z) / A) of its section) hangs down it and through the dome mesh's hole,
+  // whose flats are at 0.3 m.
+  const ArmModel m = parse_arm(load_yaml_file(kConfigs + "tank_riser.yaml"), kConfigs + "tank_riser.yaml");
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(m.tree.nv());
+  for (const auto& [joint, value] : std::vector<std::pair<std::string, double>>{{"deploy", 0.6}, {"shoulder", M_PI / 2}})
+    q[m.spec.tree.dof_index.at(joint)] = value;
+  const std::vector<double> c = clearances_at(m, q);
+  const auto column = [&](const std::string& name) {
+    const auto& parts = m.collision.parts;
+    const auto p = std::find(parts.begin(), parts.end(), name);
+    if (p != parts.end()) return c[1 + static_cast<std::size_t>(p - parts.begin())];
+    const auto& obs = m.collision.world.obstacles;
+    const auto o = std::find_if(obs.begin(), obs.end(), [&](const Obstacle& x) { return x.name == name; });
+    return c[1 + parts.size() + static_cast<std::size_t>(o - obs.begin())];
+  };
+  const double mast = 0.3 - std::sqrt(7.5 / 425.0), boom = 0.3 - std::sqrt(2 * 7.30e-6 / 2.752e-3);
+  EXPECT_NEAR(column("mast"), mast, 1e-12);   // the bore: closed form
+  EXPECT_NEAR(column("riser"), mast, 1e-12);
+  EXPECT_NEAR(column("boom"), boom, 1e-6);    // the least of the bore and the hole
+  EXPECT_NEAR(column("dome"), boom, 1e-6);    // the hole: FCL's distance to the mesh
+  EXPECT_EQ(std::find(m.collision.parts.begin(), m.collision.parts.end(), "turret"), m.collision.parts.end());
+}
+
+}  // namespace
+}  // namespace ff
