@@ -51,7 +51,7 @@ const char* kRoomStudy =
     "specs: {contact: 0}\n";
 
 class WorldCli : public CliFixture {
- protected:
+ public:
   WorldCli() : CliFixture("ff_world_cli_", {}) {}
   void SetUp() override {
     CliFixture::SetUp();
@@ -155,6 +155,46 @@ TEST_F(WorldCli, ABadObstacleIsOneLineNamingItsKeyAndWritesNothing) {
   expect_one_error_line(run("view room_study.yaml --out v.html"), "room.yaml:20: world.post.length: missing");
   EXPECT_FALSE(fs::exists(work / "out"));
   EXPECT_FALSE(fs::exists(work / "v.html"));
+}
+
+// The tank riser's safety study cut to one draw: the shoulder's encoder slips by 0.3 rad at 2 s.
+class TankRiserCli : public CliFixture {
+ protected:
+  TankRiserCli()
+      : CliFixture("ff_tank_riser_cli_", {{"configs/tank_riser.yaml", "configs/tank_riser.yaml"},
+                                          {"configs/studies/tank_riser_safety.yaml", "safety.yaml"}}) {}
+  void SetUp() override {
+    CliFixture::SetUp();
+    fs::create_directories(work / "configs/meshes");
+    for (const char* m : {"dome.stl", "pump.stl"})
+      fs::copy_file(kSource + "/configs/meshes/" + m, work / "configs/meshes" / m);
+  }
+};
+
+TEST_F(TankRiserCli, AGuardAt10CmStopsTheArmThatTouchesTheRiserWithoutOne) {
+  // The study's three cases over one grid point instead of its Monte Carlo draws.
+  std::string study = read_text(work / "safety.yaml");
+  study.replace(study.find("model: ../tank_riser.yaml"), 25, "model: configs/tank_riser.yaml");
+  study = study.substr(0, study.find("variables:")) +
+          "variables:\n"
+          "  - path: joints.shoulder.sensors.angle.fault_offset\n    levels: [0.3]\n"
+          "  - path: joints.shoulder.sensors.angle.fault_time\n    levels: [2.0]\n"
+          "design: {type: grid}\nspecs: {contact: 0}\n";
+  write("safety.yaml", study);
+  const auto r = run("run safety.yaml --out s");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string csv = read_text(work / "s/results.csv");
+  // No guard (it only records, at 10 cm): the leaning arm touches; a stop at 5 cm comes too late; at 10 cm
+  // it stops the arm short of the riser, 4 mm from it.
+  EXPECT_EQ(WorldCli::column(csv, "contact"), (std::vector<std::string>{"1", "1", "0"}));
+  const auto trip = WorldCli::column(csv, "guard_trip_s");
+  ASSERT_EQ(trip.size(), 3u);
+  EXPECT_EQ(trip[0], trip[2]);  // the recording guard trips when the stopping one does
+  EXPECT_GT(std::stod(trip[2]), 2.0);
+  EXPECT_LT(std::stod(trip[2]), 2.3);
+  EXPECT_LT(std::stod(WorldCli::column(csv, "min_clearance_m")[0]), 0.0);
+  EXPECT_GT(std::stod(WorldCli::column(csv, "min_clearance_m")[2]), 0.002);
+  EXPECT_GT(std::stod(WorldCli::column(csv, "stopping_distance_m")[2]), 0.1);
 }
 
 }  // namespace
