@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "apps/verbs.hpp"
+#include "common/files.hpp"
 #include "arm/arm_metrics.hpp"
 #include "results/summaries.hpp"
 #include "results/table.hpp"
@@ -44,11 +45,7 @@ void add_table_verb(CLI::App& app) {
   cmd->callback([args] {
     std::string path = args->input;
     if (std::filesystem::is_directory(path)) path += "/results.csv";
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error(path + ": cannot open");
-    std::stringstream text;
-    text << in.rdbuf();
-    const ResultTable t = parse_results_csv(text.str(), path);
+    const ResultTable t = parse_results_csv(read_file(path), path);
     auto metrics = split_list(args->metrics);
     if (metrics.empty()) {
       // An arm study's: each tool's (`tool:`'s is named "tool").

@@ -1,14 +1,20 @@
-// flexfarm view MODEL_OR_STUDY --out view.html: one self-contained HTML page (plotting/view_html.hpp)
-// playing a run in 3-D in the browser, among the world's obstacles; for a study, one variant solid and
-// others as ghosts (a Monte Carlo spread), the worst clearance pair highlighted.
+// flexfarm view MODEL_OR_STUDY_OR_RUN --out view.html: one self-contained HTML page
+// (plotting/view_html.hpp) playing a run in 3-D in the browser, among the world's obstacles; for a study
+// (or a study's finished run: its output directory), one variant solid and others as ghosts (a Monte
+// Carlo spread), the worst clearance pair highlighted.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <map>
 
 #include "apps/verbs.hpp"
 #include "arm/arm_simulate.hpp"
 #include "kernel/batch.hpp"
+#include "common/files.hpp"
 #include "plotting/view_arm.hpp"
+#include "results/sqlite.hpp"
+#include "results/table.hpp"
 #include "sweep/study.hpp"
 
 namespace ff {
@@ -45,18 +51,18 @@ void print_written(const std::string& out, const ViewScene& s) {
   std::printf("\n");
 }
 
-void view_study(const ViewArgs& a) {
-  const Study study = load_study(a.input);
+// The variants of `study` shown: `solid` (-1: of those shown, the one that comes closest) and up to
+// a.ghosts others, evenly spaced over the eval_ids.
+void view_study(const Study& study, int solid, const ViewArgs& a) {
   if (!study.arm) throw CLI::ValidationError("input", "the viewer shows arm models; this study's model is the reference rig");
   const int n = static_cast<int>(study.variants.size());
-  if (a.eval_id >= n) throw CLI::ValidationError("--eval", "the study has eval_ids 0.." + std::to_string(n - 1));
-  // The variants shown: --eval's (if given) and up to --ghosts others, evenly spaced over the eval_ids.
+  if (solid >= n) throw CLI::ValidationError("--eval", "the study has eval_ids 0.." + std::to_string(n - 1));
   std::vector<int> ids;
-  if (a.eval_id >= 0) ids.push_back(a.eval_id);
-  const int others = std::min(a.ghosts + (a.eval_id >= 0 ? 0 : 1), n - (a.eval_id >= 0 ? 1 : 0));
+  if (solid >= 0) ids.push_back(solid);
+  const int others = std::min(a.ghosts + (solid >= 0 ? 0 : 1), n - (solid >= 0 ? 1 : 0));
   for (int i = 0, k = 0; k < others && i < n; ++i) {
     const int id = static_cast<int>(std::floor(static_cast<double>(i) * n / std::max(others, 1)));
-    if (id == a.eval_id || std::find(ids.begin(), ids.end(), id) != ids.end()) continue;
+    if (id == solid || std::find(ids.begin(), ids.end(), id) != ids.end()) continue;
     ids.push_back(id);
     ++k;
   }
@@ -70,8 +76,8 @@ void view_study(const ViewArgs& a) {
     variants.push_back(run_view_variant(m, "variant " + std::to_string(ids[i]) + ": " + v.label));
   }
   std::fprintf(stderr, "\n");
-  // Without --eval, the variant that comes closest is shown solid.
-  if (a.eval_id < 0) {
+  // Without one given, the variant that comes closest is shown solid.
+  if (solid < 0) {
     std::size_t worst = 0;
     for (std::size_t i = 1; i < variants.size(); ++i)
       if (variants[i].min_clearance < variants[worst].min_clearance) worst = i;
@@ -82,6 +88,42 @@ void view_study(const ViewArgs& a) {
   print_written(a.out, scene);
 }
 
+// A finished run (the output directory of `flexfarm run`): its study, as results.sqlite names it (checked
+// against the run's fingerprint), and the variant shown solid: --eval's, or the one whose result has
+// the least clearance (without a world: eval_id 0).
+void view_run(const ViewArgs& a) {
+  const std::string db_path = a.input + "/results.sqlite", csv_path = a.input + "/results.csv";
+  if (!std::filesystem::exists(db_path) || !std::filesystem::exists(csv_path))
+    throw ExitError(a.input + " is not a finished run's output directory (no results.sqlite and results.csv)", 2);
+  std::map<std::string, std::string> info;
+  {
+    SqliteDb db(db_path);
+    SqliteStmt st = db.prepare("SELECT key, value FROM study");
+    while (db.next_row(st.get()))
+      info[reinterpret_cast<const char*>(sqlite3_column_text(st.get(), 0))] =
+          reinterpret_cast<const char*>(sqlite3_column_text(st.get(), 1));
+  }
+  const std::string source = info["study"];
+  if (source.empty() || !std::filesystem::exists(source))
+    throw ExitError(a.input + "'s study '" + source + "' (as the run named it) is not found from here: give the study file instead", 2);
+  const Study study = load_study(source);
+  if (study.hash != info["hash"])
+    throw ExitError(source + " has changed since the run in " + a.input + ": give the study file instead", 2);
+  int solid = a.eval_id;
+  if (solid < 0) {
+    solid = 0;
+    const ResultTable t = parse_results_csv(read_file(csv_path), csv_path);
+    const auto c = std::find(t.columns.begin(), t.columns.end(), "min_clearance_m");
+    if (c != t.columns.end()) {
+      const std::size_t at = static_cast<std::size_t>(c - t.columns.begin());
+      double least = INFINITY;
+      for (const ResultRow& r : t.rows)
+        if (r.values[at] < least) least = r.values[at], solid = r.eval_id;
+    }
+  }
+  view_study(study, solid, a);
+}
+
 }  // namespace
 
 void add_view_verb(CLI::App& app) {
@@ -90,10 +132,13 @@ void add_view_verb(CLI::App& app) {
                                          "pair, a time slider, orbit, deflection exaggeration; for a study, one "
                                          "variant solid and others as ghosts");
   auto args = std::make_shared<ViewArgs>();
-  cmd->add_option("input", args->input, "arm model YAML, or a study YAML")->required()->check(CLI::ExistingFile);
+  cmd->add_option("input", args->input, "arm model YAML, a study YAML, or a finished run's output directory")
+      ->required()
+      ->check(CLI::ExistingPath);
   cmd->add_option("--out", args->out, "the HTML file")->required();
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable (model input only)");
-  cmd->add_option("--eval", args->eval_id, "study: the variant shown solid (default: the one that comes closest)");
+  cmd->add_option("--eval", args->eval_id,
+                  "study or run: the variant shown solid (default: a run's least clearance; a study's closest of those shown)");
   cmd->add_option("--ghosts", args->ghosts, "study: how many other variants to overlay, evenly spaced over the eval_ids")
       ->check(CLI::Range(0, 1000))->capture_default_str();
   cmd->callback([args] {
@@ -106,7 +151,8 @@ void add_view_verb(CLI::App& app) {
       return print_written(args->out, scene);
     }
     if (!args->sets.empty()) throw CLI::ValidationError("--set", "is for a model file (a study sets its own)");
-    view_study(*args);
+    if (std::filesystem::is_directory(args->input)) return view_run(*args);
+    view_study(load_study(args->input), args->eval_id, *args);
   });
 }
 

@@ -12,6 +12,9 @@ void write_file_atomic(const std::string& path, const std::string& text);
 // letters, digits, '_' and '-' kept, anything else '_', so it cannot leave its directory.
 std::string make_file_stem(const std::string& name);
 
+// The whole text of a file. Throws std::runtime_error "<path>: cannot open" when it cannot be read.
+std::string read_file(const std::string& path);
+
 // Creates a directory and its parents. Throws std::runtime_error naming the path on failure.
 void make_directories(const std::string& path);
 

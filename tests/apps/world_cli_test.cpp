@@ -140,6 +140,15 @@ TEST_F(WorldCli, TheViewerPageOfAStudyShowsTheVariantThatComesClosestSolidAndOth
   const std::string page = read_text(work / "view.html");
   EXPECT_GT(page.size(), 500000u);  // three.js inlined
   EXPECT_NE(page.find("\"floor\""), std::string::npos);
+  // The run's output directory: its study from results.sqlite, the variant with the least clearance in its
+  // results solid without simulating the others; a study changed since the run is refused.
+  const auto from_run = run("view a --out run.html --ghosts 0");
+  ASSERT_EQ(from_run.exit_code, 0) << from_run.output;
+  EXPECT_NE(from_run.output.find("variant " + std::to_string(worst) + ": "), std::string::npos) << from_run.output;
+  EXPECT_NE(from_run.output.find(least), std::string::npos) << from_run.output;
+  write("room_study.yaml", std::string(kRoomStudy) + "description: changed\n");
+  expect_one_error_line(run("view a --out changed.html"), "room_study.yaml has changed since the run in a");
+  EXPECT_FALSE(fs::exists(work / "changed.html"));
   // One model: its run alone; --eval is for studies.
   const auto one = run("view room.yaml --out one.html --set world.floor.position=[0,0,-0.7]");
   ASSERT_EQ(one.exit_code, 0) << one.output;
