@@ -192,3 +192,25 @@ TEST(CapsuleClearance, ABoxMeshMeasuresAsTheAnalyticBox) {
 
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+
+TEST(MeshFile, AnStlIsReadWithItsScaleAndAMissingFileIsNamed) {
+  // configs/meshes/pump.stl: a 12-sided column of radius 0.125 m up to z = 5 m over a head of 0.35 m down
+  // to z = -1 m: its farthest vertex is sqrt(5^2 + 0.125^2) from the origin, scaled by 0.5 on every axis.
+  const std::string file = std::string(FLEXFARM_SOURCE_DIR) + "/configs/meshes/pump.stl";
+  const auto mesh = load_mesh(file, Vec3(0.5, 0.5, 0.5));
+  EXPECT_EQ(mesh->triangles.size(), 2u * 4u * 12u);
+  EXPECT_NEAR(calc_mesh_bound(*mesh), 0.5 * std::hypot(5.0, 0.125), 1e-6);
+  EXPECT_NEAR(mesh->box_size.z(), 0.5 * 6.0, 1e-6);
+  try {
+    load_mesh("no/such/mesh.stl", Vec3::Ones());
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("no/such/mesh.stl: cannot read the mesh", 0), 0u) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ff
