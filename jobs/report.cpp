@@ -191,7 +191,8 @@ std::string report_clearance_grid(const Study& study, const ResultTable& t, cons
       for (int r : rows) least = std::min(least, clearance[r]);
       return least;
     });
-    h.title = "least clearance of the arm (m; <= 0: contact), the least over the other parameters";
+    h.title = std::string("least clearance of the arm (m; <= 0: contact)") +
+              (p.size() > 2 ? ", the least over the other parameters" : "");
     h.value_label = "least clearance (m)";
     render_heat_map(h, dir + "/heatmap_clearance.png");
     md += "Heat map: heatmap_clearance.png.\n\n";
