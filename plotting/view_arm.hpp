@@ -12,6 +12,7 @@
 
 #include "arm/arm_model.hpp"
 #include "multibody/algorithms.hpp"
+#include "plotting/animate3d.hpp"  // up_direction
 #include "plotting/view_html.hpp"
 #include "world/mesh.hpp"
 
@@ -21,8 +22,7 @@ namespace ff {
 inline ViewScene make_arm_view_scene(const ArmModel& m, const std::string& title) {
   ViewScene s;
   s.title = title;
-  const Vec3 g = m.tree.gravity();
-  s.up = g.norm() > 0 ? Vec3(-g.normalized()) : Vec3::UnitZ();
+  s.up = up_direction(m.tree);
   for (const Obstacle& o : m.collision.world.obstacles) {
     ViewShape v;
     v.name = o.name;

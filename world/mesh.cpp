@@ -110,9 +110,7 @@ Clearance calc_mesh_clearance(const Obstacle& o, const Vec3& a, const Vec3& b, d
   Clearance c;
   c.distance = std::max(result.min_distance, 0.0);
   // FCL's point lies on the capsule's surface: back onto its segment.
-  const Vec3 d = b - a;
-  const double s = len > 0 ? std::clamp((result.nearest_points[0] - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-  c.on_segment = a + s * d;
+  c.on_segment = a + calc_point_segment_parameter(result.nearest_points[0], a, b) * (b - a);
   c.on_obstacle = result.nearest_points[1];
   return c;
 }

@@ -50,13 +50,6 @@ Vec3 cylinder_surface_point(const Vec3& p, double R, double hz) {
   return Vec3(p.x(), p.y(), p.z() < 0 ? -hz : hz);
 }
 
-// The nearest point of segment [a, b] to p: its parameter.
-double point_segment_parameter(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double dd = d.squaredNorm();
-  return dd > 0 ? clamp01((p - a).dot(d) / dd) : 0.0;
-}
-
 // min over s in [0, 1] of a convex f(s): golden-section search, the ends included. Returns s.
 template <class F>
 double minimise_convex(const F& f) {
@@ -112,6 +105,12 @@ double calc_obstacle_bound(const Obstacle& o) {
     case ShapeType::kMesh: return o.mesh ? calc_mesh_bound(*o.mesh) : 0.0;
   }
   return kInf;
+}
+
+double calc_point_segment_parameter(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double dd = d.squaredNorm();
+  return dd > 0 ? clamp01((p - a).dot(d) / dd) : 0.0;
 }
 
 void calc_segment_segment(const Vec3& p0, const Vec3& q0, const Vec3& p1, const Vec3& q1, double& s, double& t) {
@@ -176,15 +175,15 @@ double calc_clearance_bound(const Obstacle& o, const Vec3& a, const Vec3& b, dou
 }
 
 Clearance calc_clearance(const Obstacle& o, const Vec3& a_base, const Vec3& b_base, double r) {
+  if (o.type == ShapeType::kMesh) return calc_mesh_clearance(o, a_base, b_base, r);  // FCL places the mesh itself
   // The segment in the obstacle's frame.
   const Vec3 a = o.rotation.transpose() * (a_base - o.position);
   const Vec3 b = o.rotation.transpose() * (b_base - o.position);
   const auto to_base = [&](const Vec3& p) -> Vec3 { return o.position + o.rotation * p; };
   Clearance c;
   switch (o.type) {
-    case ShapeType::kMesh: return calc_mesh_clearance(o, a_base, b_base, r);
     case ShapeType::kSphere: {
-      const Vec3 p = a + point_segment_parameter(Vec3::Zero(), a, b) * (b - a);
+      const Vec3 p = a + calc_point_segment_parameter(Vec3::Zero(), a, b) * (b - a);
       const double n = p.norm();
       c.on_segment = to_base(p);
       c.on_obstacle = to_base(n > 0 ? Vec3(p * (o.radius / n)) : Vec3(o.radius, 0, 0));
@@ -239,6 +238,7 @@ Clearance calc_clearance(const Obstacle& o, const Vec3& a_base, const Vec3& b_ba
       c.distance = sd(s) - r;
       return c;
     }
+    case ShapeType::kMesh: break;  // measured above
   }
   return c;
 }

@@ -81,6 +81,9 @@ Clearance calc_capsule_clearance(const Vec3& a0, const Vec3& b0, double r0, cons
 // the obstacle's; a mesh's: the clearance to its bounding box. -infinity for a plane and a bore.
 double calc_clearance_bound(const Obstacle& o, const Vec3& a, const Vec3& b, double r);
 
+// The nearest point of segment [a, b] to p: its parameter s in [0, 1] (a degenerate segment: 0).
+double calc_point_segment_parameter(const Vec3& p, const Vec3& a, const Vec3& b);
+
 // The closest points of segments [p0, q0] and [p1, q1]: the parameters s, t in [0, 1] of
 // p0 + s (q0 - p0) and p1 + t (q1 - p1) (Ericson 5.1.9; a degenerate segment is its point).
 void calc_segment_segment(const Vec3& p0, const Vec3& q0, const Vec3& p1, const Vec3& q1, double& s, double& t);
