@@ -8,6 +8,7 @@
 #include "jobs/mpi.hpp"
 #include "common/errors.hpp"
 #include "common/isa.hpp"
+#include "common/version.hpp"
 
 int main(int argc, char** argv) {
   ff::MpiSession session(&argc, &argv);  // one rank of one unless started by mpirun
@@ -15,12 +16,14 @@ int main(int argc, char** argv) {
   CLI::App app{"flexfarm: simulation farm for flexible robot manipulators (PNL Flexible Beam Testbed and kin)"};
   app.require_subcommand(1);
   // The version and the vector width the kernels run at (common/isa.hpp; FLEXFARM_ISA narrows it).
-  app.set_version_flag("--version", [] { return "flexfarm 0.1.0, kernels " + ff::describe_isa(); });
+  app.set_version_flag("--version", [] { return "flexfarm " + ff::describe_version() + ", kernels " + ff::describe_isa(); });
   ff::add_modes_verb(app);
   ff::add_simulate_verb(app);
   ff::add_run_verb(app);
   ff::add_merge_verb(app);
   ff::add_table_verb(app);
+  ff::add_history_verb(app);
+  ff::add_diff_verb(app);
   ff::add_plot_verb(app);
   ff::add_animate_verb(app);
   ff::add_view_verb(app);
@@ -32,9 +35,10 @@ int main(int argc, char** argv) {
     ff::active_isa();  // a bad FLEXFARM_ISA stops here, before any kernel runs
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);  // --help, bad options
+    const int code = app.exit(e);  // --help (0), bad options
+    return code == 0 ? 0 : 2;      // bad input is exit 2, as for a bad file (flexfarm diff: 1 is a regression)
   } catch (const ff::ExitError& e) {
-    std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    if (*e.what()) std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
     return e.code;
   } catch (const ff::ConfigError& e) {
     std::fprintf(stderr, "flexfarm: error: %s\n", e.what());

@@ -1,6 +1,10 @@
 // flexfarm run STUDY.yaml --out DIR: every variant of a study, on the cores, the MPI ranks or a
 // Slurm array task's shard; journalled, resumable; then the result table, database and plots.
+#include <omp.h>
+
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <regex>
 
 #include "apps/verbs.hpp"
@@ -8,7 +12,10 @@
 #include "jobs/mpi.hpp"
 #include "jobs/progress.hpp"
 #include "jobs/report.hpp"
+#include "jobs/report_html.hpp"
 #include "common/files.hpp"
+#include "results/diff.hpp"
+#include "results/history.hpp"
 
 namespace ff {
 
@@ -43,11 +50,56 @@ std::string describe_failures(const Study& study, const ResultTable& t) {
 
 }  // namespace
 
-// Assembles the journals of `dir` into the final outputs and prints where they are.
-void finish_study(const Study& study, const std::string& dir) {
+// Where a run records itself: --history, or the default history (results/history.hpp); --no-history: nowhere.
+struct HistoryArgs {
+  std::string dir;
+  bool off = false;
+  void add(CLI::App* cmd) {
+    cmd->add_option("--history", dir, "run history directory (default: $FLEXFARM_HISTORY, else "
+                                      "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)");
+    cmd->add_flag("--no-history", off, "do not record this run in the run history");
+  }
+};
+
+// Assembles the journals of `dir` into the final outputs, records the run in the history, compares it
+// with the study's previous run there (DIR/diff.md) and prints where they are.
+void finish_study(const Study& study, const std::string& dir, const RunContext& ctx, const HistoryArgs& history) {
   const ResultTable table = assemble_results(study, dir);
-  const std::string md = write_study_report(study, table, dir);
-  std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", md.c_str(), dir.c_str());
+  RunRecord record = make_run_record(study, table, dir, ctx);
+  ReportPage page{.description = study.description, .table_md = write_study_report(study, table, dir, record)};
+  std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", page.table_md.c_str(), dir.c_str());
+  const std::string hist = history.off ? "" : resolve_history_dir(history.dir);
+  page.diff_note = hist.empty() ? "Not recorded in a run history (--no-history, or no home directory)."
+                                : "The first run of this study in the history " + hist + ".";
+  if (!hist.empty()) {
+    // The results stand without the history: a history that cannot be written is a warning.
+    try {
+      record.id = record_run(hist, record);
+      std::printf("recorded as run %ld in %s/history.sqlite\n", record.id, hist.c_str());
+      if (const auto previous = find_previous_run(hist, record)) {
+        if (std::filesystem::exists(previous->out + "/results.sqlite")) {
+          RunDir before = read_run_dir(previous->out);
+          before.record.id = previous->id;
+          before.record.verdicts = previous->verdicts;
+          const RunDiff d = diff_runs(before, RunDir{record, table}, study.tolerances);
+          page.diff_md = format_diff_md(d);
+          write_file_atomic(dir + "/diff.md", page.diff_md);
+          std::printf("compared with %s: %s (%s/diff.md)\n", previous->describe().c_str(),
+                      d.regressions.empty() ? "nothing got worse" : (std::to_string(d.regressions.size()) + " regression(s)").c_str(),
+                      dir.c_str());
+        } else {
+          page.diff_note = "The previous run, " + previous->describe() + ", is gone from " + previous->out + ": not compared.";
+          std::printf("%s\n", page.diff_note.c_str());
+        }
+      }
+    } catch (const std::runtime_error& e) {
+      page.diff_note = std::string("The run history was not updated: ") + e.what();
+      std::fprintf(stderr, "flexfarm: warning: the run history was not updated: %s\n", e.what());
+    }
+  }
+  page.record = record;
+  write_report_html(dir, page);
+  std::printf("wrote %s/report.html\n", dir.c_str());
   const std::string failures = describe_failures(study, table);
   if (!failures.empty()) throw ExitError(failures, 3);
 }
@@ -60,6 +112,7 @@ void add_run_verb(CLI::App& app) {
     std::string study, out, shard;
     int threads = 0, lanes = 8;
     bool resume = false;
+    HistoryArgs history;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("study", args->study, "study YAML file, e.g. configs/studies/fbtb_paper.yaml")
@@ -74,7 +127,10 @@ void add_run_verb(CLI::App& app) {
   auto* shard = cmd->add_option("--shard", args->shard,
                   "I/N: compute only the variants with eval_id % N == I (a Slurm array task: "
                   "--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT), then `flexfarm merge`");
+  args->history.add(cmd);
   cmd->callback([args, shard] {
+    const auto t0 = std::chrono::steady_clock::now();
+    RunContext ctx{.started = format_utc_now()};
     const bool sharded = shard->count() > 0;  // an empty --shard "$UNSET" is an error, not "no shard"
     if (sharded) parse_shard(args->shard);
     const Study study = load_study(args->study);
@@ -125,7 +181,11 @@ void add_run_verb(CLI::App& app) {
       return;
     }
     comm.barrier();
-    if (comm.rank() == 0) finish_study(study, args->out);
+    ctx.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ctx.processes = comm.size();
+    ctx.threads = args->threads > 0 ? args->threads : omp_get_max_threads();
+    ctx.lanes = args->lanes;
+    if (comm.rank() == 0) finish_study(study, args->out, ctx, args->history);
   });
 }
 
@@ -134,11 +194,14 @@ void add_merge_verb(CLI::App& app) {
                                           "DIR/results.csv, results.sqlite, table.md and plots");
   struct Args {
     std::string study, out;
+    HistoryArgs history;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("study", args->study, "the study YAML file the shards ran")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "the directory the shards wrote into")->required()->check(CLI::ExistingDirectory);
-  cmd->callback([args] { finish_study(load_study(args->study), args->out); });
+  args->history.add(cmd);
+  // The shards' start and wall time are their own: the record says when the merge finished.
+  cmd->callback([args] { finish_study(load_study(args->study), args->out, RunContext{}, args->history); });
 }
 
 }  // namespace ff

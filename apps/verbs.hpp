@@ -30,5 +30,7 @@ void add_diagnose_verb(CLI::App& app);
 void add_calibrate_verb(CLI::App& app);
 void add_record_verb(CLI::App& app);
 void add_compare_verb(CLI::App& app);
+void add_history_verb(CLI::App& app);
+void add_diff_verb(CLI::App& app);
 
 }  // namespace ff

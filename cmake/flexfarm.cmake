@@ -45,10 +45,12 @@ function(flexfarm_tests folder)
     FLEXFARM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     FLEXFARM_BINARY="$<TARGET_FILE:flexfarm>")
   add_dependencies(test_${folder} flexfarm)
+  # Every run a test makes records itself in the build's own run history, never in the user's.
+  set(history ENVIRONMENT FLEXFARM_HISTORY=${CMAKE_CURRENT_BINARY_DIR}/history)
   gtest_discover_tests(test_${folder} WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} DISCOVERY_TIMEOUT 60
-    TEST_FILTER "-${FLEXFARM_SLOW_TESTS}" PROPERTIES LABELS fast)
+    TEST_FILTER "-${FLEXFARM_SLOW_TESTS}" PROPERTIES LABELS fast ${history})
   # The slow tests start first (a high COST): on a fresh tree, with no timings yet, ctest would
   # otherwise start the longest (minutes) last, beside nothing.
   gtest_discover_tests(test_${folder} WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} DISCOVERY_TIMEOUT 60
-    TEST_FILTER "${FLEXFARM_SLOW_TESTS}" PROPERTIES LABELS slow COST 1000)
+    TEST_FILTER "${FLEXFARM_SLOW_TESTS}" PROPERTIES LABELS slow COST 1000 ${history})
 endfunction()

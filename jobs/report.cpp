@@ -8,6 +8,7 @@
 
 #include "arm/arm_metrics.hpp"
 #include "common/files.hpp"
+#include "common/version.hpp"
 #include "kernel/simulate.hpp"
 #include "kernel/trajectory.hpp"
 #include "plotting/plot.hpp"
@@ -424,20 +425,48 @@ std::string report_sensitivity(const Study& study, const ResultTable& t, const s
 
 }  // namespace
 
-std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir) {
+RunRecord make_run_record(const Study& study, const ResultTable& table, const std::string& dir, const RunContext& ctx) {
+  const auto absolute = [](const std::string& p) { return std::filesystem::absolute(p).lexically_normal().string(); };
+  RunRecord r;
+  r.study = study.name;
+  r.study_path = absolute(study.source);
+  r.out = absolute(dir);
+  r.study_hash = study.hash;
+  r.study_text = study.text;
+  r.model_path = absolute(study.model_path);
+  r.model_text = study.model_text;
+  r.study_sha256 = calc_sha256(study.text);
+  r.model_sha256 = calc_sha256(study.model_text);
+  r.version = flexfarm_version();
+  r.commit = flexfarm_commit();
+  r.host = host_name();
+  r.started = ctx.started;
+  r.finished = format_utc_now();
+  r.seconds = ctx.seconds;
+  r.processes = ctx.processes;
+  r.threads = ctx.threads;
+  r.lanes = ctx.lanes;
+  r.planned = static_cast<int>(study.variants.size());
+  r.variants = static_cast<int>(table.rows.size());
+  r.status = count_statuses(table);
+  r.summaries = calc_metric_summaries(table, study.specs);
+  return r;
+}
+
+std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir, const RunRecord& record) {
   write_file_atomic(dir + "/results.csv", format_results_csv(table));
+  // results.sqlite is the same bits for the same results; what differs from run to run goes in run.yaml.
   write_results_sqlite(table, {{"name", study.name}, {"study", study.source}, {"model", study.model_path}, {"hash", study.hash}},
                        dir + "/results.sqlite");
+  write_file_atomic(dir + "/run.yaml", format_run_yaml(record));
 
   // Readable table: per run and move when the runs are few, a summary of every metric otherwise.
   std::string md = "# " + study.name + "\n\n" + (study.description.empty() ? "" : study.description + "\n\n");
-  int counts[5] = {0, 0, 0, 0, 0};
-  for (const auto& r : table.rows)
-    counts[r.status == "ok" ? 0 : r.status == "not_settled" ? 1 : r.status == "nonfinite" ? 2 : r.status == "invalid" ? 4 : 3]++;
+  const auto& n = record.status;
   char status[256];
   std::snprintf(status, sizeof status, "%zu variants: %d ok, %d not settled, %d nonfinite, %d solver failures%s.\n\n",
-                table.rows.size(), counts[0], counts[1], counts[2], counts[3],
-                counts[4] ? (", " + std::to_string(counts[4]) + " invalid (values the model rejects)").c_str() : "");
+                table.rows.size(), n.at("ok"), n.at("not_settled"), n.at("nonfinite"), n.at("solver_fail"),
+                n.at("invalid") ? (", " + std::to_string(n.at("invalid")) + " invalid (values the model rejects)").c_str() : "");
   md += status;
   if (study.listed && study.arm) {
     // One row per run: its key responses.

@@ -7,6 +7,7 @@
 
 #include "arm/arm_simulate.hpp"
 #include "kernel/simulate.hpp"
+#include "results/history.hpp"
 #include "results/table.hpp"
 #include "sweep/study.hpp"
 
@@ -23,7 +24,21 @@ void write_trace_plots(const std::string& dir, const std::vector<std::string>& l
 std::vector<std::string> write_arm_plots(const std::string& dir, const std::vector<std::string>& labels,
                                          const std::vector<const ArmTrace*>& traces, const std::string& title);
 
-// Writes everything into `dir`; returns the Markdown table it also wrote to table.md.
-std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir);
+// How a run ran, beyond its study and results: when it started (UTC, "" when not known), its wall
+// time so far and how it was spread.
+struct RunContext {
+  std::string started;
+  double seconds = kStatsNaN;
+  int processes = 1, threads = 0, lanes = 0;
+};
+
+// The record of a finished run in `dir` (results/history.hpp): its study, inputs, version, machine,
+// times, counts by status and per-metric summaries; finished now.
+RunRecord make_run_record(const Study& study, const ResultTable& table, const std::string& dir, const RunContext& ctx);
+
+// Writes everything into `dir` (run.yaml holds `record`); returns the Markdown table it also wrote to
+// table.md.
+std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir,
+                               const RunRecord& record);
 
 }  // namespace ff

@@ -223,6 +223,8 @@ void put_scene(std::string& out, const ViewScene& s) {
 
 // ---- The page.
 
+}  // namespace
+
 std::string html_escape(std::string_view s) {
   std::string out;
   for (const char c : s) {
@@ -236,6 +238,8 @@ std::string html_escape(std::string_view s) {
   }
   return out;
 }
+
+namespace {
 
 // JavaScript inside a <script> element: "</script" and "<!--" would end or confuse it; "<\/" and "<\!"
 // mean the same in JavaScript's strings, regular expressions and comments (the only places they occur).

@@ -20,6 +20,7 @@
 #include <array>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace ff {
@@ -77,5 +78,8 @@ struct ViewScene {
 // and increasing, an unknown shape type, an index out of range, a non-finite pose, radius or up),
 // std::runtime_error naming the path when it cannot be written.
 void write_view_html(const ViewScene& scene, const std::string& path);
+
+// Text for HTML: & < > " as entities (the viewer's page, and the run report's).
+std::string html_escape(std::string_view s);
 
 }  // namespace ff

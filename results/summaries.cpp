@@ -14,12 +14,7 @@ namespace ff {
 
 namespace {
 
-std::string num(double x, const char* f = "%.4g") {
-  if (std::isnan(x)) return "-";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, x);
-  return buf;
-}
+std::string num(double x, const char* f = "%.4g") { return format_cell(x, f); }
 
 std::string join(const std::vector<std::string>& cells, const char* sep) {
   std::string out;

@@ -27,6 +27,8 @@ std::string fmt(const char* f, double x) {
 
 }  // namespace
 
+std::string format_cell(double x, const char* format) { return std::isnan(x) ? "-" : fmt(format, x); }
+
 std::string format_results_header(const ResultTable& t) {
   std::string out = "eval_id,seed,label,status";
   for (const auto& c : t.params) out += "," + csv_quote(c);

@@ -23,6 +23,9 @@ struct ResultTable {
   std::vector<ResultRow> rows;       // ascending eval_id
 };
 
+// A number for a readable table: printf `format` ("%.4g"), "-" for NaN (no number).
+std::string format_cell(double x, const char* format = "%.4g");
+
 // CSV header: eval_id,seed,label,status,<params>,<columns>.
 std::string format_results_header(const ResultTable& table);
 // One CSV row (with its newline); NaN cells are empty; numbers with 17 significant digits (exact).

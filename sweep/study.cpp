@@ -330,6 +330,7 @@ Study read_study(const std::string& path, int max_variants) {
   Study st;
   st.source = path;
   const YAML::Node doc = load_yaml_file(path);
+  st.text = read_text(path);
   YamlReader top(doc, path, "", nullptr);
   if (!doc || doc.IsNull()) top.fail("model", "the file is empty");
   st.name = std::filesystem::path(path).stem().string();
@@ -360,6 +361,7 @@ Study read_study(const std::string& path, int max_variants) {
       st.specs[kv.first.as<std::string>()] = x;
     }
   }
+  st.tolerances = read_tolerances(top);
   st.keep_traces = st.variants.size() <= 50;
   auto outputs = top.child("outputs");
   outputs.optional("traces", st.keep_traces);
@@ -368,7 +370,7 @@ Study read_study(const std::string& path, int max_variants) {
 
   char hash[17];
   std::snprintf(hash, sizeof hash, "%016llx",
-                static_cast<unsigned long long>(fnv1a(st.model_text, fnv1a(read_text(path)))));
+                static_cast<unsigned long long>(fnv1a(st.model_text, fnv1a(st.text))));
   st.hash = hash;
   st.drawn = !st.listed && st.design.kind != DesignKind::kGrid && st.design.kind != DesignKind::kCentered;
   return st;

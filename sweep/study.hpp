@@ -13,6 +13,7 @@
 #include "kernel/model.hpp"
 #include "sweep/design.hpp"
 #include "sweep/paths.hpp"
+#include "sweep/tolerances.hpp"
 
 namespace ff {
 
@@ -26,6 +27,7 @@ struct Variant {
 
 struct Study {
   std::string source;           // the study file
+  std::string text;             // its contents, as read
   std::string name;
   std::string description;
   std::uint64_t seed = 1;
@@ -48,6 +50,7 @@ struct Study {
                                 // value: the result table's columns; a bad override fails at load
   bool drawn = false;           // the values are drawn from distributions, not written in the file
   std::map<std::string, double> specs;      // response -> limit a run must not exceed (Monte Carlo summaries)
+  std::vector<Tolerance> tolerances;        // how much worse than the last run is a regression (flexfarm diff)
   bool keep_traces = false;     // write every variant's trace (default: when there are at most 50)
   std::string hash;             // fingerprint of the study and model text: journals refuse another study's rows
 };

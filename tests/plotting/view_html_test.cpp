@@ -4,6 +4,7 @@
 // exaggeration bends a deflected capsule. The screenshots are kept in the tests' artefacts/ folder.
 #include "plotting/view_html.hpp"
 
+#include "tests/chromium.hpp"
 #include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
@@ -217,59 +218,28 @@ TEST(ViewHtml, ThePageHoldsTheScenesNumbersAndEscapesItsTexts) {
 
 // ---- In headless Chromium.
 
-// Chromium: $FLEXFARM_CHROMIUM or Debian's /usr/bin/chromium.
-std::string chromium() {
-  const char* env = std::getenv("FLEXFARM_CHROMIUM");
-  return env && *env ? env : "/usr/bin/chromium";
-}
-
-// The tests' artefacts folder (the build's tests/artefacts under ctest: the working directory).
-fs::path artefact(const std::string& name) {
-  const fs::path dir = fs::current_path() / "artefacts";
-  fs::create_directories(dir);
-  return dir / name;
-}
-
 struct Shot {
   cv::Mat image;    // BGR, 800 x 600
   std::string dom;  // the page's DOM once drawn
 };
 
-// The page at each of `hashes` ("t=1&exaggeration=10") in headless Chromium, software WebGL (SwiftShader),
-// the browsers side by side (most of a run is Chromium starting and stopping): the screenshots (kept as
-// the artefacts `names`) and DOMs. Fails the test when Chromium is missing.
+// The page at each of `hashes` ("t=1&exaggeration=10") in headless Chromium (tests/chromium.hpp): the
+// screenshots (kept as the artefacts `names`) and DOMs; each page must have drawn and reported no error.
 std::vector<Shot> open_in_chromium(const fs::path& page, const std::vector<std::string>& hashes,
                                    const std::vector<std::string>& names, const TempDir& dir) {
-  const std::string browser = chromium();
-  if (::access(browser.c_str(), X_OK) != 0) {
-    ADD_FAILURE() << "no Chromium at " << browser << " (or set FLEXFARM_CHROMIUM): run scripts/bootstrap, "
-                  << "which installs Debian's chromium for the viewer's browser tests";
-    return {};
-  }
-  std::vector<std::string> cmds;
-  std::vector<FILE*> pipes;
-  for (std::size_t i = 0; i < hashes.size(); ++i) {
-    cmds.push_back("timeout 60 '" + browser + "' --headless=new --no-sandbox --disable-gpu --use-angle=swiftshader "
-                   "--enable-unsafe-swiftshader --window-size=800,600 --hide-scrollbars --user-data-dir='" +
-                   (dir.path / ("profile" + std::to_string(i))).string() + "' --virtual-time-budget=1000 --screenshot='" +
-                   (dir.path / names[i]).string() + "' --dump-dom 'file://" + page.string() + "#" + hashes[i] + "' 2>/dev/null");
-    pipes.push_back(::popen(cmds.back().c_str(), "r"));
-    if (!pipes.back()) throw std::runtime_error("cannot run " + browser);
-  }
+  std::vector<ff::test::BrowserPage> pages;
+  for (std::size_t i = 0; i < hashes.size(); ++i) pages.push_back({"file://" + page.string() + "#" + hashes[i], names[i]});
+  const std::vector<std::string> doms = ff::test::load_in_chromium(pages, dir.path, 800, 600);
   std::vector<Shot> shots(hashes.size());
   for (std::size_t i = 0; i < hashes.size(); ++i) {
     Shot& shot = shots[i];
-    char buf[4096];
-    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipes[i])) > 0;) shot.dom.append(buf, n);
-    const int status = ::pclose(pipes[i]);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << cmds[i] << "\nexit status " << status;
+    shot.dom = doms[i];
+    if (shot.dom.empty()) continue;
     shot.image = cv::imread((dir.path / names[i]).string(), cv::IMREAD_COLOR);
     if (shot.image.empty()) {
-      ADD_FAILURE() << "no screenshot from: " << cmds[i];
+      ADD_FAILURE() << "no screenshot of #" << hashes[i];
       continue;
     }
-    fs::copy_file(dir.path / names[i], artefact(names[i]), fs::copy_options::overwrite_existing);
-    std::cout << "screenshot #" << hashes[i] << ": " << artefact(names[i]).string() << "\n";
     // Drawn at the requested time, and no JavaScript error (the page marks both on <html>; the banner says it).
     const std::string html_tag = shot.dom.substr(0, shot.dom.find('>', shot.dom.find("<html")));
     const std::size_t banner = shot.dom.find("<div id=\"error\"");
@@ -312,7 +282,7 @@ TEST(ViewHtml, TheArmsPixelsMoveBetweenTwoTimesInHeadlessChromium) {
   TempDir dir("ff_view_test");
   const fs::path page = dir.path / "view.html";
   ff::write_view_html(swinging_scene(), page.string());
-  fs::copy_file(page, artefact("view_swing.html"), fs::copy_options::overwrite_existing);
+  fs::copy_file(page, ff::test::artefact("view_swing.html"), fs::copy_options::overwrite_existing);
   const std::vector<Shot> shots = open_in_chromium(page, {"t=0", "t=2"}, {"view_t0.png", "view_t2.png"}, dir);
   if (shots.size() != 2 || shots[0].image.empty() || shots[1].image.empty()) return;
   const Shot &a = shots[0], &b = shots[1];

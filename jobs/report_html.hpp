@@ -1,0 +1,31 @@
+// A run's report for a reviewer: DIR/report.html, one self-contained page (its plots inlined as
+// data URIs, no script or style from elsewhere): the study's description, the requirements and their
+// verdicts, the diff against the study's previous run, the tables of table.md, every plot of DIR, and
+// the provenance (inputs with their hashes, version, machine, timings).
+#pragma once
+
+#include <string>
+
+#include "results/history.hpp"
+
+namespace ff {
+
+struct ReportPage {
+  RunRecord record;          // provenance and verdicts
+  std::string description;   // the study's
+  std::string table_md;      // table.md
+  std::string diff_md;       // the diff against the previous run (results/diff.hpp); "" when none
+  std::string diff_note;     // why there is none ("the first run of this study in the history")
+};
+
+// Writes DIR/report.html (atomically); the plots are DIR's *.png, in name order.
+void write_report_html(const std::string& dir, const ReportPage& page);
+
+// The Markdown that flexfarm writes (headings, pipe tables, lists, paragraphs, **bold**, `code`) as
+// HTML, every character of the text escaped.
+std::string format_markdown_html(const std::string& md);
+
+// RFC 4648 base64.
+std::string encode_base64(const std::string& bytes);
+
+}  // namespace ff
