@@ -1,5 +1,6 @@
 // flexfarm table DIR: settling-time and overshoot tables of a finished study, grouped by any
-// parameters (count, missing, mean, min, p5, p50, p95, max, and the probability of missing a spec).
+// parameters (count, missing, mean, min, p5, p50, p95, max, and the probability of missing a spec);
+// a parameter with more than --bins distinct values is grouped by its bins (results/statistics.hpp).
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -32,16 +33,28 @@ void add_table_verb(CLI::App& app) {
   auto* cmd = app.add_subcommand("table", "Summarise a study's results.csv grouped by parameters: count, mean, "
                                           "min, percentiles, max, and the probability of missing a spec");
   struct Args {
-    std::string input, format = "md";
+    std::string input, format = "md", binning = "quantile";
     std::vector<std::string> by, metrics, specs;
+    int bins = Binning{}.bins;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("results", args->input, "a study's output directory or its results.csv")->required()->check(CLI::ExistingPath);
-  cmd->add_option("--by", args->by, "parameters to group by, comma separated (e.g. payload.mass,segments); none = all rows");
+  cmd->add_option("--by", args->by, "parameters to group by, comma separated (e.g. payload.mass,segments); none = all rows. "
+                                    "One with more than --bins distinct values is grouped by bins, each an interval [a, b)");
   cmd->add_option("--metric", args->metrics, "metrics to summarise, comma separated")
       ->default_str("m1_tip_settling_s,m1_tip_overshoot_pct (an arm study's: each tool's, tool_settling_s,tool_overshoot_pct)");
   cmd->add_option("--spec", args->specs, "METRIC=LIMIT: report P(metric > limit or not settled), e.g. m1_tip_settling_s=3");
-  cmd->add_option("--format", args->format, "md or csv")->check(CLI::IsMember({"md", "csv"}))->capture_default_str();
+  cmd->add_option("--format", args->format, "md or csv (a binned parameter: its interval, then <param>_lo,<param>_hi)")
+      ->check(CLI::IsMember({"md", "csv"}))
+      ->capture_default_str();
+  cmd->add_option("--bins", args->bins, "a --by parameter with more than N distinct values is grouped into N bins "
+                                        "(fewer where ties merge them); 0 = one group per distinct value")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--binning", args->binning, "quantile (about equal numbers of rows per bin) or width (equal-width bins "
+                                              "from the least to the largest value)")
+      ->check(CLI::IsMember({"quantile", "width"}))
+      ->capture_default_str();
   cmd->callback([args] {
     std::string path = args->input;
     if (std::filesystem::is_directory(path)) path += "/results.csv";
@@ -65,8 +78,9 @@ void add_table_verb(CLI::App& app) {
     }
     try {
       const auto by = split_list(args->by);
-      std::fputs((args->format == "csv" ? format_groupby_csv(t, by, metrics, specs)
-                                        : format_groupby_md(t, by, metrics, specs)).c_str(), stdout);
+      const Binning binning{args->bins, args->binning == "width" ? Binning::kWidth : Binning::kQuantile};
+      std::fputs((args->format == "csv" ? format_groupby_csv(t, by, metrics, specs, binning)
+                                        : format_groupby_md(t, by, metrics, specs, binning)).c_str(), stdout);
     } catch (const std::invalid_argument& e) {
       throw CLI::ValidationError("--by/--metric", e.what());
     }

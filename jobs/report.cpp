@@ -178,8 +178,8 @@ HeatMap make_heat_map(const ResultTable& t, const std::string& x, const std::str
   return h;
 }
 
-// An arm with a world: the least clearance and contact by the first two parameters, and its heat
-// map (the least over the other parameters: the worst case of each cell).
+// An arm with a world: the least clearance and contact by the first two parameters (binned as in
+// report_grid), and its heat map (the least over the other parameters: the worst case of each cell).
 std::string report_clearance_grid(const Study& study, const ResultTable& t, const std::string& dir) {
   const auto& p = t.params;
   std::string md = "## Least clearance and contact by " + p[0] + (p.size() > 1 ? " and " + p[1] : "") + "\n\n";
@@ -201,7 +201,9 @@ std::string report_clearance_grid(const Study& study, const ResultTable& t, cons
   return md;
 }
 
-// Grid and centred designs: settling time over the first two parameters, and against each.
+// Grid and centred designs: settling time over the first two parameters, and against each. The table
+// bins a parameter with more than 10 values (format_groupby_md's default Binning: 10 quantile bins);
+// the heat map and the band plots keep every level.
 std::string report_grid(const Study& study, const ResultTable& t, const std::string& dir) {
   const KeyMetrics km = key_metrics(t);
   const auto& p = t.params;

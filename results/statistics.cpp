@@ -236,6 +236,47 @@ std::vector<Group> make_groups(const std::vector<std::vector<double>>& key_colum
   return groups;
 }
 
+std::vector<double> calc_bin_edges(const std::vector<double>& column, const Binning& binning) {
+  if (binning.bins <= 0) return {};
+  std::vector<double> x;  // the finite keys, rounded, ascending
+  for (double v : column)
+    if (std::isfinite(v)) x.push_back(round_key(v));
+  std::sort(x.begin(), x.end());
+  std::size_t levels = x.empty() ? 0 : 1;
+  for (std::size_t i = 1; i < x.size(); ++i) levels += x[i] != x[i - 1];
+  if (levels <= static_cast<std::size_t>(binning.bins)) return {};
+  const double lo = x.front(), hi = x.back();
+  std::vector<double> edges = {lo};
+  for (int k = 1; k < binning.bins; ++k) {
+    const double e = binning.kind == Binning::kQuantile
+                         ? sorted_percentile(x, 100.0 * k / binning.bins)
+                         : lo + (hi - lo) * static_cast<double>(k) / static_cast<double>(binning.bins);
+    // Rounded like the keys; clamped so the edges never decrease or pass the largest key.
+    edges.push_back(std::clamp(round_key(e), edges.back(), hi));
+  }
+  edges.push_back(hi);
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  if (binning.kind == Binning::kQuantile) {
+    // Drop the upper edge of a bin [a, b) that holds no key: it merges with the next one. The last bin,
+    // closed, holds the largest key.
+    std::vector<double> kept = {edges.front()};
+    for (std::size_t i = 1; i + 1 < edges.size(); ++i)
+      if (std::lower_bound(x.begin(), x.end(), kept.back()) != std::lower_bound(x.begin(), x.end(), edges[i]))
+        kept.push_back(edges[i]);
+    kept.push_back(edges.back());
+    edges = std::move(kept);
+  }
+  return edges;
+}
+
+double calc_bin_key(const std::vector<double>& edges, double value) {
+  if (!std::isfinite(value) || edges.size() < 2) return value;
+  const double v = round_key(value);
+  if (v < edges.front() || v > edges.back()) throw std::invalid_argument("calc_bin_key: value outside the bins");
+  const auto above = std::upper_bound(edges.begin(), edges.end(), v) - edges.begin();  // first edge > v
+  return static_cast<double>(std::min<std::ptrdiff_t>(above - 1, static_cast<std::ptrdiff_t>(edges.size()) - 2));
+}
+
 std::size_t draw_index(std::uint64_t seed, std::uint64_t counter, std::size_t n) {
   // Output number `counter` of the SplitMix64 stream whose state starts at mix(seed): mix(state + (counter+1) g).
   const std::uint64_t key = splitmix64_mix(seed + kGolden);

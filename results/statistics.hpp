@@ -61,6 +61,30 @@ struct Group {
 };
 std::vector<Group> make_groups(const std::vector<std::vector<double>>& key_columns);
 
+// Binning of a group-by key column with many levels (a fine grid, a random design), so that a table
+// grouped by it stays readable. A column with more than `bins` distinct finite keys (rounded as
+// make_groups rounds them) is binned into at most `bins` bins; one with fewer is not (bins <= 0:
+// never). Quantile bins: edges at the type-7 percentiles 100 k / bins (k = 0..bins) of every finite
+// key of the column, one per row (not per distinct value), so bins hold about equal numbers of rows,
+// as pandas.qcut; equal-width bins: min..max in `bins` equal steps. Edges are rounded to 12
+// significant digits; equal edges merge, and a quantile bin that holds no key (ties, e.g. 90 zeros
+// among 100 rows) merges with the next, so quantile bins are never empty or repeated (an equal-width
+// bin can be empty: it makes no group).
+struct Binning {
+  enum Kind { kQuantile, kWidth };
+  int bins = 10;
+  Kind kind = kQuantile;
+};
+
+// The bin edges e[0] < ... < e[m] (m >= 1 bins, e[0] the least key, e[m] the largest) of a key column,
+// or none when it is not binned (see Binning). Bin i is [e[i], e[i+1]), the last one closed [e[m-1], e[m]].
+std::vector<double> calc_bin_edges(const std::vector<double>& column, const Binning& binning);
+
+// The bin of `value` (rounded as make_groups rounds keys) under edges from calc_bin_edges: every finite
+// value in [e[0], e[m]] lands in exactly one bin, 0..m-1; NaN and +-inf give themselves (NaN stays its
+// own group, after every bin). The key column make_groups then groups by.
+double calc_bin_key(const std::vector<double>& edges, double value);
+
 // Helpers shared with sensitivity.cpp.
 
 // Counter-based uniform index in [0, n) (n >= 1): SplitMix64 (Steele, Lea & Flood 2014) output number `counter`

@@ -43,7 +43,62 @@ struct GroupRows {
   std::vector<int> rows;
 };
 
-std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::string>& by) {
+// A `by` column: its bin edges (none: not binned) and their text, with the fewest significant digits
+// from 6 on that tell every two edges apart.
+struct ByColumn {
+  std::string name;
+  std::vector<double> values, edges;
+  std::vector<std::string> edge_text;
+  int levels = 0;  // distinct finite keys of a binned column
+};
+
+ByColumn by_column(const ResultTable& t, const std::string& name, const Binning& binning) {
+  ByColumn c{name, column_values(t, name), {}, {}, 0};
+  if (name == "case") return c;  // a label, never binned
+  c.edges = calc_bin_edges(c.values, binning);
+  for (int digits = 6; !c.edges.empty() && digits <= 17; ++digits) {
+    c.edge_text.clear();
+    for (double e : c.edges) c.edge_text.push_back(num(e, ("%." + std::to_string(digits) + "g").c_str()));
+    if (std::adjacent_find(c.edge_text.begin(), c.edge_text.end()) == c.edge_text.end()) break;
+  }
+  if (!c.edges.empty()) {
+    std::vector<Group> levels = make_groups({c.values});
+    c.levels = static_cast<int>(std::count_if(levels.begin(), levels.end(), [](const Group& g) { return std::isfinite(g.key[0]); }));
+  }
+  return c;
+}
+
+// The key cells of a group in column c, whose key (a value, or a bin from calc_bin_key) is `key`: the
+// value, or the bin as an interval "[a, b)" ("[a, b]" the last one), in CSV followed by its two edges
+// (`<name>_lo`, `<name>_hi`; NaN and +-inf keys: "-" there).
+void add_key_cells(const ByColumn& c, double key, const std::string& row_label, bool csv, std::vector<std::string>* cells) {
+  if (c.name == "case") {
+    cells->push_back(case_label(row_label));
+    return;
+  }
+  if (c.edges.empty()) {
+    cells->push_back(num(key, "%.6g"));
+    return;
+  }
+  if (!std::isfinite(key)) {
+    cells->push_back(num(key, "%.6g"));
+    if (csv) cells->insert(cells->end(), 2, "-");
+    return;
+  }
+  const auto i = static_cast<std::size_t>(key);
+  const bool last = i + 2 == c.edges.size();
+  cells->push_back("[" + c.edge_text[i] + ", " + c.edge_text[i + 1] + (last ? "]" : ")"));
+  if (csv) {
+    cells->push_back(num(c.edges[i], "%.12g"));
+    cells->push_back(num(c.edges[i + 1], "%.12g"));
+  }
+}
+
+// The groups of the table by `by` (all rows when it is empty), each column binned as `binning` says;
+// *head gets the key columns' names (a binned one's in CSV with its `_lo` and `_hi`), *notes names each
+// binned column with its number of values and bins.
+std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::string>& by, const Binning& binning,
+                                  bool csv, std::vector<std::string>* head, std::string* notes) {
   std::vector<GroupRows> out;
   if (by.empty()) {
     GroupRows all;
@@ -51,12 +106,30 @@ std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::s
     out.push_back(all);
     return out;
   }
+  std::vector<ByColumn> cols;
   std::vector<std::vector<double>> keys;
-  for (const auto& b : by) keys.push_back(column_values(t, b));
+  for (const auto& b : by) {
+    cols.push_back(by_column(t, b, binning));
+    const ByColumn& c = cols.back();
+    head->push_back(b);
+    if (c.edges.empty()) {
+      keys.push_back(c.values);
+      continue;
+    }
+    if (csv) {
+      head->push_back(b + "_lo");
+      head->push_back(b + "_hi");
+    }
+    std::vector<double> bin(c.values.size());
+    for (std::size_t r = 0; r < bin.size(); ++r) bin[r] = calc_bin_key(c.edges, c.values[r]);
+    keys.push_back(bin);
+    *notes += (notes->empty() ? "" : "; ") + b + " (" + std::to_string(c.levels) + " values) in " +
+              std::to_string(c.edges.size() - 1) +
+              (binning.kind == Binning::kQuantile ? " quantile bins (about equal numbers of rows)" : " equal-width bins");
+  }
   for (const auto& g : make_groups(keys)) {
     GroupRows gr;
-    for (std::size_t i = 0; i < by.size(); ++i)
-      gr.key.push_back(by[i] == "case" ? case_label(t.rows[g.rows[0]].label) : num(g.key[i], "%.6g"));
+    for (std::size_t i = 0; i < by.size(); ++i) add_key_cells(cols[i], g.key[i], t.rows[g.rows[0]].label, csv, &gr.key);
     gr.rows = g.rows;
     out.push_back(gr);
   }
@@ -92,8 +165,10 @@ std::vector<std::string> summary_cells(const std::vector<double>& v, const std::
 
 template <class Row>
 std::string groupby(const ResultTable& t, const std::vector<std::string>& by, const std::vector<std::string>& metrics,
-                    const std::map<std::string, double>& specs, bool csv, Row row) {
-  std::vector<std::string> head = by;
+                    const std::map<std::string, double>& specs, const Binning& binning, bool csv, Row row) {
+  std::vector<std::string> head;
+  std::string notes;
+  const std::vector<GroupRows> groups = group_rows(t, by, binning, csv, &head, &notes);
   for (const char* h : {"metric", "count", "not settled", "missing", "horizon", "mean", "min", "p5", "p50", "p95", "max",
                         "P(miss spec)", "95% CI"})
     head.push_back(h);
@@ -104,7 +179,7 @@ std::string groupby(const ResultTable& t, const std::vector<std::string>& by, co
     cols.push_back(column_values(t, m));
     horizons.push_back(horizon_values(t, m));
   }
-  for (const auto& g : group_rows(t, by)) {
+  for (const auto& g : groups) {
     for (std::size_t k = 0; k < metrics.size(); ++k) {
       std::vector<double> v, h;
       for (int r : g.rows) v.push_back(cols[k][r]);
@@ -116,6 +191,8 @@ std::string groupby(const ResultTable& t, const std::vector<std::string>& by, co
       out += row(cells, false);
     }
   }
+  if (!csv && !notes.empty())
+    out += "\nBinned: " + notes + "; [a, b) holds a <= value < b, the last bin [a, b] its upper end too.\n";
   return out;
 }
 
@@ -143,8 +220,9 @@ std::vector<double> horizon_values(const ResultTable& t, const std::string& metr
 }
 
 std::string format_groupby_md(const ResultTable& t, const std::vector<std::string>& by,
-                              const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
-  return groupby(t, by, metrics, specs, false, [](const std::vector<std::string>& cells, bool header) {
+                              const std::vector<std::string>& metrics, const std::map<std::string, double>& specs,
+                              const Binning& binning) {
+  return groupby(t, by, metrics, specs, binning, false, [](const std::vector<std::string>& cells, bool header) {
     std::string line = "| " + join(cells, " | ") + " |\n";
     if (header) {
       line += "|";
@@ -156,8 +234,9 @@ std::string format_groupby_md(const ResultTable& t, const std::vector<std::strin
 }
 
 std::string format_groupby_csv(const ResultTable& t, const std::vector<std::string>& by,
-                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs) {
-  return groupby(t, by, metrics, specs, true, [](const std::vector<std::string>& cells, bool) {
+                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs,
+                               const Binning& binning) {
+  return groupby(t, by, metrics, specs, binning, true, [](const std::vector<std::string>& cells, bool) {
     std::vector<std::string> quoted;
     for (const auto& c : cells)  // no number: an empty cell
       quoted.push_back(c == "-" ? std::string() : c.find_first_of(", ") != std::string::npos ? "\"" + c + "\"" : c);

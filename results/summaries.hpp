@@ -37,10 +37,18 @@ std::vector<double> horizon_values(const ResultTable& t, const std::string& metr
 // A statistic above the horizon reads "> H" in Markdown; in CSV its cell holds H and the last
 // column, `censored`, names those statistics ("mean" when the mean is the restricted mean), e.g.
 // "mean p95 max".
+// A `by` column with more than binning.bins distinct values (the default: 10) is grouped by its bins
+// (Binning, statistics.hpp; `case`, a label, never is): its key reads as an interval, "[0.5, 1.25)"
+// (the last bin closed, "[a, b]"); in CSV that text, then two numeric columns `<name>_lo` and
+// `<name>_hi` with the edges (12 significant digits; empty for a NaN key, which stays its own group),
+// so a spreadsheet can sort and plot by them. Markdown ends with a line naming each binned column,
+// its number of distinct values and bins. An unbinned column prints its values (6 significant digits).
 std::string format_groupby_md(const ResultTable& t, const std::vector<std::string>& by,
-                              const std::vector<std::string>& metrics, const std::map<std::string, double>& specs);
+                              const std::vector<std::string>& metrics, const std::map<std::string, double>& specs,
+                              const Binning& binning = {});
 std::string format_groupby_csv(const ResultTable& t, const std::vector<std::string>& by,
-                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs);
+                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs,
+                               const Binning& binning = {});
 
 // Monte Carlo summary of each metric: runs, not settled (with their horizons), no value, mean, p5,
 // p50, p95, each with a 95 % percentile-bootstrap interval (1000 resamples that draw the

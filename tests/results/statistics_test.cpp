@@ -1,4 +1,4 @@
-// results/statistics.cpp: percentiles, summaries, bootstrap intervals, Wilson intervals, group-by.
+// results/statistics.cpp: percentiles, summaries, bootstrap intervals, Wilson intervals, group-by and its bins.
 #include "results/statistics.hpp"
 
 #include <gtest/gtest.h>
@@ -239,6 +239,140 @@ TEST(Statistics, GroupsAreSortedAndExhaustive) {
 
   EXPECT_TRUE(make_groups({}).empty());
   EXPECT_THROW(make_groups({{1.0, 2.0}, {1.0}}), std::invalid_argument);
+}
+
+// The bin of every value of `column` under `edges` (calc_bin_key), grouped: the rows of each bin.
+std::vector<Group> bin_groups(const std::vector<double>& column, const std::vector<double>& edges) {
+  std::vector<double> key;
+  for (double v : column) key.push_back(calc_bin_key(edges, v));
+  return make_groups({key});
+}
+
+// Every row in exactly one group, no group empty, edges strictly ascending, each finite row inside its bin.
+void expect_proper_bins(const std::vector<double>& column, const std::vector<double>& edges) {
+  for (std::size_t i = 1; i < edges.size(); ++i) EXPECT_LT(edges[i - 1], edges[i]) << i;
+  std::vector<int> seen(column.size(), 0);
+  const auto groups = bin_groups(column, edges);
+  std::size_t finite_bins = 0;
+  for (const auto& g : groups) {
+    EXPECT_FALSE(g.rows.empty());
+    finite_bins += std::isfinite(g.key[0]);
+    for (int r : g.rows) {
+      ++seen[r];
+      if (!std::isfinite(g.key[0])) continue;
+      const auto b = static_cast<std::size_t>(g.key[0]);
+      EXPECT_GE(column[r], edges[b]) << r;
+      if (b + 2 < edges.size()) {
+        EXPECT_LT(column[r], edges[b + 1]) << r;
+      } else {
+        EXPECT_LE(column[r], edges[b + 1]) << r;
+      }
+    }
+  }
+  EXPECT_EQ(finite_bins + 1, edges.size()) << "a quantile bin without rows";
+  for (int s : seen) EXPECT_EQ(s, 1);
+}
+
+TEST(Binning, QuantileBinsOfOneToHundredHoldTenRowsEach) {
+  // 1..100 in a shuffled order: the type-7 percentiles 10 k of 1..100 are 10 k + 1 - 0.1 k.
+  std::vector<double> x(100);
+  for (int r = 0; r < 100; ++r) x[r] = (r * 37) % 100 + 1;
+  const auto edges = calc_bin_edges(x, {});
+  EXPECT_EQ(edges, (std::vector<double>{1, 10.9, 20.8, 30.7, 40.6, 50.5, 60.4, 70.3, 80.2, 90.1, 100}));
+  const auto groups = bin_groups(x, edges);
+  ASSERT_EQ(groups.size(), 10u);
+  for (int b = 0; b < 10; ++b) {
+    EXPECT_EQ(groups[b].key[0], b);
+    ASSERT_EQ(groups[b].rows.size(), 10u) << b;
+    for (int r : groups[b].rows) {
+      EXPECT_GE(x[r], 10 * b + 1) << b;
+      EXPECT_LE(x[r], 10 * b + 10) << b;
+    }
+  }
+  expect_proper_bins(x, edges);
+}
+
+TEST(Binning, EqualWidthBinsSplitTheRangeEvenlyAndAnEdgeOpensItsBin) {
+  // 0..10 and 2.5, 7.5 once more, in 4 equal-width bins: edges 0, 2.5, 5, 7.5, 10; 10 closes the last.
+  std::vector<double> x = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 2.5, 7.5};
+  const Binning width{4, Binning::kWidth};
+  const auto edges = calc_bin_edges(x, width);
+  EXPECT_EQ(edges, (std::vector<double>{0, 2.5, 5, 7.5, 10}));
+  const auto groups = bin_groups(x, edges);
+  ASSERT_EQ(groups.size(), 4u);
+  EXPECT_EQ(groups[0].rows, (std::vector<int>{0, 1, 2}));       // 0, 1, 2
+  EXPECT_EQ(groups[1].rows, (std::vector<int>{3, 4, 11}));      // 3, 4, 2.5
+  EXPECT_EQ(groups[2].rows, (std::vector<int>{5, 6, 7}));       // 5, 6, 7
+  EXPECT_EQ(groups[3].rows, (std::vector<int>{8, 9, 10, 12}));  // 8, 9, 10, 7.5
+  // A gap: the empty equal-width bins stay (they make no group); 0.1 + 0.2 lands on the edge 0.3.
+  const std::vector<double> gap = {0, 1, 2, 3, 4, 5, 6, 100};
+  EXPECT_EQ(calc_bin_edges(gap, width), (std::vector<double>{0, 25, 50, 75, 100}));
+  EXPECT_EQ(bin_groups(gap, calc_bin_edges(gap, width)).size(), 2u);
+  std::vector<double> tenths;
+  for (int i = 0; i <= 20; ++i) tenths.push_back(i * 0.1);
+  const auto e = calc_bin_edges(tenths, {10, Binning::kWidth});
+  ASSERT_EQ(e.size(), 11u);
+  EXPECT_EQ(e[3], 0.6);
+  EXPECT_EQ(calc_bin_key(e, 0.1 + 0.2 + 0.3), 3.0) << "0.6000000000000001 is 0.6 to 12 digits: the bin it opens";
+}
+
+TEST(Binning, TiesGiveNoEmptyOrRepeatedBin) {
+  // 90 zeros and 1..10: the percentiles 10..80 are all 0 and merge; 90 is 0.1; two bins.
+  std::vector<double> x(90, 0.0);
+  for (int i = 1; i <= 10; ++i) x.push_back(i);
+  const auto edges = calc_bin_edges(x, {});
+  EXPECT_EQ(edges, (std::vector<double>{0, 0.1, 10}));
+  const auto groups = bin_groups(x, edges);
+  ASSERT_EQ(groups.size(), 2u);
+  EXPECT_EQ(groups[0].rows.size(), 90u);
+  EXPECT_EQ(groups[1].rows.size(), 10u);
+  expect_proper_bins(x, edges);
+  // Distinct edges can still bound no row: 16 rows, 2 twice; the 10th percentile is 1.5, the 20th 2, so
+  // [1.5, 2) holds nothing and merges with the next bin.
+  const std::vector<double> y = {0, 1, 2, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14};
+  const auto ey = calc_bin_edges(y, {});
+  EXPECT_EQ(ey, (std::vector<double>{0, 1.5, 3.5, 5, 6.5, 8, 9.5, 11, 12.5, 14}));
+  expect_proper_bins(y, ey);
+  // Random columns with many ties, quantile and equal-width: the same properties.
+  TestRng rng{11};
+  for (int trial = 0; trial < 50; ++trial) {
+    std::vector<double> z(1 + rng.next() % 300);
+    for (double& v : z) v = static_cast<double>(rng.next() % (2 + trial)) * (rng.next() % 4 == 0 ? 0.0 : 0.25);
+    for (int bins : {1, 3, 10}) {
+      const auto ez = calc_bin_edges(z, {bins, Binning::kQuantile});
+      if (!ez.empty()) {
+        expect_proper_bins(z, ez);
+      }
+      const auto ew = calc_bin_edges(z, {bins, Binning::kWidth});
+      for (std::size_t i = 1; i < ew.size(); ++i) EXPECT_LT(ew[i - 1], ew[i]);
+      if (!ew.empty()) {
+        EXPECT_EQ(ew.size(), static_cast<std::size_t>(bins) + 1);
+      }
+    }
+  }
+}
+
+TEST(Binning, NanKeysStayTheirOwnGroupAndFewLevelsAreNotBinned) {
+  std::vector<double> x;
+  for (int i = 0; i < 20; ++i) x.push_back(i);
+  x.insert(x.begin() + 3, kNaN);
+  x.push_back(kNaN);
+  const auto edges = calc_bin_edges(x, {5, Binning::kWidth});
+  EXPECT_EQ(edges, (std::vector<double>{0, 3.8, 7.6, 11.4, 15.2, 19}));
+  const auto groups = bin_groups(x, edges);
+  ASSERT_EQ(groups.size(), 6u);
+  EXPECT_TRUE(std::isnan(groups[5].key[0]));
+  EXPECT_EQ(groups[5].rows, (std::vector<int>{3, 21}));
+  expect_proper_bins(x, edges);
+  // Not binned: at most `bins` distinct values (NaN not counted), bins = 0, or no values.
+  EXPECT_TRUE(calc_bin_edges({1, 2, 3, 2, 1, kNaN, kNaN}, {3}).empty());
+  EXPECT_TRUE(calc_bin_edges(x, {0}).empty());
+  EXPECT_TRUE(calc_bin_edges(x, {20}).empty());
+  EXPECT_EQ(calc_bin_edges(x, {19}).size(), 20u);
+  EXPECT_TRUE(calc_bin_edges({}, {}).empty());
+  EXPECT_TRUE(calc_bin_edges({kNaN, kNaN}, {1}).empty());
+  EXPECT_TRUE(std::isnan(calc_bin_key(edges, kNaN)));
+  EXPECT_THROW(calc_bin_key(edges, 20.0), std::invalid_argument);
 }
 
 }  // namespace

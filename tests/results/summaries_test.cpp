@@ -82,6 +82,75 @@ TEST(Summaries, GroupByMarkdownShowsBoundsPerGroup) {
   EXPECT_EQ(lines[2].rfind("| 0 | m1_tip_settling_s | 3 | 2 | 0 | 8 | 5.2 | 1 | 1 | 5 | > 8 | > 8 |", 0), 0u) << lines[2];
 }
 
+// 40 runs, x = 1..40 (shuffled), tip settling x / 4 s except every fifth run, not settled (horizon 8 s);
+// one more run with no x (NaN).
+ResultTable binned_table() {
+  ResultTable t;
+  t.params = {"x"};
+  t.columns = {"m1_tip_settling_s", "m1_settling_horizon_s"};
+  for (int i = 0; i <= 40; ++i) {
+    const double x = i == 40 ? kNaN : (i * 17) % 40 + 1;
+    t.rows.push_back({i, 0, "run " + std::to_string(i), "ok", {x}, {i % 5 == 0 ? kNaN : x / 4, 8.0}});
+  }
+  return t;
+}
+
+// The cells of a Markdown or CSV line after its first `skip` (the key).
+std::string after_key(const std::string& line, const std::string& sep, int skip) {
+  std::size_t at = sep == " | " ? 2 : 0;
+  for (int i = 0; i < skip; ++i) at = line.find(sep, at) + sep.size();
+  return line.substr(at);
+}
+
+TEST(Summaries, GroupByBinsAColumnWithManyValuesAndEachBinSummarisesItsRows) {
+  // 4 quantile bins of x = 1..40: edges 1, 10.75, 20.5, 30.25, 40; NaN its own group, last.
+  const ResultTable t = binned_table();
+  const std::string md = format_groupby_md(t, {"x"}, {"m1_tip_settling_s"}, {{"m1_tip_settling_s", 5.0}}, {4});
+  const auto lines = lines_of(md);
+  ASSERT_EQ(lines.size(), 9u) << md;
+  const char* keys[] = {"[1, 10.75)", "[10.75, 20.5)", "[20.5, 30.25)", "[30.25, 40]", "-"};
+  for (int b = 0; b < 5; ++b) EXPECT_EQ(lines[2 + b].rfind(std::string("| ") + keys[b] + " | m1_tip_settling_s | ", 0), 0u) << lines[2 + b];
+  EXPECT_EQ(lines[8], "Binned: x (40 values) in 4 quantile bins (about equal numbers of rows); [a, b) holds a <= value < b, "
+                      "the last bin [a, b] its upper end too.");
+  // The same rows grouped by hand (x replaced by its bin, 0..3): the same censored statistics.
+  ResultTable by_hand = t;
+  for (auto& r : by_hand.rows)
+    if (!std::isnan(r.params[0])) r.params[0] = std::floor((r.params[0] - 1) / 10);
+  const auto hand = lines_of(format_groupby_md(by_hand, {"x"}, {"m1_tip_settling_s"}, {{"m1_tip_settling_s", 5.0}}, {0}));
+  ASSERT_EQ(hand.size(), 7u);
+  for (int g = 2; g < 7; ++g) EXPECT_EQ(after_key(lines[g], " | ", 1), after_key(hand[g], " | ", 1)) << g;
+  // The first bin: 8 settled (0.5..2.5 s), 2 not settled.
+  EXPECT_EQ(after_key(lines[2], " | ", 1).rfind("m1_tip_settling_s | 8 | 2 | 0 | 8 |", 0), 0u) << lines[2];
+  // Binning off, or a column with few values: one group per value, and no note.
+  EXPECT_EQ(lines_of(format_groupby_md(t, {"x"}, {"m1_tip_settling_s"}, {}, {0})).size(), 43u);
+  EXPECT_EQ(lines_of(format_groupby_md(t, {"x"}, {"m1_tip_settling_s"}, {}, {40})).size(), 43u);
+  EXPECT_EQ(lines_of(format_groupby_md(t, {"x"}, {"m1_tip_settling_s"}, {})).size(), 15u) << "10 bins by default";
+}
+
+TEST(Summaries, GroupByCsvGivesABinItsIntervalAndItsEdges) {
+  const ResultTable t = binned_table();
+  const std::string csv = format_groupby_csv(t, {"x"}, {"m1_tip_settling_s"}, {}, {4, Binning::kWidth});
+  const auto lines = lines_of(csv);
+  ASSERT_EQ(lines.size(), 6u) << csv;
+  EXPECT_EQ(lines[0].rfind("x,x_lo,x_hi,metric,count,", 0), 0u) << lines[0];
+  // Equal width over 1..40: edges 1, 10.75, 20.5, 30.25, 40 too (the values are evenly spread).
+  EXPECT_EQ(lines[1].rfind("\"[1, 10.75)\",1,10.75,m1_tip_settling_s,8,2,0,8,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[4].rfind("\"[30.25, 40]\",30.25,40,m1_tip_settling_s,", 0), 0u) << lines[4];
+  EXPECT_EQ(lines[5].rfind(",,,m1_tip_settling_s,", 0), 0u) << "a NaN key: no interval, no edges; " << lines[5];
+  // The edges are the rows' bounds to 12 digits; the interval's text has the fewest digits from 6 on
+  // that tell neighbouring edges apart (here 9: 1, 1.00000001, 1.00000002, ...).
+  ResultTable fine = t;
+  for (auto& r : fine.rows) r.params[0] = 1 + r.params[0] * 1e-9;
+  const auto fl = lines_of(format_groupby_csv(fine, {"x"}, {"m1_tip_settling_s"}, {}, {4, Binning::kWidth}));
+  EXPECT_EQ(fl[1].rfind("\"[1, 1.00000001)\",1.000000001,1.00000001075,", 0), 0u) << fl[1];
+  // A case is a label: never binned, however many.
+  ResultTable cases = t;
+  cases.params = {"case"};
+  for (auto& r : cases.rows) r.label = "c" + std::to_string(r.eval_id % 12) + " | x";
+  for (auto& r : cases.rows) r.params[0] = r.eval_id % 12;
+  EXPECT_EQ(lines_of(format_groupby_csv(cases, {"case"}, {"m1_tip_settling_s"}, {})).size(), 13u);
+}
+
 TEST(Summaries, TableWithoutHorizonsCountsNotSettledAsMissing) {
   // A results.csv written before the horizon column: NaN stays "missing", statistics over the settled runs.
   const std::string csv = format_groupby_csv(censored_table(false), {}, {"m1_tip_settling_s"}, {});

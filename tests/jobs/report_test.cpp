@@ -1,0 +1,72 @@
+// jobs/report.cpp: table.md of a grid study over a fine grid groups each parameter into bins.
+#include "jobs/report.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/temp_dir.hpp"
+
+namespace ff {
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A 64 x 64 grid (payload.mass x joints.stiffness), as a finished study's result table: tip settling
+// 1 + mass / 100 s, not settled (horizon 5 s) where the mass is above 390 kg and the stiffness below 35e3.
+ResultTable fine_grid() {
+  ResultTable t;
+  t.params = {"payload.mass", "joints.stiffness"};
+  t.columns = {"m1_tip_settling_s", "m1_tip_overshoot_pct", "m1_settling_horizon_s"};
+  for (int i = 0; i < 64 * 64; ++i) {
+    const double mass = 164.35 + (i / 64) * (493.05 - 164.35) / 63, k = 31.6e3 + (i % 64) * 250.0;
+    const bool settled = !(mass > 390 && k < 35e3);
+    t.rows.push_back({i, 0, "v" + std::to_string(i), settled ? "ok" : "not_settled", {mass, k},
+                      {settled ? 1 + mass / 100 : NAN, k / 1e4, 5.0}});
+  }
+  return t;
+}
+
+TEST(Report, AFineGridsTableBinsEachParameterIntoTenGroups) {
+  const test::TempDir dir("ff_report");
+  Study study;
+  study.name = "fine";
+  study.design.kind = DesignKind::kGrid;
+  const std::string md = write_study_report(study, fine_grid(), dir.path.string());
+  EXPECT_EQ(read_text((dir.path / "table.md").string()), md);
+  // The settling table: 10 x 10 bins, two metrics each, not 4096 x 2 lines.
+  const auto a = md.find("## Tip settling time by payload.mass and joints.stiffness");
+  ASSERT_NE(a, std::string::npos) << md;
+  const auto b = md.find("## Every metric", a);
+  ASSERT_NE(b, std::string::npos) << md;
+  int groups = 0;
+  std::istringstream in(md.substr(a, b - a));
+  for (std::string line; std::getline(in, line);) groups += line.rfind("| [", 0) == 0;
+  EXPECT_EQ(groups, 200) << md;
+  // A grid's quantile edges fall on its levels (each level 64 rows): the first bins hold levels 0..5 of
+  // each, 36 runs, settling 1 + (164.35 + 2.5 x 5.2175) / 100 s on average.
+  EXPECT_NE(md.find("| [164.35, 195.655) | [31600, 33100) | m1_tip_settling_s | 36 | 0 | 0 | - | 2.774 |"), std::string::npos)
+      << md;
+  // The last bins, closed, with the not-settled runs (mass above 390 kg, stiffness below 35e3).
+  EXPECT_NE(md.find(", 493.05] | [33100, 34600) | m1_tip_settling_s | "), std::string::npos) << md;
+  EXPECT_NE(md.find(", 47350] | m1_tip_settling_s | "), std::string::npos) << md;
+  EXPECT_NE(md.find("Binned: payload.mass (64 values) in 10 quantile bins (about equal numbers of rows); "
+                    "joints.stiffness (64 values) in 10 quantile bins"),
+            std::string::npos)
+      << md;
+  // The plots keep every level.
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "heatmap_settling.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "settling_vs_payload_mass.png"));
+}
+
+}  // namespace
+}  // namespace ff
