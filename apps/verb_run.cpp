@@ -48,6 +48,12 @@ void finish_study(const Study& study, const std::string& dir) {
   const ResultTable table = assemble_results(study, dir);
   const std::string md = write_study_report(study, table, dir);
   std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", md.c_str(), dir.c_str());
+  if (!study.requirements.statements.empty()) {
+    // The verdicts last, where they are seen (they do not change the exit code).
+    const std::size_t n = table.rows.size(), total = study.variants.size();
+    std::printf("\nrequirements (%zu of %zu variants%s):\n%s", n, total, n < total ? ", stopped early: every requirement decided" : "",
+                format_verdict_lines(calc_study_verdicts(study, table)).c_str());
+  }
   const std::string failures = describe_failures(study, table);
   if (!failures.empty()) throw ExitError(failures, 3);
 }
@@ -101,6 +107,9 @@ void add_run_verb(CLI::App& app) {
                             ".csv is locked); wait for that run to end, or use another --out");
 
     opt.notice = [](const std::string& m) { std::fprintf(stderr, "flexfarm: %s\n", m.c_str()); };
+    if (study.requirements.stop_when_decided && opt.part.count > 1 && comm.rank() == 0)
+      opt.notice("requirements.stop_when_decided: " + std::string(sharded ? "shards" : "MPI ranks") +
+                 " do not see each other's rows, so every variant runs; the results stop where one process would have");
     Progress progress(study.name + (opt.tag == "main" ? "" : " " + opt.tag), stderr_is_terminal());
     int already = -1;
     opt.progress = [&](int done, int total, double seconds) {

@@ -8,6 +8,7 @@
 
 #include "arm/arm_metrics.hpp"
 #include "common/files.hpp"
+#include "jobs/farm.hpp"
 #include "kernel/simulate.hpp"
 #include "kernel/trajectory.hpp"
 #include "plotting/plot.hpp"
@@ -424,6 +425,17 @@ std::string report_sensitivity(const Study& study, const ResultTable& t, const s
 
 }  // namespace
 
+std::string format_study_requirements_md(const Study& study, const ResultTable& table) {
+  if (study.requirements.statements.empty()) return "";
+  std::string md = "\n## Requirements\n\n";
+  if (table.rows.size() < study.variants.size())
+    md += "Stopped early after " + std::to_string(table.rows.size()) + " of " + std::to_string(study.variants.size()) +
+          " variants: every requirement decided.\n\n";
+  char conf[64];
+  std::snprintf(conf, sizeof conf, "Intervals at %g %% confidence.\n\n", study.requirements.confidence * 100.0);
+  return md + conf + format_requirements_md(calc_study_verdicts(study, table));
+}
+
 std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir) {
   write_file_atomic(dir + "/results.csv", format_results_csv(table));
   write_results_sqlite(table, {{"name", study.name}, {"study", study.source}, {"model", study.model_path}, {"hash", study.hash}},
@@ -479,6 +491,7 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     }
     md += "\n## Every metric\n\n" + format_groupby_md(table, {}, table.columns, study.specs);
   }
+  md += format_study_requirements_md(study, table);
   write_file_atomic(dir + "/table.md", md);
 
   // Time series of every variant whose trace is on disk, when they are few enough to tell apart.

@@ -23,6 +23,10 @@ void write_trace_plots(const std::string& dir, const std::vector<std::string>& l
 std::vector<std::string> write_arm_plots(const std::string& dir, const std::vector<std::string>& labels,
                                          const std::vector<const ArmTrace*>& traces, const std::string& title);
 
+// table.md's "## Requirements" section: the verdicts of the study's requirements (calc_study_verdicts,
+// jobs/farm.hpp), and whether the study stopped early; "" without requirements.
+std::string format_study_requirements_md(const Study& study, const ResultTable& table);
+
 // Writes everything into `dir`; returns the Markdown table it also wrote to table.md.
 std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir);
 

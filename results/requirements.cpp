@@ -181,7 +181,7 @@ RequirementSet read_requirements(YamlReader& top) {
   set.key = top.full_key("requirements");
   if (!top.has("requirements")) return set;
   const YAML::Node node = top.raw("requirements");
-  set.line = node.Mark().line + 1;
+  set.line = set.stop_line = node.Mark().line + 1;
   YAML::Node list = node;
   std::string list_key = set.key;
   if (node.IsMap()) {
@@ -191,6 +191,7 @@ RequirementSet read_requirements(YamlReader& top) {
     list.reset(r.raw("statements"));  // reset: a Node's operator= would write into `requirements:` itself
     list_key = r.full_key("statements");
     read_present(r, kRequirementFields, set);
+    set.stop_line = r.has("stop_when_decided") ? node["stop_when_decided"].Mark().line + 1 : set.line;
     if (!(set.confidence < 1.0)) r.fail("confidence", "must be in (0, 1), got " + format_key_number(set.confidence));
     r.finish();
   } else if (!node.IsSequence()) {

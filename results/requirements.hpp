@@ -58,6 +58,7 @@ struct RequirementSet {
   std::string file;                // the study file, and the block's line and key, for errors
   int line = 0;
   std::string key = "requirements";
+  int stop_line = 0;               // of `stop_when_decided` (the block's when not written)
 };
 
 // The keys of the map form of `requirements:` (docs/formats.md holds the docs to it).

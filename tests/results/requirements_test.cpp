@@ -12,6 +12,7 @@
 
 #include "common/errors.hpp"
 #include "results/censoring.hpp"
+#include "sweep/study.hpp"
 #include "tests/docs_tables.hpp"
 
 namespace {
@@ -366,6 +367,17 @@ TEST(Requirement, TheStopPointIsTheFirstCheckpointWhereEveryStatementIsDecided) 
   EXPECT_EQ(checked, (std::vector<int>{10, 20, 30})) << "each checkpoint once";
   EXPECT_EQ(find_stop_point(s, 100, 100, [](int) { return false; }), 100);
   EXPECT_EQ(find_stop_point(s, 30, 30, decided_from_30), 30) << "the whole study: no early stop";
+}
+
+// The example of docs/formats.md: its block read with the study, its metrics checked against the columns.
+TEST(RequirementYaml, TheProposalStudyReadsItsRequirements) {
+  const Study st = load_study(std::string(FLEXFARM_SOURCE_DIR) + "/configs/studies/fbtb_proposal.yaml");
+  ASSERT_EQ(st.requirements.statements.size(), 4u);
+  EXPECT_TRUE(st.requirements.stop_when_decided);
+  EXPECT_EQ(st.requirements.check_every, 100);
+  EXPECT_EQ(st.requirements.seed, st.seed);
+  EXPECT_EQ(st.requirements.statements[1].kind, RequirementKind::kPercentile);
+  EXPECT_EQ(st.requirements.statements[1].metric, "m1_peak_torque_Nm");
 }
 
 }  // namespace
