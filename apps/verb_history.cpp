@@ -9,6 +9,7 @@
 #include "common/yaml_reader.hpp"
 #include "results/diff.hpp"
 #include "results/history.hpp"
+#include "results/requirements.hpp"
 
 namespace ff {
 
@@ -32,7 +33,7 @@ std::string counts_text(const RunRecord& r) {
 
 std::string verdicts_text(const RunRecord& r) {
   int pass = 0, fail = 0, undecided = 0;
-  for (const VerdictRecord& v : r.verdicts) (v.verdict == "pass" ? pass : v.verdict == "fail" ? fail : undecided)++;
+  for (const Verdict& v : r.verdicts) (v.verdict == "pass" ? pass : v.verdict == "fail" ? fail : undecided)++;
   if (r.verdicts.empty()) return "-";
   return std::to_string(pass) + " pass, " + std::to_string(fail) + " fail" +
          (undecided ? ", " + std::to_string(undecided) + " undecided" : "");
@@ -60,7 +61,7 @@ std::string format_run_md(const RunRecord& r) {
           " |\n";
   if (!r.verdicts.empty()) {
     md += "\n| requirement | verdict | estimate [interval] | n | evidence |\n|---|---|---|---|---|\n";
-    for (const VerdictRecord& v : r.verdicts)
+    for (const Verdict& v : r.verdicts)
       md += "| " + v.requirement + " | " + v.verdict + " | " + num(v.estimate) + " [" + num(v.lower) + ", " + num(v.upper) +
             "] | " + std::to_string(v.n) + " | " + v.evidence + " |\n";
   }
@@ -160,11 +161,16 @@ void add_diff_verb(CLI::App& app) {
       }
       // The later run's tolerances, read from its study as it ran.
       std::vector<Tolerance> tolerances;
+      RequirementSet requirements;
       if (!b.record.study_text.empty()) {
         YamlReader top(load_yaml_text(b.record.study_text, b.record.study_path), b.record.study_path, "", nullptr);
         tolerances = read_tolerances(top);
+        requirements = read_requirements(top);
+        double seed = 1;  // the mean's bootstrap draws from the study's seed, as when it ran
+        top.optional("seed", seed);
+        requirements.seed = static_cast<std::uint64_t>(seed);
       }
-      d = diff_runs(a, b, tolerances);
+      d = diff_runs(a, b, tolerances, requirements);
     } catch (const std::exception& e) {
       throw ExitError(e.what(), 2);  // exit 1 means a regression
     }

@@ -80,8 +80,7 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
         if (std::filesystem::exists(previous->out + "/results.sqlite")) {
           RunDir before = read_run_dir(previous->out);
           before.record.id = previous->id;
-          before.record.verdicts = previous->verdicts;
-          const RunDiff d = diff_runs(before, RunDir{record, table}, study.tolerances);
+          const RunDiff d = diff_runs(before, RunDir{record, table}, study.tolerances, study.requirements);
           page.diff_md = format_diff_md(d);
           write_file_atomic(dir + "/diff.md", page.diff_md);
           std::printf("compared with %s: %s (%s/diff.md)\n", previous->describe().c_str(),
@@ -100,6 +99,12 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
   page.record = record;
   write_report_html(dir, page);
   std::printf("wrote %s/report.html\n", dir.c_str());
+  if (!record.verdicts.empty()) {
+    // The verdicts last, where they are seen (they do not change the exit code).
+    const std::size_t n = table.rows.size(), total = study.variants.size();
+    std::printf("\nrequirements (%zu of %zu variants%s):\n%s", n, total, n < total ? ", stopped early: every requirement decided" : "",
+                format_verdict_lines(record.verdicts).c_str());
+  }
   const std::string failures = describe_failures(study, table);
   if (!failures.empty()) throw ExitError(failures, 3);
 }
@@ -157,6 +162,9 @@ void add_run_verb(CLI::App& app) {
                             ".csv is locked); wait for that run to end, or use another --out");
 
     opt.notice = [](const std::string& m) { std::fprintf(stderr, "flexfarm: %s\n", m.c_str()); };
+    if (study.requirements.stop_when_decided && opt.part.count > 1 && comm.rank() == 0)
+      opt.notice("requirements.stop_when_decided: " + std::string(sharded ? "shards" : "MPI ranks") +
+                 " do not see each other's rows, so every variant runs; the results stop where one process would have");
     Progress progress(study.name + (opt.tag == "main" ? "" : " " + opt.tag), stderr_is_terminal());
     int already = -1;
     opt.progress = [&](int done, int total, double seconds) {

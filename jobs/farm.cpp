@@ -1,5 +1,6 @@
 #include "jobs/farm.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +10,32 @@
 #include "common/files.hpp"
 
 namespace ff {
+
+namespace {
+// Every requirement is decided on rows 0..k-1 (all in `rows`), the study not complete.
+bool decided_at(const Study& study, const std::map<int, std::string>& rows, int k) {
+  const ResultTable empty = make_result_table(study);
+  std::string text = format_results_header(empty);
+  for (int i = 0; i < k; ++i) text += rows.at(i);
+  const ResultTable t = parse_results_csv(text, "journal rows");
+  return all_decided(evaluate_requirements(study.requirements, t, false, static_cast<int>(study.variants.size())));
+}
+
+int leading_rows(const std::map<int, std::string>& rows, int from = 0) {
+  while (rows.count(from)) ++from;
+  return from;
+}
+}  // namespace
+
+int find_study_stop_point(const Study& study, const std::map<int, std::string>& rows) {
+  return find_stop_point(study.requirements, static_cast<int>(study.variants.size()), leading_rows(rows),
+                         [&](int k) { return decided_at(study, rows, k); });
+}
+
+std::vector<Verdict> calc_study_verdicts(const Study& study, const ResultTable& table) {
+  const int total = static_cast<int>(study.variants.size());
+  return evaluate_requirements(study.requirements, table, static_cast<int>(table.rows.size()) == total, total);
+}
 
 FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   const ResultTable empty = make_result_table(study);
@@ -37,11 +64,29 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   if (!timings) throw std::runtime_error(timings_path + ": cannot open for writing");
   if (new_timings) std::fputs("first_eval_id,variants,seconds\n", timings);
 
+  // Early stop: the rows so far (journalled and new), how many lead without a gap, the next checkpoint.
+  const bool track = study.requirements.stop_when_decided && opt.part.count == 1;
+  std::map<int, std::string> rows = track ? done : std::map<int, std::string>{};
+  int prefix = leading_rows(rows), next = 0;
+  std::atomic<bool> stop{false};
+  const int nvariants = static_cast<int>(study.variants.size());
+  auto check_stop = [&] {
+    prefix = leading_rows(rows, prefix);
+    const int k = find_stop_point(study.requirements, nvariants, prefix, [&](int c) { return decided_at(study, rows, c); }, &next);
+    if (k >= 0 && k < nvariants) {
+      st.stop = k;
+      stop = true;
+    }
+  };
+  if (track) check_stop();
+  EvalOptions eval = opt.eval;
+  eval.stop = &stop;
+
   const auto t0 = std::chrono::steady_clock::now();
   int finished = st.already;
   if (opt.progress) opt.progress(finished, st.total, 0.0);
   try {
-    evaluate_variants(study, pending, opt.eval, [&](BatchResult&& res) {
+    if (!stop) evaluate_variants(study, pending, eval, [&](BatchResult&& res) {
       // Traces first, then the rows: a journalled row always has its trace on disk.
       for (std::size_t k = 0; k < res.traces.size(); ++k) {
         char name[48];
@@ -60,6 +105,10 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
       std::fflush(timings);
       finished += static_cast<int>(res.rows.size());
       st.computed += static_cast<int>(res.rows.size());
+      if (track && !stop) {
+        for (const auto& r : res.rows) rows[r.eval_id] = format_results_row(r);
+        check_stop();
+      }
       if (opt.progress)
         opt.progress(finished, st.total, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     });
@@ -77,7 +126,9 @@ ResultTable assemble_results(const Study& study, const std::string& out) {
   const auto rows = read_journals(out, study.hash, header);
   std::string text = header;
   int missing = 0, first_missing = -1;
+  const int stop = find_study_stop_point(study, rows);  // -1: not known, so the study must be whole
   for (const auto& v : study.variants) {
+    if (stop >= 0 && v.eval_id >= stop) break;
     auto it = rows.find(v.eval_id);
     if (it == rows.end()) {
       if (first_missing < 0) first_missing = v.eval_id;

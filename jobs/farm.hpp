@@ -5,7 +5,9 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "jobs/runner.hpp"
 
@@ -33,14 +35,26 @@ struct FarmStatus {
   int total = 0;                 // variants of this share
   int already = 0;               // found in the journals (resume)
   int computed = 0;              // evaluated now
+  int stop = -1;                 // requirements.stop_when_decided: the variants the study stopped at, else -1
 };
 
 // Evaluates this process's share. Throws std::runtime_error when `out` already holds this tag's
-// journal and resume is off, or a journal of another study.
+// journal and resume is off, or a journal of another study. A study with requirements.stop_when_decided
+// run whole (no partition) stops once its stop point is known (find_study_stop_point): no new batch
+// starts; rows of batches already running are journalled too. Partitioned, it runs its whole share.
 FarmStatus run_farm(const Study& study, const FarmOptions& opt);
 
 // Reads every journal in `out` and returns the complete result table; throws std::runtime_error
-// naming how many variants are missing when the journals do not cover the study.
+// naming how many variants are missing when the journals do not cover the study. A study that stops
+// early (find_study_stop_point) is complete with its first K rows, and its table is exactly those.
 ResultTable assemble_results(const Study& study, const std::string& out);
+
+// Where a study with requirements.stop_when_decided stops, from its rows by eval_id (as journalled):
+// find_stop_point (results/requirements.hpp) on them, -1 while not known. The study's size otherwise.
+int find_study_stop_point(const Study& study, const std::map<int, std::string>& rows);
+
+// The verdicts of a study's requirements on its result table (the whole study, or the rows it
+// stopped at). Empty without requirements.
+std::vector<Verdict> calc_study_verdicts(const Study& study, const ResultTable& table);
 
 }  // namespace ff

@@ -9,6 +9,7 @@
 #include "arm/arm_metrics.hpp"
 #include "common/files.hpp"
 #include "common/version.hpp"
+#include "jobs/farm.hpp"
 #include "kernel/simulate.hpp"
 #include "kernel/trajectory.hpp"
 #include "plotting/plot.hpp"
@@ -428,7 +429,9 @@ std::string report_sensitivity(const Study& study, const ResultTable& t, const s
 }  // namespace
 
 RunRecord make_run_record(const Study& study, const ResultTable& table, const std::string& dir, const RunContext& ctx) {
-  const auto absolute = [](const std::string& p) { return std::filesystem::absolute(p).lexically_normal().string(); };
+  const auto absolute = [](const std::string& p) {
+    return p.empty() ? p : std::filesystem::absolute(p).lexically_normal().string();
+  };
   RunRecord r;
   r.study = study.name;
   r.study_path = absolute(study.source);
@@ -452,7 +455,19 @@ RunRecord make_run_record(const Study& study, const ResultTable& table, const st
   r.variants = static_cast<int>(table.rows.size());
   r.status = count_statuses(table);
   r.summaries = calc_metric_summaries(table, study.specs);
+  r.verdicts = calc_study_verdicts(study, table);
   return r;
+}
+
+std::string format_study_requirements_md(const Study& study, const ResultTable& table) {
+  if (study.requirements.statements.empty()) return "";
+  std::string md = "\n## Requirements\n\n";
+  if (table.rows.size() < study.variants.size())
+    md += "Stopped early after " + std::to_string(table.rows.size()) + " of " + std::to_string(study.variants.size()) +
+          " variants: every requirement decided.\n\n";
+  char conf[64];
+  std::snprintf(conf, sizeof conf, "Intervals at %g %% confidence.\n\n", study.requirements.confidence * 100.0);
+  return md + conf + format_requirements_md(calc_study_verdicts(study, table));
 }
 
 std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir, const RunRecord& record) {
@@ -510,6 +525,7 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     }
     md += "\n## Every metric\n\n" + format_groupby_md(table, {}, table.columns, study.specs);
   }
+  md += format_study_requirements_md(study, table);
   write_file_atomic(dir + "/table.md", md);
 
   // Time series of every variant whose trace is on disk, when they are few enough to tell apart.

@@ -162,7 +162,7 @@ void write_report_html(const std::string& dir, const ReportPage& page) {
 
   // At a glance: the verdicts, the variants, what changed.
   int pass = 0, fail = 0, undecided = 0;
-  for (const VerdictRecord& v : r.verdicts) (v.verdict == "pass" ? pass : v.verdict == "fail" ? fail : undecided)++;
+  for (const Verdict& v : r.verdicts) (v.verdict == "pass" ? pass : v.verdict == "fail" ? fail : undecided)++;
   b += "<div class=\"summary\">\n";
   if (!r.verdicts.empty()) {
     if (pass) b += "<span class=\"badge pass\">" + std::to_string(pass) + " pass</span>\n";
@@ -184,7 +184,7 @@ void write_report_html(const std::string& dir, const ReportPage& page) {
   } else {
     b += "<table id=\"verdicts\">\n<tr><th>requirement</th><th>verdict</th><th>estimate [interval]</th><th>samples</th>"
          "<th>more samples to decide</th><th>evidence</th></tr>\n";
-    for (const VerdictRecord& v : r.verdicts)
+    for (const Verdict& v : r.verdicts)
       b += "<tr class=\"" + html_escape(v.verdict) + "\"><td><code>" + html_escape(v.requirement) + "</code></td><td class=\"verdict\">" +
            html_escape(v.verdict == "undecided" ? "not decided" : v.verdict) + "</td><td>" + num(v.estimate) + " [" + num(v.lower) +
            ", " + num(v.upper) + "]</td><td>" + std::to_string(v.n) + "</td><td>" +

@@ -112,7 +112,8 @@ void evaluate_in_chunks(const Study& study, const std::vector<int>& pending, con
 #pragma omp critical(ff_batch_error)
     if (!error) error = std::current_exception();
   };
-  for (std::size_t c0 = 0; c0 < pending.size() && !error; c0 += chunk) {
+  const auto stopped = [&] { return opt.stop && opt.stop->load(); };
+  for (std::size_t c0 = 0; c0 < pending.size() && !error && !stopped(); c0 += chunk) {
     const int n = static_cast<int>(std::min(chunk, pending.size() - c0));
     // Build: a variant the model rejects (a draw from a distribution's tail) is a result, `invalid`.
     std::vector<Model> models(static_cast<std::size_t>(n));
@@ -139,6 +140,7 @@ void evaluate_in_chunks(const Study& study, const std::vector<int>& pending, con
     const int nb = static_cast<int>(batches.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (int b = 0; b < nb; ++b) {
+      if (stopped()) continue;
       try {
         const auto t0 = std::chrono::steady_clock::now();
         std::vector<Model> lanes;

@@ -3,6 +3,7 @@
 // rank count or resume.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -18,6 +19,8 @@ struct EvalOptions {
   int lanes = 8;                 // W: variants advanced together by one kernel call
   int threads = 0;               // 0 = OpenMP default
   bool keep_traces = false;      // keep each variant's trace; without, its metrics accumulate online (rig and arms)
+  // Set (by `done`) to stop early: no new chunk and no new batch starts; those running finish.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 // A finished batch: its rows (ascending eval_id), their traces when kept, and its wall time.

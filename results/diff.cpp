@@ -151,7 +151,23 @@ MetricChange compare_metric(const ResultTable& a, const ResultTable& b, const st
   return c;
 }
 
-RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances, std::uint64_t seed) {
+namespace {
+// A run's verdicts on `requirements` ("" verdicts when a metric is not in its table).
+std::vector<Verdict> verdicts_of(const RunDir& run, const RequirementSet& requirements) {
+  if (requirements.statements.empty()) return run.record.verdicts;
+  const bool complete = run.record.planned == 0 || static_cast<int>(run.table.rows.size()) >= run.record.planned;
+  try {
+    return evaluate_requirements(requirements, run.table, complete, run.record.planned);
+  } catch (const std::invalid_argument&) {
+    std::vector<Verdict> none;
+    for (const Requirement& r : requirements.statements) none.push_back({.requirement = r.text});
+    return none;
+  }
+}
+}  // namespace
+
+RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances,
+                  const RequirementSet& requirements, std::uint64_t seed) {
   RunDiff d;
   d.a = a.record;
   d.b = b.record;
@@ -178,19 +194,20 @@ RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>
     d.metrics.push_back(c);
   }
   // Verdicts by requirement text, in b's order then a's others.
-  auto find = [](const std::vector<VerdictRecord>& v, const std::string& req) {
-    const auto it = std::find_if(v.begin(), v.end(), [&](const VerdictRecord& x) { return x.requirement == req; });
+  const std::vector<Verdict> va = verdicts_of(a, requirements), vb = verdicts_of(b, requirements);
+  auto find = [](const std::vector<Verdict>& v, const std::string& req) {
+    const auto it = std::find_if(v.begin(), v.end(), [&](const Verdict& x) { return x.requirement == req; });
     return it == v.end() ? std::string() : it->verdict;
   };
   auto rank = [](const std::string& v) { return v == "pass" ? 2 : v == "undecided" ? 1 : v == "fail" ? 0 : -1; };
-  for (const VerdictRecord& v : b.record.verdicts) {
-    VerdictChange c{v.requirement, find(a.record.verdicts, v.requirement), v.verdict};
+  for (const Verdict& v : vb) {
+    VerdictChange c{v.requirement, find(va, v.requirement), v.verdict};
     c.worse = rank(c.a) >= 0 && rank(c.b) < rank(c.a);
     if (c.worse) d.regressions.push_back("requirement " + c.requirement + ": " + c.a + " before, " + c.b + " now");
     d.verdicts.push_back(c);
   }
-  for (const VerdictRecord& v : a.record.verdicts)
-    if (find(b.record.verdicts, v.requirement).empty()) d.verdicts.push_back({v.requirement, v.verdict, ""});
+  for (const Verdict& v : va)
+    if (find(vb, v.requirement).empty()) d.verdicts.push_back({v.requirement, v.verdict, ""});
   const int fa = a.record.failed(), fb = b.record.failed();
   if (fb > fa)
     d.regressions.push_back("failed variants (nonfinite, solver_fail, invalid) rose from " + std::to_string(fa) + " to " +

@@ -10,9 +10,10 @@
 #include <vector>
 
 #include "results/history.hpp"
+#include "results/requirements.hpp"
 #include "results/statistics.hpp"
 #include "results/table.hpp"
-#include "sweep/tolerances.hpp"
+#include "results/tolerances.hpp"
 
 namespace ff {
 
@@ -63,9 +64,11 @@ struct RunDiff {
   std::vector<std::string> regressions;  // one line each; empty: nothing got worse
 };
 
-// The diff of two runs; `tolerances` are the later run's (b's study). Verdicts are compared as each
-// run recorded them (RunRecord::verdicts, by requirement text).
-RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances, std::uint64_t seed = 1);
+// The diff of two runs; `tolerances` and `requirements` are the later run's (b's study). The
+// requirements are evaluated on both tables, so both runs are held to the same statements (a metric the
+// earlier run lacks gives it no verdict); without them, the verdicts each run recorded are compared.
+RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances,
+                  const RequirementSet& requirements = {}, std::uint64_t seed = 1);
 
 // The diff as Markdown: inputs, metrics that have a tolerance or moved beyond noise (and how many did
 // not), verdicts, and the regressions (or "nothing got worse").

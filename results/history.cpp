@@ -187,7 +187,7 @@ std::string format_run_yaml(const RunRecord& r) {
     out << v;
   }
   out << YAML::Key << "verdicts" << YAML::Value << YAML::BeginSeq;
-  for (const VerdictRecord& v : r.verdicts)
+  for (const Verdict& v : r.verdicts)
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "requirement" << YAML::Value << v.requirement << YAML::Key << "verdict"
         << YAML::Value << v.verdict << YAML::Key << "estimate" << YAML::Value << number_text(v.estimate) << YAML::Key << "lower"
         << YAML::Value << number_text(v.lower) << YAML::Key << "upper" << YAML::Value << number_text(v.upper) << YAML::Key
@@ -203,7 +203,7 @@ RunDir read_run_dir(const std::string& dir) {
   if (!std::filesystem::exists(db_path) || !std::filesystem::exists(csv_path))
     throw std::runtime_error(dir + " is not a finished run's output directory (no results.sqlite and results.csv)");
   std::map<std::string, std::string> info;
-  std::vector<VerdictRecord> verdicts;
+  std::vector<Verdict> verdicts;
   if (std::filesystem::exists(yaml_path)) {
     const YAML::Node doc = load_yaml_file(yaml_path);
     if (!doc.IsMap()) throw std::runtime_error(yaml_path + ": not a run record");
@@ -213,10 +213,11 @@ RunDir read_run_dir(const std::string& dir) {
         if (key != "verdicts" && kv.second.IsScalar()) info[key] = kv.second.Scalar();
       }
       for (const auto& v : doc["verdicts"])
-        verdicts.push_back({v["requirement"].as<std::string>(""), v["verdict"].as<std::string>(""),
-                            text_number(v["estimate"].as<std::string>("")), text_number(v["lower"].as<std::string>("")),
-                            text_number(v["upper"].as<std::string>("")), v["n"].as<int>(0), v["more"].as<long>(-1),
-                            v["evidence"].as<std::string>("")});
+        verdicts.push_back({.requirement = v["requirement"].as<std::string>(""), .verdict = v["verdict"].as<std::string>(""),
+                          .estimate = text_number(v["estimate"].as<std::string>("")),
+                          .lower = text_number(v["lower"].as<std::string>("")),
+                          .upper = text_number(v["upper"].as<std::string>("")), .n = v["n"].as<int>(0),
+                          .more = v["more"].as<long long>(-1), .evidence = v["evidence"].as<std::string>("")});
     } catch (const YAML::Exception& e) {
       throw std::runtime_error(yaml_path + ": not a run record (" + e.what() + ")");
     }
@@ -321,9 +322,9 @@ void read_details(SqliteDb& db, RunRecord& r) {
   sqlite3_bind_int64(ve.get(), 1, r.id);
   while (db.next_row(ve.get())) {
     sqlite3_stmt* s = ve.get();
-    r.verdicts.push_back({column_text(s, 0), column_text(s, 1), column_number(s, 2), column_number(s, 3),
-                          column_number(s, 4), sqlite3_column_int(s, 5), static_cast<long>(sqlite3_column_int64(s, 6)),
-                          column_text(s, 7)});
+    r.verdicts.push_back({.requirement = column_text(s, 0), .verdict = column_text(s, 1), .estimate = column_number(s, 2),
+                          .lower = column_number(s, 3), .upper = column_number(s, 4), .n = sqlite3_column_int(s, 5),
+                          .more = sqlite3_column_int64(s, 6), .evidence = column_text(s, 7)});
   }
 }
 
@@ -372,7 +373,7 @@ long record_run(const std::string& history_dir, const RunRecord& r) {
       db.step(q);
     }
     const SqliteStmt ve = db.prepare("INSERT INTO verdicts VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
-    for (const VerdictRecord& v : r.verdicts) {
+    for (const Verdict& v : r.verdicts) {
       sqlite3_stmt* q = ve.get();
       sqlite3_bind_int64(q, 1, id);
       bind_text(q, 2, v.requirement);

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "results/requirements.hpp"
 #include "results/statistics.hpp"
 #include "results/table.hpp"
 
@@ -26,15 +27,6 @@ struct MetricSummary {
 };
 std::vector<MetricSummary> calc_metric_summaries(const ResultTable& t, const std::map<std::string, double>& specs);
 
-// A requirement's verdict as a run keeps it (results/requirements.hpp makes them).
-struct VerdictRecord {
-  std::string requirement, verdict;  // verdict: pass, fail, undecided
-  double estimate = kStatsNaN, lower = kStatsNaN, upper = kStatsNaN;
-  int n = 0;
-  long more = -1;                    // samples more that would decide it (-1: none would)
-  std::string evidence;
-};
-
 struct RunRecord {
   long id = 0;                       // in the history (0: not recorded there)
   std::string study;                 // the study's name
@@ -50,7 +42,7 @@ struct RunRecord {
   int variants = 0;                  // rows in the results (fewer than planned when stopped early)
   std::map<std::string, int> status;  // rows by status: ok, not_settled, nonfinite, solver_fail, invalid
   std::vector<MetricSummary> summaries;
-  std::vector<VerdictRecord> verdicts;
+  std::vector<Verdict> verdicts;   // of the study's requirements (results/requirements.hpp)
 
   int failed() const;                // rows whose status is nonfinite, solver_fail or invalid
   std::string describe() const;      // "run 12 (fbtb_mc, 2026-12-05T02:00:13Z)" or the directory

@@ -187,14 +187,10 @@ Interval calc_bootstrap_percentile(const std::vector<double>& values, double p, 
   return bootstrap(values, resamples, confidence, seed, [p](std::vector<double>& x) { return select_percentile(x, p); });
 }
 
-Interval calc_miss_probability(const std::vector<double>& values, double limit, double confidence) {
+Interval calc_wilson_interval(std::size_t k, std::size_t n_rows, double confidence) {
   if (!(confidence > 0.0 && confidence < 1.0)) throw std::invalid_argument("confidence must be in (0, 1)");
-  if (values.empty()) return {};
-  // Count the misses: above the limit, or NaN (did not meet the spec at all).
-  std::size_t k = 0;
-  for (double v : values)
-    if (std::isnan(v) || v > limit) ++k;
-  const double n = static_cast<double>(values.size());
+  if (n_rows == 0) return {};
+  const double n = static_cast<double>(n_rows);
   const double ph = static_cast<double>(k) / n;
   // Wilson score interval: (ph + z^2/2n -+ z sqrt(ph (1-ph)/n + z^2/4n^2)) / (1 + z^2/n).
   const double z = calc_two_sided_z(confidence);
@@ -205,8 +201,18 @@ Interval calc_miss_probability(const std::vector<double>& values, double limit, 
   Interval out;
   out.estimate = ph;
   out.lower = k == 0 ? 0.0 : std::max(0.0, centre - half);
-  out.upper = k == values.size() ? 1.0 : std::min(1.0, centre + half);
+  out.upper = k >= n_rows ? 1.0 : std::min(1.0, centre + half);
   return out;
+}
+
+Interval calc_miss_probability(const std::vector<double>& values, double limit, double confidence) {
+  if (!(confidence > 0.0 && confidence < 1.0)) throw std::invalid_argument("confidence must be in (0, 1)");
+  if (values.empty()) return {};
+  // Count the misses: above the limit, or NaN (did not meet the spec at all).
+  std::size_t k = 0;
+  for (double v : values)
+    if (std::isnan(v) || v > limit) ++k;
+  return calc_wilson_interval(k, values.size(), confidence);
 }
 
 std::vector<Group> make_groups(const std::vector<std::vector<double>>& key_columns) {

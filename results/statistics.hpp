@@ -50,6 +50,10 @@ Interval calc_bootstrap_percentile(const std::vector<double>& values, double p, 
 // DasGupta 2001), exact 0 / 1 bounds when no / every value misses. Empty input -> all NaN.
 Interval calc_miss_probability(const std::vector<double>& values, double limit, double confidence);
 
+// Wilson score interval of a proportion k/n at `confidence` (as calc_miss_probability: exact 0 / 1 bounds
+// when k = 0 / k = n). k <= n; n = 0 -> all NaN; confidence outside (0, 1): std::invalid_argument.
+Interval calc_wilson_interval(std::size_t k, std::size_t n, double confidence);
+
 // Group-by: rows whose keys are equal after rounding each key to 12 significant digits (exact double equality
 // of the rounded values; -0 counts as +0, NaN keys equal each other) form a group. `key` holds the rounded key
 // values, `rows` the group's rows in ascending order; groups are in ascending key order, lexicographic over the

@@ -16,6 +16,7 @@
 #include "kernel/model_io.hpp"
 #include "common/yaml_reader.hpp"
 #include "common/random.hpp"
+#include "results/run_metrics.hpp"
 
 namespace ff {
 
@@ -362,6 +363,11 @@ Study read_study(const std::string& path, int max_variants) {
     }
   }
   st.tolerances = read_tolerances(top);
+  st.requirements = read_requirements(top);
+  st.requirements.seed = st.seed;
+  if (st.requirements.stop_when_decided && (st.listed || st.design.kind != DesignKind::kMonteCarlo || !st.case_labels.empty()))
+    throw ConfigError(path, st.requirements.stop_line, st.requirements.key + ".stop_when_decided",
+                      "only for `design: {type: monte_carlo}` without `cases:` (a prefix of another design is not a sample of it)");
   st.keep_traces = st.variants.size() <= 50;
   auto outputs = top.child("outputs");
   outputs.optional("traces", st.keep_traces);
@@ -401,6 +407,8 @@ void check_models(Study& st) {
   };
   if (st.arm) st.arm_nominal = build_arm(0);
   else st.nominal = build(0);  // variant 0, or case 0's nominal point
+  check_requirement_columns(st.requirements, st.arm ? arm_metric_columns(st.arm_nominal)
+                                                    : calc_metric_columns(static_cast<int>(st.nominal.spec.trajectory.moves.size())));
   std::vector<std::exception_ptr> errors(n);
 #pragma omp parallel for schedule(dynamic, 8)
   for (std::size_t i = 1; i < n; ++i) {

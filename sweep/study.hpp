@@ -11,9 +11,10 @@
 #include <vector>
 
 #include "kernel/model.hpp"
+#include "results/requirements.hpp"
+#include "results/tolerances.hpp"
 #include "sweep/design.hpp"
 #include "sweep/paths.hpp"
-#include "sweep/tolerances.hpp"
 
 namespace ff {
 
@@ -51,6 +52,7 @@ struct Study {
   bool drawn = false;           // the values are drawn from distributions, not written in the file
   std::map<std::string, double> specs;      // response -> limit a run must not exceed (Monte Carlo summaries)
   std::vector<Tolerance> tolerances;        // how much worse than the last run is a regression (flexfarm diff)
+  RequirementSet requirements;  // `requirements:` (results/requirements.hpp); their metrics checked by check_models
   bool keep_traces = false;     // write every variant's trace (default: when there are at most 50)
   std::string hash;             // fingerprint of the study and model text: journals refuse another study's rows
 };
@@ -71,7 +73,8 @@ Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
 // reported. Drawn values (Monte Carlo, LHS, Sobol', Saltelli, Morris) are checked at each case's
 // nominal point only (its written set, every variable at its median): a draw from a distribution's
 // tail that the model rejects is a result of the run (status `invalid`), not an error. Models are
-// built again, per batch, when the variants run: memory does not grow with the study.
+// built again, per batch, when the variants run: memory does not grow with the study. Every metric
+// a requirement names must be one of the nominal model's result columns.
 void check_models(Study& st);
 
 // The legends of variants shown together (`flexfarm plot`): each one's label less the `path=value`

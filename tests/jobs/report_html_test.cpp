@@ -77,9 +77,12 @@ ReportPage sample_page(const std::string& dir) {
   r.planned = 400;
   r.variants = 200;
   r.status = {{"ok", 190}, {"not_settled", 10}};
-  r.verdicts = {{"P(m1_tip_settling_s <= 3) >= 0.9", "pass", 0.95, 0.91, 0.97, 200, -1, "190 of 200 within"},
-                {"p95(m1_peak_torque_Nm) <= 900", "fail", 1033, 1020, 1050, 200, -1, "P(<= 900) = 0.12"},
-                {"mean(m1_tip_overshoot_pct) <= 3", "undecided", 2.98, 2.8, 3.2, 200, 1400, "interval straddles 3"}};
+  auto verdict = [](const char* req, const char* v, double est, double lo, double hi, long long more, const char* why) {
+    return Verdict{.requirement = req, .verdict = v, .estimate = est, .lower = lo, .upper = hi, .n = 200, .more = more, .evidence = why};
+  };
+  r.verdicts = {verdict("P(m1_tip_settling_s <= 3) >= 0.9", "pass", 0.95, 0.91, 0.97, 0, "190 of 200 within"),
+                verdict("p95(m1_peak_torque_Nm) <= 900", "fail", 0.12, 0.08, 0.17, 0, "P(<= 900) = 0.12"),
+                verdict("mean(m1_tip_overshoot_pct) <= 3", "undecided", 2.98, 2.8, 3.2, 1400, "interval straddles 3")};
   page.description = "A proposal's <evaluation> & its requirements.";
   page.table_md = "# fbtb_proposal\n\n200 variants.\n\n| run | value |\n|---|---|\n| <img src=x onerror=alert(1)> | 1 |\n";
   page.diff_md = "# What changed\n\n## Result\n\nNothing got worse.\n";

@@ -41,7 +41,8 @@ TEST(Report, AFineGridsTableBinsEachParameterIntoTenGroups) {
   Study study;
   study.name = "fine";
   study.design.kind = DesignKind::kGrid;
-  const std::string md = write_study_report(study, fine_grid(), dir.path.string());
+  const ResultTable t = fine_grid();
+  const std::string md = write_study_report(study, t, dir.path.string(), make_run_record(study, t, dir.path.string(), {}));
   EXPECT_EQ(read_text((dir.path / "table.md").string()), md);
   // The settling table: 10 x 10 bins, two metrics each, not 4096 x 2 lines.
   const auto a = md.find("## Tip settling time by payload.mass and joints.stiffness");

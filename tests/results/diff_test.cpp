@@ -126,7 +126,7 @@ TEST(MetricChange, DivergedVariantsAreLeftOutOfBothSidesWhenPaired) {
   EXPECT_DOUBLE_EQ(c.b, 3.5);
 }
 
-RunDir run_of(const ResultTable& t, const std::string& model_text, std::vector<VerdictRecord> verdicts = {}) {
+RunDir run_of(const ResultTable& t, const std::string& model_text, std::vector<Verdict> verdicts = {}) {
   RunDir d;
   d.table = t;
   d.record.model_text = model_text;

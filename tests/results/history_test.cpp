@@ -86,7 +86,8 @@ RunRecord sample_record(const std::string& study_path, const std::string& out) {
   r.variants = 10;
   r.status = count_statuses(t);
   r.summaries = calc_metric_summaries(t, {{"m_x", 8.5}});
-  r.verdicts = {{"P(m_x <= 8.5) >= 0.9", "undecided", 0.8, 0.49, 0.94, 10, 60, "8 of 10"}};
+  r.verdicts = {{.requirement = "P(m_x <= 8.5) >= 0.9", .verdict = "undecided", .estimate = 0.8, .lower = 0.49, .upper = 0.94,
+                 .n = 10, .more = 60, .evidence = "8 of 10"}};
   return r;
 }
 

@@ -1,4 +1,4 @@
-#include "sweep/tolerances.hpp"
+#include "results/tolerances.hpp"
 
 #include <algorithm>
 #include <cmath>
