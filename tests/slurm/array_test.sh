@@ -2,7 +2,10 @@
 # A one-node Slurm cluster on this machine (munged, slurmctld and slurmd as root, all their files in a
 # temporary directory): the docs' array script, scripts/slurm/array.sbatch, runs slurm_small.yaml as 4
 # array tasks, scripts/slurm/merge.sbatch merges them after the array, and the merged results.csv
-# must be byte-identical to a one-process `flexfarm run`. Usage: array_test.sh FLEXFARM_BINARY.
+# must be byte-identical to a one-process `flexfarm run`; then the docs' nightly job,
+# scripts/nightly/nightly.sbatch, submitted with `sbatch --begin` on two nights, the model changed
+# between them: the first job completes, the second fails with exit code 1 (a regression) and leaves
+# its diff.md and report.html. Usage: array_test.sh FLEXFARM_BINARY.
 # Exits 77 (ctest: skipped) without root or Slurm, unless FLEXFARM_REQUIRE_SLURM=1 (.ci/slurm).
 set -euo pipefail
 flexfarm=$(realpath "${1:?usage: $0 FLEXFARM_BINARY}")
@@ -119,3 +122,31 @@ wait "$reference" || { echo "slurm test: the reference run failed"; exit 1; }
 ls "$tmp"/out/journal-shard-{0,1,2,3}-of-4.csv >/dev/null
 cmp "$tmp/ref/results.csv" "$tmp/out/results.csv"
 echo "slurm test: 4 array tasks + merge give the one-process results.csv, byte for byte"
+
+# The nightly job (docs/nightly.md) on two nights: the second with the derivative gain cut by a third.
+mkdir -p "$tmp/nightly"
+cp "$root/configs/fbtb.yaml" "$tmp/nightly/fbtb.yaml"
+cat >"$tmp/nightly/sweep.yaml" <<EOF
+name: nightly
+model: fbtb.yaml
+set: {trajectory.moves: [{target: 0.5, hold: 12.0}], simulation.integrator: sdirk2}
+variables:
+  - {path: payload.mass, distribution: {type: truncated_normal, mean: 328.7, std: 40.0, lower: 200.0, upper: 460.0}}
+design: {type: monte_carlo, samples: 32}
+tolerances:
+  m1_peak_torque_Nm: {increase: 3%}
+EOF
+export FLEXFARM_ROOT=$root FLEXFARM_HISTORY=$tmp/history FLEXFARM_NIGHTLY_ONCE=1
+for night in 1 2; do
+  [[ $night == 2 ]] && sed -i 's/  kd: 3.0e4 /  kd: 2.0e4 /' "$tmp/nightly/fbtb.yaml"
+  job=$(FLEXFARM_NIGHT=night$night sbatch --parsable --begin=now --cpus-per-task=2 --output="$tmp/nightly-$night.log" \
+    "$root/scripts/nightly/nightly.sbatch" nightly/sweep.yaml nightly/out)
+  deadline=$((SECONDS + 120))
+  while ((SECONDS < deadline)) && [[ -n $(timeout 5 squeue -h -j "$job" 2>/dev/null) ]]; do sleep 0.2; done
+  exit_code=$(scontrol -o show job "$job" | grep -o ' ExitCode=[0-9:]*')
+  expected=$([[ $night == 1 ]] && echo " ExitCode=0:0" || echo " ExitCode=1:0")
+  [[ $exit_code == "$expected" ]] || { echo "slurm test: nightly job $night:$exit_code, not$expected"; cat "$tmp/nightly-$night.log"; exit 1; }
+done
+grep -q "| controller.kd | 3.0e4 | 2.0e4 |" "$tmp/nightly/out/night2/diff.md"
+grep -q "regressions since the last run" "$tmp/nightly/out/night2/report.html"
+echo "slurm test: the nightly sbatch job completes on night 1 and flags the changed model on night 2 (exit 1)"
