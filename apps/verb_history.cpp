@@ -162,6 +162,7 @@ void add_diff_verb(CLI::App& app) {
       // The later run's tolerances, read from its study as it ran.
       std::vector<Tolerance> tolerances;
       RequirementSet requirements;
+      std::map<std::string, double> specs;
       if (!b.record.study_text.empty()) {
         YamlReader top(load_yaml_text(b.record.study_text, b.record.study_path), b.record.study_path, "", nullptr);
         tolerances = read_tolerances(top);
@@ -169,8 +170,10 @@ void add_diff_verb(CLI::App& app) {
         double seed = 1;  // the mean's bootstrap draws from the study's seed, as when it ran
         top.optional("seed", seed);
         requirements.seed = static_cast<std::uint64_t>(seed);
+        if (const YAML::Node node = top.raw("specs"); node && node.IsMap())
+          for (const auto& kv : node) specs[kv.first.Scalar()] = kv.second.as<double>();
       }
-      d = diff_runs(a, b, tolerances, requirements);
+      d = diff_runs(a, b, tolerances, requirements, specs);
     } catch (const std::exception& e) {
       throw ExitError(e.what(), 2);  // exit 1 means a regression
     }

@@ -37,6 +37,10 @@ void flatten(const YAML::Node& n, const std::string& path, std::map<std::string,
 
 }  // namespace
 
+std::string describe_statistic(const MetricChange& c) {
+  return c.statistic == "p_miss" ? "P(miss: > " + num(c.spec) + " or no value)" : c.statistic;
+}
+
 std::vector<KeyChange> diff_yaml_text(const std::string& a, const std::string& b) {
   if (a == b) return {};
   std::map<std::string, std::string> fa, fb;
@@ -90,7 +94,7 @@ std::vector<double> restrict_to(std::vector<double> v, const std::vector<double>
 
 double statistic_of(const std::vector<double>& x, const std::string& stat) {
   if (x.empty()) return kStatsNaN;
-  if (stat == "mean") {
+  if (stat == "mean" || stat == "p_miss") {
     double s = 0.0;
     for (double v : x) s += v;
     return s / static_cast<double>(x.size());
@@ -101,15 +105,29 @@ double statistic_of(const std::vector<double>& x, const std::string& stat) {
 }  // namespace
 
 MetricChange compare_metric(const ResultTable& a, const ResultTable& b, const std::string& metric,
-                            const std::string& statistic, bool paired, double confidence, std::uint64_t seed) {
+                            const std::string& statistic, bool paired, double confidence, std::uint64_t seed, double spec) {
   MetricChange c;
   c.metric = metric;
   c.statistic = statistic;
+  c.spec = spec;
   c.paired = paired;
   const auto va = column_values(a, metric), ha = horizon_values(a, metric);
   const auto vb = column_values(b, metric), hb = horizon_values(b, metric);
-  c.horizon = std::fmin(least_horizon(va, ha), least_horizon(vb, hb));
-  const auto ra = restrict_to(va, ha, c.horizon), rb = restrict_to(vb, hb, c.horizon);
+  std::vector<double> ra, rb;
+  if (statistic == "p_miss") {
+    // 1 for a miss (above the spec, not settled, diverged), 0 for a row within it; its mean is P(miss).
+    const auto misses = [&](const std::vector<double>& v) {
+      std::vector<double> x;
+      for (double y : v) x.push_back(std::isnan(y) || y > spec ? 1.0 : 0.0);
+      return x;
+    };
+    ra = misses(va);
+    rb = misses(vb);
+  } else {
+    c.horizon = std::fmin(least_horizon(va, ha), least_horizon(vb, hb));
+    ra = restrict_to(va, ha, c.horizon);
+    rb = restrict_to(vb, hb, c.horizon);
+  }
   std::vector<double> xa, xb;
   for (std::size_t i = 0; i < (paired ? ra.size() : 0); ++i)
     if (!std::isnan(ra[i]) && !std::isnan(rb[i])) xa.push_back(ra[i]), xb.push_back(rb[i]);
@@ -167,7 +185,7 @@ std::vector<Verdict> verdicts_of(const RunDir& run, const RequirementSet& requir
 }  // namespace
 
 RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances,
-                  const RequirementSet& requirements, std::uint64_t seed) {
+                  const RequirementSet& requirements, const std::map<std::string, double>& specs, std::uint64_t seed) {
   RunDiff d;
   d.a = a.record;
   d.b = b.record;
@@ -177,7 +195,12 @@ RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>
   for (const std::string& m : b.table.columns) {
     if (std::find(a.table.columns.begin(), a.table.columns.end(), m) == a.table.columns.end()) continue;
     const auto tol = std::find_if(tolerances.begin(), tolerances.end(), [&](const Tolerance& t) { return t.metric == m; });
-    MetricChange c = compare_metric(a.table, b.table, m, tol == tolerances.end() ? "mean" : tol->statistic, d.paired, 0.95, seed);
+    const std::string statistic = tol == tolerances.end() ? "mean" : tol->statistic;
+    const auto spec = specs.find(m);
+    const double limit = spec == specs.end() ? kStatsNaN : spec->second;
+    if (statistic == "p_miss" && std::isnan(limit)) continue;  // refused when the study is read
+    MetricChange c = compare_metric(a.table, b.table, m, statistic, d.paired, 0.95, seed, limit);
+    // With a spec, its P(miss) too (unless that is the tolerance's statistic already).
     if (tol != tolerances.end()) {
       c.tolerance = tol->describe();
       const double scale = std::abs(c.a);
@@ -187,11 +210,14 @@ RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>
       const bool fell = !std::isnan(down) && -c.change > down && c.upper < 0.0;
       c.regression = rose || fell;
       if (c.regression)
-        d.regressions.push_back(m + ": " + c.statistic + " " + (rose ? "rose" : "fell") + " from " + num(c.a) + " to " +
+        d.regressions.push_back(m + ": " + describe_statistic(c) + " " + (rose ? "rose" : "fell") + " from " + num(c.a) + " to " +
                                 num(c.b) + " (change " + num(c.change) + ", 95 % interval " + num(c.lower) + " to " +
                                 num(c.upper) + "), beyond the tolerance (" + c.tolerance + ")");
     }
     d.metrics.push_back(c);
+    // With a spec, its P(miss) too (unless that is the tolerance's statistic already).
+    if (!std::isnan(limit) && statistic != "p_miss")
+      d.metrics.push_back(compare_metric(a.table, b.table, m, "p_miss", d.paired, 0.95, seed, limit));
   }
   // Verdicts by requirement text, in b's order then a's others.
   const std::vector<Verdict> va = verdicts_of(a, requirements), vb = verdicts_of(b, requirements);
@@ -271,7 +297,7 @@ std::string format_diff_md(const RunDiff& d) {
       (c.identical ? identical : within)++;
       continue;
     }
-    md += "| " + c.metric + " | " + c.statistic + (std::isnan(c.horizon) ? "" : " (restricted to " + num(c.horizon, "%.3g") + " s)") +
+    md += "| " + c.metric + " | " + describe_statistic(c) + (std::isnan(c.horizon) ? "" : " (restricted to " + num(c.horizon, "%.3g") + " s)") +
           " | " + num(c.a) + " | " + num(c.b) + " | " + num(c.change) + " [" + num(c.lower) + ", " + num(c.upper) + "] | " +
           (c.identical ? "identical" : c.beyond_noise ? "yes" : "no") + " | " +
           (c.tolerance.empty() ? "" : c.tolerance + (c.regression ? ": **regression**" : ": within")) + " |\n";

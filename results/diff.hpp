@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,8 @@ std::vector<KeyChange> diff_yaml_text(const std::string& a, const std::string& b
 
 // A statistic of a metric in two runs and the bootstrap interval of its change b - a.
 struct MetricChange {
-  std::string metric, statistic = "mean";
+  std::string metric, statistic = "mean";  // mean, p5, p50, p95, p_miss
+  double spec = kStatsNaN;                  // p_miss: the spec
   double a = kStatsNaN, b = kStatsNaN, change = kStatsNaN, lower = kStatsNaN, upper = kStatsNaN;
   int n_a = 0, n_b = 0;     // values used (diverged rows dropped; not settled at the common horizon)
   double horizon = kStatsNaN;  // the common horizon not-settled values are restricted to (NaN: none)
@@ -42,9 +44,14 @@ struct MetricChange {
 // The change of `statistic` of `metric` from table a to table b: 1000 percentile-bootstrap resamples
 // at `confidence`, deterministic in `seed`; paired (resampling variants) when `paired`. A censored
 // metric is compared as its restricted response min(T, tau) with tau the smaller of the two runs'
-// least horizons, so not-settled runs count, at tau, in both.
+// least horizons, so not-settled runs count, at tau, in both. Statistic "p_miss": the share of rows
+// that miss `spec` (value > spec, or no value: not settled, diverged), every row counted.
 MetricChange compare_metric(const ResultTable& a, const ResultTable& b, const std::string& metric,
-                            const std::string& statistic, bool paired, double confidence, std::uint64_t seed);
+                            const std::string& statistic, bool paired, double confidence, std::uint64_t seed,
+                            double spec = kStatsNaN);
+
+// "mean", "p95", or "P(miss: > 3 or no value)".
+std::string describe_statistic(const MetricChange& c);
 
 // Whether two tables hold the same variants: the same eval_ids, seeds and parameter values, in order.
 bool same_variants(const ResultTable& a, const ResultTable& b);
@@ -67,8 +74,10 @@ struct RunDiff {
 // The diff of two runs; `tolerances` and `requirements` are the later run's (b's study). The
 // requirements are evaluated on both tables, so both runs are held to the same statements (a metric the
 // earlier run lacks gives it no verdict); without them, the verdicts each run recorded are compared.
+// A metric with a spec (b's study's `specs:`) is compared by its P(miss) too.
 RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances,
-                  const RequirementSet& requirements = {}, std::uint64_t seed = 1);
+                  const RequirementSet& requirements = {}, const std::map<std::string, double>& specs = {},
+                  std::uint64_t seed = 1);
 
 // The diff as Markdown: inputs, metrics that have a tolerance or moved beyond noise (and how many did
 // not), verdicts, and the regressions (or "nothing got worse").

@@ -363,6 +363,10 @@ Study read_study(const std::string& path, int max_variants) {
     }
   }
   st.tolerances = read_tolerances(top);
+  for (const Tolerance& t : st.tolerances)
+    if (t.statistic == "p_miss" && !st.specs.count(t.metric))
+      throw ConfigError(path, t.line, "tolerances." + t.metric + ".statistic",
+                        "p_miss needs a spec for " + t.metric + " (specs: {" + t.metric + ": LIMIT})");
   st.requirements = read_requirements(top);
   st.requirements.seed = st.seed;
   if (st.requirements.stop_when_decided && (st.listed || st.design.kind != DesignKind::kMonteCarlo || !st.case_labels.empty()))

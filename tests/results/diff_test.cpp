@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "test_rng.hpp"
+#include "tests/docs_tables.hpp"
 
 namespace ff {
 namespace {
@@ -126,6 +127,16 @@ TEST(MetricChange, DivergedVariantsAreLeftOutOfBothSidesWhenPaired) {
   EXPECT_DOUBLE_EQ(c.b, 3.5);
 }
 
+TEST(MetricChange, TheMissProbabilityCountsRowsAboveTheSpecAndRowsWithoutAValue) {
+  // Spec 3: a misses at 4 and the diverged row (2 of 4), b at 5, 5 and the diverged row (3 of 4).
+  const MetricChange c =
+      compare_metric(one_metric({1, 2, kNaN, 4}), one_metric({5, 5, 3, kNaN}), "m_x", "p_miss", true, 0.95, 3, 3.0);
+  EXPECT_DOUBLE_EQ(c.a, 0.5);
+  EXPECT_DOUBLE_EQ(c.b, 0.75);
+  EXPECT_EQ(c.n_a, 4);  // every row counts
+  EXPECT_EQ(describe_statistic(c), "P(miss: > 3 or no value)");
+}
+
 RunDir run_of(const ResultTable& t, const std::string& model_text, std::vector<Verdict> verdicts = {}) {
   RunDir d;
   d.table = t;
@@ -197,7 +208,7 @@ TEST(Tolerances, AreReadWithTheirDirectionAndStatisticAndBadOnesNameTheLine) {
   EXPECT_EQ(t[1].describe(), "p5 decrease > 5 %");
   const std::pair<const char*, const char*> bad[] = {
       {"tolerances:\n  m: {increase: fast}\n", "study.yaml:2: tolerances.m.increase: expected an amount"},
-      {"tolerances:\n  m: {statistic: p99, increase: 1}\n", "study.yaml:2: tolerances.m.statistic: expected mean, p5, p50 or p95"},
+      {"tolerances:\n  m: {statistic: p99, increase: 1}\n", "study.yaml:2: tolerances.m.statistic: expected mean, p5, p50, p95 or p_miss"},
       {"tolerances:\n  m: {}\n", "tolerances.m"},
       {"tolerances:\n  m: {increse: 1}\n", "study.yaml:2: tolerances.m.increse: unknown key"},
       {"tolerances:\n  m: {increase: -1}\n", "tolerances.m.increase: expected an amount >= 0"},
@@ -211,6 +222,8 @@ TEST(Tolerances, AreReadWithTheirDirectionAndStatisticAndBadOnesNameTheLine) {
     }
   }
 }
+
+TEST(Tolerances, TheirKeysAreDocumented) { test::expect_documented("Study tolerances", tolerance_keys()); }
 
 }  // namespace
 }  // namespace ff
