@@ -66,7 +66,9 @@ struct HistoryArgs {
 void finish_study(const Study& study, const std::string& dir, const RunContext& ctx, const HistoryArgs& history) {
   const ResultTable table = assemble_results(study, dir);
   RunRecord record = make_run_record(study, table, dir, ctx);
-  ReportPage page{.description = study.description, .table_md = write_study_report(study, table, dir, record)};
+  ReportPage page;
+  page.description = study.description;
+  page.table_md = write_study_report(study, table, dir, record);
   std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", page.table_md.c_str(), dir.c_str());
   const std::string hist = history.off ? "" : resolve_history_dir(history.dir);
   page.diff_note = hist.empty() ? "Not recorded in a run history (--no-history, or no home directory)."

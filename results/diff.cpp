@@ -178,7 +178,11 @@ std::vector<Verdict> verdicts_of(const RunDir& run, const RequirementSet& requir
     return evaluate_requirements(requirements, run.table, complete, run.record.planned);
   } catch (const std::invalid_argument&) {
     std::vector<Verdict> none;
-    for (const Requirement& r : requirements.statements) none.push_back({.requirement = r.text});
+    for (const Requirement& r : requirements.statements) {
+      Verdict v;
+      v.requirement = r.text;
+      none.push_back(v);
+    }
     return none;
   }
 }
@@ -284,6 +288,8 @@ std::string format_diff_md(const RunDiff& d) {
   };
   inputs("Model", b.model_path, a.model_text, b.model_text, d.model);
   inputs("Study", b.study_path, a.study_text, b.study_text, d.study);
+  const std::string va = describe_version(a), vb = describe_version(b);
+  md += "flexfarm: " + (va == vb ? "the same build, " + vb : va + " before, " + vb + " now") + ".\n\n";
 
   md += "## Metrics\n\n";
   md += d.paired ? "Paired by variant: both runs hold the same " + std::to_string(b.variants) +

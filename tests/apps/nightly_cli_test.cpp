@@ -105,5 +105,21 @@ TEST_F(NightlyCli, TheScriptFlagsTheNightTheModelGotWorseAndNotTheNightsAround) 
   EXPECT_EQ(flexfarm("diff --bogus").exit_code, 2);
 }
 
+TEST_F(NightlyCli, AHistoryThatCannotBeWrittenIsAWarningAndTheRunStandsAndNoHistoryRecordsNothing) {
+  // A history under a file cannot be made: the run warns, writes everything else and exits 0.
+  write("not_a_dir", "x");
+  const Result r = run_shell("FLEXFARM_HISTORY=not_a_dir/history " + quote(kBinary) + " run configs/nightly.yaml --out a");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("flexfarm: warning: the run history was not updated: "), std::string::npos) << r.output;
+  for (const char* f : {"results.csv", "results.sqlite", "run.yaml", "table.md", "report.html"}) EXPECT_TRUE(fs::exists(work / "a" / f)) << f;
+  EXPECT_NE(read_text(work / "a/report.html").find("The run history was not updated: "), std::string::npos);
+  // --no-history: nothing recorded, and the report says so.
+  const Result none = flexfarm("run configs/nightly.yaml --out b --no-history");
+  EXPECT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_FALSE(fs::exists(base / "history"));
+  EXPECT_NE(read_text(work / "b/report.html").find("Not recorded in a run history"), std::string::npos);
+  EXPECT_NE(flexfarm("history").output.find("no runs in"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace ff::test
