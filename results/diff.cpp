@@ -38,7 +38,8 @@ void flatten(const YAML::Node& n, const std::string& path, std::map<std::string,
 }  // namespace
 
 std::string describe_statistic(const MetricChange& c) {
-  return c.statistic == "p_miss" ? "P(miss: > " + num(c.spec) + " or no value)" : c.statistic;
+  if (c.statistic == "p_miss") return "P(miss: > " + num(c.spec) + " or no value)";
+  return c.statistic == "not_settled" ? "share not settled" : c.statistic;
 }
 
 std::vector<KeyChange> diff_yaml_text(const std::string& a, const std::string& b) {
@@ -94,7 +95,7 @@ std::vector<double> restrict_to(std::vector<double> v, const std::vector<double>
 
 double statistic_of(const std::vector<double>& x, const std::string& stat) {
   if (x.empty()) return kStatsNaN;
-  if (stat == "mean" || stat == "p_miss") {
+  if (stat == "mean" || stat == "p_miss" || stat == "not_settled") {
     double s = 0.0;
     for (double v : x) s += v;
     return s / static_cast<double>(x.size());
@@ -123,6 +124,15 @@ MetricChange compare_metric(const ResultTable& a, const ResultTable& b, const st
     };
     ra = misses(va);
     rb = misses(vb);
+  } else if (statistic == "not_settled") {
+    // 1 for a run that did not settle (no value, a horizon), else 0; its mean is the share not settled.
+    const auto censored = [](const std::vector<double>& v, const std::vector<double>& h) {
+      std::vector<double> x;
+      for (std::size_t i = 0; i < v.size(); ++i) x.push_back(std::isnan(v[i]) && i < h.size() && !std::isnan(h[i]) ? 1.0 : 0.0);
+      return x;
+    };
+    ra = censored(va, ha);
+    rb = censored(vb, hb);
   } else {
     c.horizon = std::fmin(least_horizon(va, ha), least_horizon(vb, hb));
     ra = restrict_to(va, ha, c.horizon);
@@ -219,9 +229,12 @@ RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>
                                 num(c.upper) + "), beyond the tolerance (" + c.tolerance + ")");
     }
     d.metrics.push_back(c);
-    // With a spec, its P(miss) too (unless that is the tolerance's statistic already).
+    // With a spec, its P(miss) too; a censored metric, its share not settled (unless those are the
+    // tolerance's statistic already): a mean restricted to the horizon can fall while more runs fail to settle.
     if (!std::isnan(limit) && statistic != "p_miss")
       d.metrics.push_back(compare_metric(a.table, b.table, m, "p_miss", d.paired, 0.95, seed, limit));
+    if (!std::isnan(c.horizon) && statistic != "not_settled")
+      d.metrics.push_back(compare_metric(a.table, b.table, m, "not_settled", d.paired, 0.95, seed));
   }
   // Verdicts by requirement text, in b's order then a's others.
   const std::vector<Verdict> va = verdicts_of(a, requirements), vb = verdicts_of(b, requirements);

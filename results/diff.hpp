@@ -29,7 +29,7 @@ std::vector<KeyChange> diff_yaml_text(const std::string& a, const std::string& b
 
 // A statistic of a metric in two runs and the bootstrap interval of its change b - a.
 struct MetricChange {
-  std::string metric, statistic = "mean";  // mean, p5, p50, p95, p_miss
+  std::string metric, statistic = "mean";  // mean, p5, p50, p95, p_miss, not_settled
   double spec = kStatsNaN;                  // p_miss: the spec
   double a = kStatsNaN, b = kStatsNaN, change = kStatsNaN, lower = kStatsNaN, upper = kStatsNaN;
   int n_a = 0, n_b = 0;     // values used (diverged rows dropped; not settled at the common horizon)
@@ -45,7 +45,8 @@ struct MetricChange {
 // at `confidence`, deterministic in `seed`; paired (resampling variants) when `paired`. A censored
 // metric is compared as its restricted response min(T, tau) with tau the smaller of the two runs'
 // least horizons, so not-settled runs count, at tau, in both. Statistic "p_miss": the share of rows
-// that miss `spec` (value > spec, or no value: not settled, diverged), every row counted.
+// that miss `spec` (value > spec, or no value: not settled, diverged), every row counted; "not_settled":
+// the share of rows not settled (no value, with a horizon).
 MetricChange compare_metric(const ResultTable& a, const ResultTable& b, const std::string& metric,
                             const std::string& statistic, bool paired, double confidence, std::uint64_t seed,
                             double spec = kStatsNaN);
@@ -74,7 +75,8 @@ struct RunDiff {
 // The diff of two runs; `tolerances` and `requirements` are the later run's (b's study). The
 // requirements are evaluated on both tables, so both runs are held to the same statements (a metric the
 // earlier run lacks gives it no verdict); without them, the verdicts each run recorded are compared.
-// A metric with a spec (b's study's `specs:`) is compared by its P(miss) too.
+// A metric with a spec (b's study's `specs:`) is compared by its P(miss) too, and a censored one (not
+// settled somewhere in either run) by its share not settled.
 RunDiff diff_runs(const RunDir& a, const RunDir& b, const std::vector<Tolerance>& tolerances,
                   const RequirementSet& requirements = {}, const std::map<std::string, double>& specs = {},
                   std::uint64_t seed = 1);

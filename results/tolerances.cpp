@@ -30,7 +30,7 @@ void read_amount(YamlReader& r, const std::string& key, double& out, bool& relat
   if (relative) out /= 100.0;
 }
 
-const char* const kStatistics[] = {"mean", "p5", "p50", "p95", "p_miss"};
+const char* const kStatistics[] = {"mean", "p5", "p50", "p95", "p_miss", "not_settled"};
 
 }  // namespace
 
@@ -61,7 +61,7 @@ std::vector<Tolerance> read_tolerances(YamlReader& top) {
     read_amount(r, "decrease", t.decrease, t.decrease_relative);
     r.optional("statistic", t.statistic);
     if (std::find(std::begin(kStatistics), std::end(kStatistics), t.statistic) == std::end(kStatistics))
-      r.fail("statistic", "expected mean, p5, p50, p95 or p_miss, got '" + t.statistic + "'");
+      r.fail("statistic", "expected mean, p5, p50, p95, p_miss or not_settled, got '" + t.statistic + "'");
     if (std::isnan(t.increase) && std::isnan(t.decrease))
       r.fail("increase", "a tolerance needs increase or decrease (or both): the change that counts as a regression");
     r.finish();

@@ -14,7 +14,8 @@ namespace ff {
 // `tolerances: {METRIC: {increase: X, decrease: X, statistic: mean}}`: by how much a statistic of a
 // metric may get worse before a diff calls it a regression. X is in the metric's unit, or "N%" of the
 // earlier run's statistic. statistic: mean (default), p5, p50, p95, or p_miss (the share of runs that
-// miss the metric's spec: above it, or without a value; the study must have a spec for the metric).
+// miss the metric's spec: above it, or without a value; the study must have a spec for the metric), or
+// not_settled (the share of runs that did not settle).
 struct Tolerance {
   std::string metric;
   std::string statistic = "mean";

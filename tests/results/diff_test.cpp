@@ -118,6 +118,19 @@ TEST(MetricChange, NotSettledRunsCountAtTheSmallerOfTheTwoLeastHorizons) {
   EXPECT_DOUBLE_EQ(c.a, (1 + 6 + 6 + 3) / 4.0);
   EXPECT_DOUBLE_EQ(c.b, (1 + 2 + 3 + 6) / 4.0);
   EXPECT_EQ(c.n_a, 4);
+  // The share not settled: one of four in each.
+  const MetricChange share = compare_metric(a, b, "m1_tip_settling_s", "not_settled", true, 0.95, 3);
+  EXPECT_DOUBLE_EQ(share.a, 0.25);
+  EXPECT_DOUBLE_EQ(share.b, 0.25);
+  EXPECT_EQ(describe_statistic(share), "share not settled");
+  // A diff of the two lists the mean and, the metric being censored, the share not settled.
+  RunDir ra, rb;
+  ra.table = a;
+  rb.table = b;
+  const RunDiff d = diff_runs(ra, rb, {});
+  ASSERT_GE(d.metrics.size(), 2u);
+  EXPECT_EQ(d.metrics[0].statistic, "mean");
+  EXPECT_EQ(d.metrics[1].statistic, "not_settled");
 }
 
 TEST(MetricChange, DivergedVariantsAreLeftOutOfBothSidesWhenPaired) {
@@ -181,8 +194,15 @@ TEST(RunDiff, AToleratedMetricThatRoseBeyondItsToleranceAndNoiseIsARegression) {
 }
 
 TEST(RunDiff, MoreFailedVariantsAndAWorseVerdictAreRegressions) {
-  const RunDir a = run_of(one_metric({1, 2, 3}), "", {{.requirement = "P(m_x <= 3) >= 0.9", .verdict = "pass"}, {.requirement = "mean(m_x) <= 5", .verdict = "undecided"}});
-  const RunDir b = run_of(one_metric({1, kNaN, 3}), "", {{.requirement = "P(m_x <= 3) >= 0.9", .verdict = "undecided"}, {.requirement = "mean(m_x) <= 5", .verdict = "pass"}});
+  // Verdicts as each run recorded them (no requirements given to the diff).
+  const auto verdict = [](const char* requirement, const char* v) {
+    Verdict x;
+    x.requirement = requirement;
+    x.verdict = v;
+    return x;
+  };
+  const RunDir a = run_of(one_metric({1, 2, 3}), "", {verdict("P(m_x <= 3) >= 0.9", "pass"), verdict("mean(m_x) <= 5", "undecided")});
+  const RunDir b = run_of(one_metric({1, kNaN, 3}), "", {verdict("P(m_x <= 3) >= 0.9", "undecided"), verdict("mean(m_x) <= 5", "pass")});
   const RunDiff d = diff_runs(a, b, {});
   ASSERT_EQ(d.verdicts.size(), 2u);
   EXPECT_TRUE(d.verdicts[0].worse);
@@ -208,7 +228,7 @@ TEST(Tolerances, AreReadWithTheirDirectionAndStatisticAndBadOnesNameTheLine) {
   EXPECT_EQ(t[1].describe(), "p5 decrease > 5 %");
   const std::pair<const char*, const char*> bad[] = {
       {"tolerances:\n  m: {increase: fast}\n", "study.yaml:2: tolerances.m.increase: expected an amount"},
-      {"tolerances:\n  m: {statistic: p99, increase: 1}\n", "study.yaml:2: tolerances.m.statistic: expected mean, p5, p50, p95 or p_miss"},
+      {"tolerances:\n  m: {statistic: p99, increase: 1}\n", "study.yaml:2: tolerances.m.statistic: expected mean, p5, p50, p95, p_miss or not_settled"},
       {"tolerances:\n  m: {}\n", "tolerances.m"},
       {"tolerances:\n  m: {increse: 1}\n", "study.yaml:2: tolerances.m.increse: unknown key"},
       {"tolerances:\n  m: {increase: -1}\n", "tolerances.m.increase: expected an amount >= 0"},
