@@ -6,10 +6,10 @@
 
 #include "apps/verbs.hpp"
 #include "common/files.hpp"
-#include "common/yaml_reader.hpp"
+#include "common/version.hpp"
 #include "results/diff.hpp"
 #include "results/history.hpp"
-#include "results/requirements.hpp"
+#include "sweep/study.hpp"
 
 namespace ff {
 
@@ -44,7 +44,7 @@ std::string format_run_md(const RunRecord& r) {
   std::string md = "# " + r.describe() + "\n\n| | |\n|---|---|\n";
   const std::pair<const char*, std::string> rows[] = {
       {"study", r.study_path},   {"model", r.model_path},   {"output", r.out},
-      {"study hash", r.study_hash}, {"flexfarm", r.version + (r.commit.empty() ? "" : " (" + r.commit + ")")},
+      {"study hash", r.study_hash}, {"flexfarm", format_build(r.version, r.commit)},
       {"host", r.host},          {"started", r.started.empty() ? "-" : r.started}, {"finished", r.finished},
       {"wall time (s)", num(r.seconds, "%.1f")},
       {"processes x threads, lanes", std::to_string(r.processes) + " x " + std::to_string(r.threads) + ", " + std::to_string(r.lanes)},
@@ -78,12 +78,7 @@ RunDir resolve_run(const std::string& arg, const std::string& history) {
   }
   const long id = parse_run_id(arg);
   if (id == 0) throw std::runtime_error(arg + ": neither a run's output directory nor a run id of the history");
-  const RunRecord r = read_history_run(history, id);
-  if (!std::filesystem::exists(r.out + "/results.sqlite"))
-    throw std::runtime_error(r.describe() + ": its output directory " + r.out + " is gone (its rows are needed)");
-  RunDir d = read_run_dir(r.out);
-  d.record.id = r.id;
-  return d;
+  return read_run_dir(read_history_run(history, id));
 }
 
 }  // namespace
@@ -121,8 +116,8 @@ void add_history_verb(CLI::App& app) {
     std::string md = "| id | study | finished | host | flexfarm | variants | wall (s) | requirements | output |\n"
                      "|---|---|---|---|---|---|---|---|---|\n";
     for (const RunRecord& r : runs)
-      md += "| " + std::to_string(r.id) + " | " + r.study + " | " + r.finished + " | " + r.host + " | " + r.version +
-            (r.commit.empty() ? "" : " (" + r.commit + ")") + " | " + counts_text(r) + " | " + num(r.seconds, "%.1f") +
+      md += "| " + std::to_string(r.id) + " | " + r.study + " | " + r.finished + " | " + r.host + " | " +
+            format_build(r.version, r.commit) + " | " + counts_text(r) + " | " + num(r.seconds, "%.1f") +
             " | " + verdicts_text(r) + " | " + r.out + " |\n";
     std::fputs(md.c_str(), stdout);
   });
@@ -159,21 +154,10 @@ void add_diff_verb(CLI::App& app) {
         if (!previous) throw std::runtime_error("no earlier run of " + b.record.study_path + " in the history " + hist + " to compare with");
         a = resolve_run(std::to_string(previous->id), hist);
       }
-      // The later run's tolerances, read from its study as it ran.
-      std::vector<Tolerance> tolerances;
-      RequirementSet requirements;
-      std::map<std::string, double> specs;
-      if (!b.record.study_text.empty()) {
-        YamlReader top(load_yaml_text(b.record.study_text, b.record.study_path), b.record.study_path, "", nullptr);
-        tolerances = read_tolerances(top);
-        requirements = read_requirements(top);
-        double seed = 1;  // the mean's bootstrap draws from the study's seed, as when it ran
-        top.optional("seed", seed);
-        requirements.seed = static_cast<std::uint64_t>(seed);
-        if (const YAML::Node node = top.raw("specs"); node && node.IsMap())
-          for (const auto& kv : node) specs[kv.first.Scalar()] = kv.second.as<double>();
-      }
-      d = diff_runs(a, b, tolerances, requirements, specs);
+      // The later run's specs, tolerances and requirements, read from its study as it ran.
+      const StudyCriteria c =
+          b.record.study_text.empty() ? StudyCriteria{} : read_study_criteria(b.record.study_text, b.record.study_path);
+      d = diff_runs(a, b, c.tolerances, c.requirements, c.specs);
     } catch (const std::exception& e) {
       throw ExitError(e.what(), 2);  // exit 1 means a regression
     }

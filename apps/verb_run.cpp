@@ -80,9 +80,7 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
       std::printf("recorded as run %ld in %s/history.sqlite\n", record.id, hist.c_str());
       if (const auto previous = find_previous_run(hist, record)) {
         if (std::filesystem::exists(previous->out + "/results.sqlite")) {
-          RunDir before = read_run_dir(previous->out);
-          before.record.id = previous->id;
-          const RunDiff d = diff_runs(before, RunDir{record, table}, study.tolerances, study.requirements, study.specs);
+          const RunDiff d = diff_runs(read_run_dir(*previous), RunDir{record, table}, study.tolerances, study.requirements, study.specs);
           page.diff_md = format_diff_md(d);
           write_file_atomic(dir + "/diff.md", page.diff_md);
           std::printf("compared with %s: %s (%s/diff.md)\n", previous->describe().c_str(),

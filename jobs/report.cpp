@@ -459,7 +459,7 @@ RunRecord make_run_record(const Study& study, const ResultTable& table, const st
   return r;
 }
 
-std::string format_study_requirements_md(const Study& study, const ResultTable& table) {
+std::string format_study_requirements_md(const Study& study, const ResultTable& table, const std::vector<Verdict>& verdicts) {
   if (study.requirements.statements.empty()) return "";
   std::string md = "\n## Requirements\n\n";
   if (table.rows.size() < study.variants.size())
@@ -467,7 +467,7 @@ std::string format_study_requirements_md(const Study& study, const ResultTable& 
           " variants: every requirement decided.\n\n";
   char conf[64];
   std::snprintf(conf, sizeof conf, "Intervals at %g %% confidence.\n\n", study.requirements.confidence * 100.0);
-  return md + conf + format_requirements_md(calc_study_verdicts(study, table));
+  return md + conf + format_requirements_md(verdicts);
 }
 
 std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir, const RunRecord& record) {
@@ -525,7 +525,7 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     }
     md += "\n## Every metric\n\n" + format_groupby_md(table, {}, table.columns, study.specs);
   }
-  md += format_study_requirements_md(study, table);
+  md += format_study_requirements_md(study, table, record.verdicts);
   write_file_atomic(dir + "/table.md", md);
 
   // Time series of every variant whose trace is on disk, when they are few enough to tell apart.

@@ -41,8 +41,8 @@ RunRecord make_run_record(const Study& study, const ResultTable& table, const st
 std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir,
                                const RunRecord& record);
 
-// table.md's "## Requirements" section: the verdicts of the study's requirements (calc_study_verdicts,
-// jobs/farm.hpp), and whether the study stopped early; "" without requirements.
-std::string format_study_requirements_md(const Study& study, const ResultTable& table);
+// table.md's "## Requirements" section: `verdicts` (calc_study_verdicts, jobs/farm.hpp, on `table`), and
+// whether the study stopped early; "" without requirements.
+std::string format_study_requirements_md(const Study& study, const ResultTable& table, const std::vector<Verdict>& verdicts);
 
 }  // namespace ff

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 
+#include "common/version.hpp"
 #include "results/summaries.hpp"
 
 namespace ff {
@@ -268,8 +269,8 @@ std::string describe_counts(const RunRecord& r) {
   return s + ")";
 }
 
-std::string describe_version(const RunRecord& r) {
-  return r.version.empty() ? "(not recorded)" : r.version + (r.commit.empty() ? "" : " (" + r.commit + ")");
+std::string describe_build(const RunRecord& r) {
+  return r.version.empty() ? "(not recorded)" : format_build(r.version, r.commit);
 }
 
 std::string key_table(const std::vector<KeyChange>& keys) {
@@ -287,7 +288,7 @@ std::string format_diff_md(const RunDiff& d) {
   md += "| | before | now |\n|---|---|---|\n";
   md += "| run | " + a.describe() + " | " + b.describe() + " |\n";
   md += "| directory | " + a.out + " | " + b.out + " |\n";
-  md += "| flexfarm | " + describe_version(a) + " | " + describe_version(b) + " |\n";
+  md += "| flexfarm | " + describe_build(a) + " | " + describe_build(b) + " |\n";
   md += "| finished | " + a.finished + " | " + b.finished + " |\n";
   md += "| variants | " + describe_counts(a) + " | " + describe_counts(b) + " |\n\n";
 
@@ -301,7 +302,7 @@ std::string format_diff_md(const RunDiff& d) {
   };
   inputs("Model", b.model_path, a.model_text, b.model_text, d.model);
   inputs("Study", b.study_path, a.study_text, b.study_text, d.study);
-  const std::string va = describe_version(a), vb = describe_version(b);
+  const std::string va = describe_build(a), vb = describe_build(b);
   md += "flexfarm: " + (va == vb ? "the same build, " + vb : va + " before, " + vb + " now") + ".\n\n";
 
   md += "## Metrics\n\n";

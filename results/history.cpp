@@ -234,6 +234,14 @@ RunDir read_run_dir(const std::string& dir) {
   return d;
 }
 
+RunDir read_run_dir(const RunRecord& recorded) {
+  if (!std::filesystem::exists(recorded.out + "/results.sqlite"))
+    throw std::runtime_error(recorded.describe() + ": its output directory " + recorded.out + " is gone (its rows are needed)");
+  RunDir d = read_run_dir(recorded.out);
+  d.record.id = recorded.id;
+  return d;
+}
+
 std::string resolve_history_dir(const std::string& option) {
   if (!option.empty()) return option;
   for (const char* var : {"FLEXFARM_HISTORY"})

@@ -75,6 +75,9 @@ struct RunDir {
   ResultTable table;
 };
 RunDir read_run_dir(const std::string& dir);
+// The directory of a run in the history, with the run's id; throws std::runtime_error naming the run
+// when its directory is gone.
+RunDir read_run_dir(const RunRecord& recorded);
 
 // The history directory: `option` when given, else $FLEXFARM_HISTORY, else $XDG_DATA_HOME/flexfarm,
 // else $HOME/.local/share/flexfarm; "" when none can be found.

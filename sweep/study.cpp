@@ -327,6 +327,41 @@ std::vector<std::string> calc_legend_labels(const Study& st, const std::vector<i
   return out;
 }
 
+namespace {
+// `seed:` (default 1): every variant's seed and every design's randomness.
+std::uint64_t read_seed(YamlReader& top) {
+  double seed = 1;
+  top.optional("seed", seed);
+  if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) top.fail("seed", "must be a whole number >= 0");
+  return static_cast<std::uint64_t>(seed);
+}
+}  // namespace
+
+StudyCriteria read_study_criteria(YamlReader& top, std::uint64_t seed) {
+  StudyCriteria c;
+  if (const YAML::Node specs = top.raw("specs")) {
+    if (!specs.IsMap()) top.fail("specs", "expected a map of RESPONSE: limit");
+    for (const auto& kv : specs) {
+      const double x = numeric_value(kv.second);
+      if (!std::isfinite(x)) top.fail("specs", "limit of '" + kv.first.as<std::string>() + "' must be a number");
+      c.specs[kv.first.as<std::string>()] = x;
+    }
+  }
+  c.tolerances = read_tolerances(top);
+  for (const Tolerance& t : c.tolerances)
+    if (t.statistic == "p_miss" && !c.specs.count(t.metric))
+      throw ConfigError(top.file(), t.line, "tolerances." + t.metric + ".statistic",
+                        "p_miss needs a spec for " + t.metric + " (specs: {" + t.metric + ": LIMIT})");
+  c.requirements = read_requirements(top);
+  c.requirements.seed = seed;
+  return c;
+}
+
+StudyCriteria read_study_criteria(const std::string& text, const std::string& source) {
+  YamlReader top(load_yaml_text(text, source), source, "", nullptr);
+  return read_study_criteria(top, read_seed(top));
+}
+
 Study read_study(const std::string& path, int max_variants) {
   Study st;
   st.source = path;
@@ -337,10 +372,7 @@ Study read_study(const std::string& path, int max_variants) {
   st.name = std::filesystem::path(path).stem().string();
   top.optional("name", st.name);
   top.optional("description", st.description);
-  double seed = 1;
-  top.optional("seed", seed);
-  if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) top.fail("seed", "must be a whole number >= 0");
-  st.seed = static_cast<std::uint64_t>(seed);
+  st.seed = read_seed(top);
 
   std::string model;
   if (!top.has("model")) top.fail("model", "missing required value (path of the model YAML, relative to this file)");
@@ -354,21 +386,10 @@ Study read_study(const std::string& path, int max_variants) {
   parse_design(st, top, max_variants);
   for (auto& v : st.variants) v.seed = calc_variant_seed(st.seed, static_cast<std::uint64_t>(v.eval_id));
 
-  if (const YAML::Node specs = top.raw("specs")) {
-    if (!specs.IsMap()) top.fail("specs", "expected a map of RESPONSE: limit");
-    for (const auto& kv : specs) {
-      const double x = numeric_value(kv.second);
-      if (!std::isfinite(x)) top.fail("specs", "limit of '" + kv.first.as<std::string>() + "' must be a number");
-      st.specs[kv.first.as<std::string>()] = x;
-    }
-  }
-  st.tolerances = read_tolerances(top);
-  for (const Tolerance& t : st.tolerances)
-    if (t.statistic == "p_miss" && !st.specs.count(t.metric))
-      throw ConfigError(path, t.line, "tolerances." + t.metric + ".statistic",
-                        "p_miss needs a spec for " + t.metric + " (specs: {" + t.metric + ": LIMIT})");
-  st.requirements = read_requirements(top);
-  st.requirements.seed = st.seed;
+  StudyCriteria criteria = read_study_criteria(top, st.seed);
+  st.specs = std::move(criteria.specs);
+  st.tolerances = std::move(criteria.tolerances);
+  st.requirements = std::move(criteria.requirements);
   if (st.requirements.stop_when_decided && (st.listed || st.design.kind != DesignKind::kMonteCarlo || !st.case_labels.empty()))
     throw ConfigError(path, st.requirements.stop_line, st.requirements.key + ".stop_when_decided",
                       "only for `design: {type: monte_carlo}` without `cases:` (a prefix of another design is not a sample of it)");

@@ -61,6 +61,17 @@ struct Study {
 // the results, every row (about 1.4 kB a variant).
 inline constexpr int kMaxStudyVariants = 1000000;
 
+// What a study holds its runs to, read from its text alone (no model, no design): `specs:`,
+// `tolerances:` (a p_miss one needs its metric's spec) and `requirements:`, whose bootstrap draws from
+// the study's `seed:`. read_study reads them so; flexfarm diff from a run's recorded study text.
+struct StudyCriteria {
+  std::map<std::string, double> specs;
+  std::vector<Tolerance> tolerances;
+  RequirementSet requirements;
+};
+StudyCriteria read_study_criteria(YamlReader& top, std::uint64_t seed);
+StudyCriteria read_study_criteria(const std::string& text, const std::string& source);
+
 // Loads and checks a study: read_study, then check_models.
 Study load_study(const std::string& path);
 
