@@ -3,10 +3,13 @@
 
 #include <cstdio>
 #include <exception>
+#include <iostream>
+#include <sstream>
 
 #include "apps/verbs.hpp"
 #include "jobs/mpi.hpp"
 #include "common/errors.hpp"
+#include "common/text.hpp"
 #include "common/isa.hpp"
 #include "common/version.hpp"
 
@@ -35,16 +38,18 @@ int main(int argc, char** argv) {
     ff::active_isa();  // a bad FLEXFARM_ISA stops here, before any kernel runs
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);  // --help (0), bad options
-    return code == 0 ? 0 : 2;      // bad input is exit 2, as for a bad file (flexfarm diff: 1 is a regression)
+    std::ostringstream err;  // a bad option's value is shown as text, escape sequences and all
+    const int code = app.exit(e, std::cout, err);  // --help (0), bad options
+    ff::print_safe(stderr, "%s", err.str().c_str());
+    return code == 0 ? 0 : 2;  // bad input is exit 2, as for a bad file (flexfarm diff: 1 is a regression)
   } catch (const ff::ExitError& e) {
-    if (*e.what()) std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    if (*e.what()) ff::print_safe(stderr, "flexfarm: error: %s\n", e.what());
     return e.code;
   } catch (const ff::ConfigError& e) {
-    std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    ff::print_safe(stderr, "flexfarm: error: %s\n", e.what());  // a name's escape sequence shown as text
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "flexfarm: error: %s\n", e.what());
+    ff::print_safe(stderr, "flexfarm: error: %s\n", e.what());  // a name's escape sequence shown as text
     return 1;
   }
   return 0;

@@ -39,10 +39,10 @@ void animate_arm(const ArmModel& m, const std::string& title, const AnimateArgs&
   o.still_path = a.frame_png;
   o.still_time = a.frame_time;
   const ArmAnimationSummary s = write_arm_animation(m, run.traces[0].t(), run.q[0], a.out, o);
-  std::printf("wrote %s: %d frames, %.1f s of motion at %gx, deflection x%g%s\n", a.out.c_str(), s.frames, m.duration,
+  print_safe(stdout, "wrote %s: %d frames, %.1f s of motion at %gx, deflection x%g%s\n", a.out.c_str(), s.frames, m.duration,
               a.speed, a.exaggeration, a.frame_png.empty() ? "" : (", and " + a.frame_png).c_str());
   if (run.status[0] != LaneStatus::kOk)
-    std::printf("warning: the run ended %s; %d frames show the warning instead of the arm\n",
+    print_safe(stdout, "warning: the run ended %s; %d frames show the warning instead of the arm\n",
                 lane_status_name(run.status[0]), s.nonfinite_frames);
 }
 
@@ -53,8 +53,8 @@ void add_animate_verb(CLI::App& app) {
                                             "segments, payload, tip trace), an arm model in 3-D (perspective, every "
                                             "body, the tool's path); optional deflection exaggeration");
   auto args = std::make_shared<AnimateArgs>();
-  cmd->add_option("input", args->input, "model YAML, or a study YAML with --eval")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--out", args->out, "video file: .avi (Motion-JPEG) or .mp4")->required();
+  cmd->add_option("input", args->input, "model YAML, or a study YAML with --eval")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--out", args->out, "video file: .avi (Motion-JPEG) or .mp4")->required()->check(kPath);
   cmd->add_option("--eval", args->eval_id, "the variant of a study to animate (its eval_id)");
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable (model input only)");
   cmd->add_option("--exaggerate", args->exaggeration, "scale the beam's deflection by this factor")
@@ -66,7 +66,7 @@ void add_animate_verb(CLI::App& app) {
   cmd->add_option("--azimuth", args->azimuth, "arm: camera azimuth, degrees")->capture_default_str();
   cmd->add_option("--elevation", args->elevation, "arm: camera elevation above the ground, degrees")
       ->check(CLI::Range(-90.0, 90.0))->capture_default_str();
-  cmd->add_option("--frame", args->frame_png, "arm: also write one frame as this PNG (the time: --at)");
+  cmd->add_option("--frame", args->frame_png, "arm: also write one frame as this PNG (the time: --at)")->check(kPath);
   cmd->add_option("--at", args->frame_time, "arm: the time of the --frame PNG, s")->capture_default_str();
   cmd->callback([args] {
     if (args->eval_id >= 0 ? load_study(args->input).arm : is_arm_model_file(args->input)) {
@@ -121,7 +121,7 @@ void add_animate_verb(CLI::App& app) {
       a.frames.push_back(std::move(f));
     });
     render_animation(a, args->out);
-    std::printf("wrote %s: %zu frames, %.1f s of motion at %gx, deflection x%g\n", args->out.c_str(), a.frames.size(),
+    print_safe(stdout, "wrote %s: %zu frames, %.1f s of motion at %gx, deflection x%g\n", args->out.c_str(), a.frames.size(),
                 m.duration, args->speed, args->exaggeration);
   });
 }

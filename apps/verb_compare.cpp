@@ -53,18 +53,18 @@ void compare_arm(const std::string& model, const std::vector<std::string>& sets,
   const Record r = read_record_csv(data, {});
   check_arm_record(r, m);
   if (k > 0)
-    std::fprintf(stderr, "comparing %s with %s: %zu samples, free run and k = %d from the observer's estimate\n",
+    print_safe(stderr, "comparing %s with %s: %zu samples, free run and k = %d from the observer's estimate\n",
                  model.c_str(), data.c_str(), r.size(), k);
   else
-    std::fprintf(stderr, "comparing %s with %s: %zu samples, free run on the record's references\n", model.c_str(),
+    print_safe(stderr, "comparing %s with %s: %zu samples, free run on the record's references\n", model.c_str(),
                  data.c_str(), r.size());
   const ArmCompareResult result = compare_arm_record(m, r, {}, k, observer);
   const auto files =
       write_report_into([&](const std::string& dir) { return write_arm_compare_report(result, dir); }, out);
-  std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_arm_fit_table(result).c_str(), out.c_str(),
+  print_safe(stdout, "%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_arm_fit_table(result).c_str(), out.c_str(),
               files.size() - 2);
-  if (!result.ok) std::printf("the replay failed numerically: see %s/report.md\n", out.c_str());
-  if (k > 0 && !result.k_ok) std::printf("the k-step prediction failed: see %s/report.md\n", out.c_str());
+  if (!result.ok) print_safe(stdout, "the replay failed numerically: see %s/report.md\n", out.c_str());
+  if (k > 0 && !result.k_ok) print_safe(stdout, "the k-step prediction failed: see %s/report.md\n", out.c_str());
 }
 
 }  // namespace
@@ -82,8 +82,8 @@ void add_compare_verb(CLI::App& app) {
     std::vector<std::string> sets;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("--model", args->model, "model YAML file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--data", args->data, "measurement record CSV (docs/formats.md, \"Measurement record\")")->required();
+  cmd->add_option("--model", args->model, "model YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--data", args->data, "measurement record CSV (docs/formats.md, \"Measurement record\")")->required()->check(kPath);
   cmd->add_option("--mode", args->mode, "replay: closed-loop (record's ref drives the model's controller), "
                                         "open-loop (record's hub_torque drives the plant), inverse-dynamics")
       ->check(CLI::IsMember({"closed-loop", "open-loop", "inverse-dynamics"}))
@@ -102,7 +102,7 @@ void add_compare_verb(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
-  cmd->add_option("--out", args->out, "output directory (created)")->required();
+  cmd->add_option("--out", args->out, "output directory (created)")->required()->check(kPath);
   cmd->callback([args, k_opt, noise_opt, relin_opt] {
     if (is_arm_model_file(args->model)) {
       if (args->mode != "closed-loop") throw ExitError("--mode: an arm model is compared in closed loop only", 2);
@@ -120,17 +120,17 @@ void add_compare_verb(CLI::App& app) {
     const ReplayMode mode = parse_replay_mode(args->mode);
     const Model m = load_model_with(args->model, args->sets);
     const Record r = read_record_csv(args->data, replay_inputs(mode));
-    std::fprintf(stderr, "comparing %s with %s: %zu samples, %s, k = %d\n", args->model.c_str(), args->data.c_str(),
+    print_safe(stderr, "comparing %s with %s: %zu samples, %s, k = %d\n", args->model.c_str(), args->data.c_str(),
                  r.size(), replay_mode_name(mode), args->k);
     ObserverOptions observer;
     observer.process_noise = args->process_noise;
     const CompareResult result = compare_record(m, r, mode, args->k, {}, observer);
     const auto files =
         write_report_into([&](const std::string& dir) { return write_compare_report(result, dir); }, args->out);
-    std::printf("%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_fit_table(result).c_str(),
+    print_safe(stdout, "%s\nwrote %s/{report.md, compare.json} and %zu plots\n", format_fit_table(result).c_str(),
                 args->out.c_str(), files.size() - 2);
     if (!result.free_ok || !result.k_ok)
-      std::printf("a replay failed numerically: see %s/report.md\n", args->out.c_str());
+      print_safe(stdout, "a replay failed numerically: see %s/report.md\n", args->out.c_str());
   });
 }
 

@@ -6,6 +6,7 @@
 
 #include "apps/verbs.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 #include "common/version.hpp"
 #include "results/diff.hpp"
 #include "results/history.hpp"
@@ -41,7 +42,7 @@ std::string verdicts_text(const RunRecord& r) {
 
 // One run's record: provenance, summaries, verdicts.
 std::string format_run_md(const RunRecord& r) {
-  std::string md = "# " + r.describe() + "\n\n| | |\n|---|---|\n";
+  std::string md = "# " + r.describe() + "\n\n| | |\n|---|---|\n";  // every cell from the record through md_cell
   const std::pair<const char*, std::string> rows[] = {
       {"study", r.study_path},   {"model", r.model_path},   {"output", r.out},
       {"study hash", r.study_hash}, {"flexfarm", format_build(r.version, r.commit)},
@@ -49,12 +50,12 @@ std::string format_run_md(const RunRecord& r) {
       {"wall time (s)", num(r.seconds, "%.1f")},
       {"processes x threads, lanes", std::to_string(r.processes) + " x " + std::to_string(r.threads) + ", " + std::to_string(r.lanes)},
       {"variants", counts_text(r)}};
-  for (const auto& [k, v] : rows) md += std::string("| ") + k + " | " + v + " |\n";
+  for (const auto& [k, v] : rows) md += std::string("| ") + k + " | " + md_cell(v) + " |\n";
   md += "\n| metric | count | not settled | missing | mean [95 %] | p5 | p50 | p95 | spec | P(miss) [95 %] |\n"
         "|---|---|---|---|---|---|---|---|---|---|\n";
   auto bounded = [](double x) { return std::isinf(x) ? std::string("> horizon") : num(x); };
   for (const MetricSummary& m : r.summaries)
-    md += "| " + m.metric + " | " + std::to_string(m.count) + " | " + std::to_string(m.censored) + " | " +
+    md += "| " + md_cell(m.metric) + " | " + std::to_string(m.count) + " | " + std::to_string(m.censored) + " | " +
           std::to_string(m.missing) + " | " + num(m.mean) + " [" + num(m.mean_lower) + ", " + num(m.mean_upper) + "] | " +
           bounded(m.p5) + " | " + bounded(m.p50) + " | " + bounded(m.p95) + " | " + num(m.spec) + " | " +
           (std::isnan(m.p_miss) ? "-" : num(m.p_miss, "%.3f") + " [" + num(m.p_miss_lower, "%.3f") + ", " + num(m.p_miss_upper, "%.3f") + "]") +
@@ -62,8 +63,8 @@ std::string format_run_md(const RunRecord& r) {
   if (!r.verdicts.empty()) {
     md += "\n| requirement | verdict | estimate [interval] | n | evidence |\n|---|---|---|---|---|\n";
     for (const Verdict& v : r.verdicts)
-      md += "| " + v.requirement + " | " + v.verdict + " | " + num(v.estimate) + " [" + num(v.lower) + ", " + num(v.upper) +
-            "] | " + std::to_string(v.n) + " | " + v.evidence + " |\n";
+      md += "| " + md_cell(v.requirement) + " | " + v.verdict + " | " + num(v.estimate) + " [" + num(v.lower) + ", " + num(v.upper) +
+            "] | " + std::to_string(v.n) + " | " + md_cell(v.evidence) + " |\n";
   }
   return md;
 }
@@ -92,15 +93,17 @@ void add_history_verb(CLI::App& app) {
     int limit = 20;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("what", args->what, "a study (its file or its name) to list only its runs, or a run id to show that run");
+  cmd->add_option("what", args->what, "a study (its file or its name) to list only its runs, or a run id to show that run")
+      ->check(kPath);
   cmd->add_option("--history", args->history, "run history directory (default: $FLEXFARM_HISTORY, else "
-                                              "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)");
+                                              "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)")
+      ->check(kPath);
   cmd->add_option("--limit", args->limit, "list at most the latest N runs (0: all)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->callback([args] {
     const std::string hist = resolve_history_dir(args->history);
     if (hist.empty()) throw ExitError("no run history: give --history DIR or set FLEXFARM_HISTORY", 2);
     if (const long id = parse_run_id(args->what)) {
-      std::fputs(format_run_md(read_history_run(hist, id)).c_str(), stdout);
+      print_safe(stdout, "%s", format_run_md(read_history_run(hist, id)).c_str());
       return;
     }
     std::string study = args->what;
@@ -108,7 +111,7 @@ void add_history_verb(CLI::App& app) {
       study = std::filesystem::absolute(study).lexically_normal().string();
     std::vector<RunRecord> runs = list_runs(hist, study, true);
     if (runs.empty()) {
-      std::printf("no runs%s in %s/history.sqlite\n", study.empty() ? "" : (" of " + args->what).c_str(), hist.c_str());
+      print_safe(stdout, "no runs%s in %s/history.sqlite\n", study.empty() ? "" : (" of " + args->what).c_str(), hist.c_str());
       return;
     }
     if (args->limit > 0 && runs.size() > static_cast<std::size_t>(args->limit))
@@ -116,10 +119,10 @@ void add_history_verb(CLI::App& app) {
     std::string md = "| id | study | finished | host | flexfarm | variants | wall (s) | requirements | output |\n"
                      "|---|---|---|---|---|---|---|---|---|\n";
     for (const RunRecord& r : runs)
-      md += "| " + std::to_string(r.id) + " | " + r.study + " | " + r.finished + " | " + r.host + " | " +
-            format_build(r.version, r.commit) + " | " + counts_text(r) + " | " + num(r.seconds, "%.1f") +
-            " | " + verdicts_text(r) + " | " + r.out + " |\n";
-    std::fputs(md.c_str(), stdout);
+      md += "| " + std::to_string(r.id) + " | " + md_cell(r.study) + " | " + md_cell(r.finished) + " | " + md_cell(r.host) + " | " +
+            md_cell(format_build(r.version, r.commit)) + " | " + counts_text(r) + " | " + num(r.seconds, "%.1f") +
+            " | " + verdicts_text(r) + " | " + md_cell(r.out) + " |\n";
+    print_safe(stdout, "%s", md.c_str());
   });
 }
 
@@ -136,34 +139,38 @@ void add_diff_verb(CLI::App& app) {
   cmd->add_option("runs", args->runs, "RUN_A RUN_B, or RUN_B alone (compared with the study's previous run in the "
                                       "history); a run is an output directory of flexfarm run or a history id (12 or #12)")
       ->required()
-      ->expected(1, 2);
+      ->expected(1, 2)
+      ->check(kPath);
   cmd->add_option("--history", args->history, "run history directory (default: $FLEXFARM_HISTORY, else "
-                                              "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)");
-  cmd->add_option("--out", args->out, "also write the diff (Markdown) to this file");
+                                              "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)")
+      ->check(kPath);
+  cmd->add_option("--out", args->out, "also write the diff (Markdown) to this file")->check(kPath);
   cmd->callback([args] {
     RunDiff d;
+    std::string first;  // B is its study's first run: nothing to compare with, which is no error
     try {
       const std::string hist = resolve_history_dir(args->history);
       const RunDir b = resolve_run(args->runs.back(), hist);
       RunDir a;
       if (args->runs.size() == 2) {
         a = resolve_run(args->runs.front(), hist);
-      } else {
-        // The run recorded before b: b's history entry, found by its directory.
-        const auto previous = find_previous_run(hist, b.record);
-        if (!previous) throw std::runtime_error("no earlier run of " + b.record.study_path + " in the history " + hist + " to compare with");
+      } else if (const auto previous = find_previous_run(hist, b.record)) {  // the run recorded before b
         a = resolve_run(std::to_string(previous->id), hist);
+      } else {
+        first = "# Nothing to compare with\n\n" + b.record.describe() + " is the first run of " + b.record.study_path +
+                " in the history " + (hist.empty() ? std::string("(none)") : hist) +
+                ": there is no earlier run to compare it with. Nothing got worse.\n";
       }
       // The later run's specs, tolerances and requirements, read from its study as it ran.
       const StudyCriteria c =
           b.record.study_text.empty() ? StudyCriteria{} : read_study_criteria(b.record.study_text, b.record.study_path);
-      d = diff_runs(a, b, c.tolerances, c.requirements, c.specs);
+      if (first.empty()) d = diff_runs(a, b, c.tolerances, c.requirements, c.specs);
     } catch (const std::exception& e) {
       throw ExitError(e.what(), 2);  // exit 1 means a regression
     }
-    const std::string md = format_diff_md(d);
+    const std::string md = first.empty() ? format_diff_md(d) : first;
     if (!args->out.empty()) write_file_atomic(args->out, md);
-    std::fputs(md.c_str(), stdout);
+    print_safe(stdout, "%s", md.c_str());
     if (!d.regressions.empty()) throw ExitError("", 1);  // the diff has said which
   });
 }

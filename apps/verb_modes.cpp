@@ -20,14 +20,14 @@ namespace ff {
 namespace {
 
 void print_modes(const char* title, const std::vector<Mode>& modes, int count) {
-  std::printf("%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
+  print_safe(stdout, "%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
   int shown = 0;
   for (const auto& m : modes) {
     if (shown++ == count) break;
     if (m.oscillatory)
-      std::printf("  %-4d %12.4f %12.4f %10.4f\n", shown, m.frequency_hz(), m.omega_n, m.zeta);
+      print_safe(stdout, "  %-4d %12.4f %12.4f %10.4f\n", shown, m.frequency_hz(), m.omega_n, m.zeta);
     else
-      std::printf("  %-4d %12s %12.4f %10s   real pole, time constant %.4g s\n", shown, "-", m.omega_n, "-",
+      print_safe(stdout, "  %-4d %12s %12.4f %10s   real pole, time constant %.4g s\n", shown, "-", m.omega_n, "-",
                   1.0 / m.omega_n);
   }
 }
@@ -63,7 +63,7 @@ void print_tree_modes(const char* title, const std::vector<TreeMode>& modes, int
   // A mode whose omega is round-off of zero (below 1e-9 of the largest) is motion nothing resists.
   double wmax = 0.0;
   for (const TreeMode& m : modes) wmax = std::max(wmax, m.omega_n);
-  std::printf("%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
+  print_safe(stdout, "%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
   // A mode that moves no joint and that nothing restores (a hydraulic actuator's mean chamber pressure)
   // is counted below the table, not listed.
   const auto still = [&](const TreeMode& m) { return !m.moves && m.omega_n <= 1e-9 * wmax; };
@@ -76,18 +76,18 @@ void print_tree_modes(const char* title, const std::vector<TreeMode>& modes, int
     }
     if (++listed > count) continue;
     if (m.oscillatory)
-      std::printf("  %-4zu %12.4f %12.4f %10.4f\n", static_cast<std::size_t>(listed), m.frequency_hz(), m.omega_n, m.zeta);
+      print_safe(stdout, "  %-4zu %12.4f %12.4f %10.4f\n", static_cast<std::size_t>(listed), m.frequency_hz(), m.omega_n, m.zeta);
     else if (m.omega_n <= 1e-9 * wmax)
-      std::printf("  %-4zu %12s %12s %10s   free: nothing resists this motion\n", static_cast<std::size_t>(listed), "-", "0", "-");
+      print_safe(stdout, "  %-4zu %12s %12s %10s   free: nothing resists this motion\n", static_cast<std::size_t>(listed), "-", "0", "-");
     else if (m.zeta < 0.0)
-      std::printf("  %-4zu %12s %12.4f %10s   unstable: grows e-fold in %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",
+      print_safe(stdout, "  %-4zu %12s %12.4f %10s   unstable: grows e-fold in %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",
                   1.0 / m.omega_n);
     else
-      std::printf("  %-4zu %12s %12.4f %10s   real pole, time constant %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",
+      print_safe(stdout, "  %-4zu %12s %12.4f %10s   real pole, time constant %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",
                   1.0 / m.omega_n);
   }
   if (neutral > 0)
-    std::printf("  and %d neutral state%s that move%s no joint (omega 0; the hydraulic actuators' mean chamber "
+    print_safe(stdout, "  and %d neutral state%s that move%s no joint (omega 0; the hydraulic actuators' mean chamber "
                 "pressures, which the linearised valves do not restore)\n",
                 neutral, neutral == 1 ? "" : "s", neutral == 1 ? "s" : "");
 }
@@ -108,7 +108,7 @@ void write_mode_shapes(const TreeDescription& d, const std::vector<TreeMode>& mo
     out << '\n';
   }
   write_file_atomic(path, out.str());
-  std::printf("mode shapes: %s\n", path.c_str());
+  print_safe(stdout, "mode shapes: %s\n", path.c_str());
 }
 
 struct ModesOptions {
@@ -119,7 +119,7 @@ struct ModesOptions {
 };
 
 void print_tree_header(const std::string& path, const Tree& tree, std::size_t locked) {
-  std::printf("tree %s: %d bodies, %d moving joints (%zu locked), gravity (%.4g, %.4g, %.4g) m/s^2\n", path.c_str(),
+  print_safe(stdout, "tree %s: %d bodies, %d moving joints (%zu locked), gravity (%.4g, %.4g, %.4g) m/s^2\n", path.c_str(),
               tree.num_bodies(), tree.nv(), locked, tree.gravity()[0], tree.gravity()[1], tree.gravity()[2]);
 }
 
@@ -148,7 +148,7 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
   Eigen::VectorXd start = arm.q0;
   for (int j : arm.compliant_dofs) start[j] = 0.0;
   const StaticEquilibriumResult sag = calc_arm_sag(arm, parse_pose(d, start, o.at));
-  if (!sag.converged()) std::printf("static sag not found (%s): linearised at the straight links\n", sag.message.c_str());
+  if (!sag.converged()) print_safe(stdout, "static sag not found (%s): linearised at the straight links\n", sag.message.c_str());
   const Eigen::VectorXd& q0 = sag.q;
   TreeModeOptions options;
   for (const std::string& name : o.lock) options.locked_dofs.push_back(dof_of(d, name, "--lock"));
@@ -173,7 +173,7 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
                                  "spool, torque loop and chambers linearised):"
                                : "closed loop (continuous-time PD on the actuated joints):",
                      modes, o.count);
-    std::printf("fixed-step substeps per control period: %d (h = %.3g ms, %s)\n", arm.substeps,
+    print_safe(stdout, "fixed-step substeps per control period: %d (h = %.3g ms, %s)\n", arm.substeps,
                 1e3 * arm.control_period / arm.substeps, arm.integrator == Integrator::kRk4 ? "rk4" : "implicit");
   }
   if (!o.shapes.empty()) write_mode_shapes(d, modes, nv, o.shapes);
@@ -184,16 +184,16 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
   Eigen::VectorXd straight = q0;
   for (int j : arm.compliant_dofs) straight[j] = 0.0;
   calc_body_poses(tree, straight, rigid);
-  std::printf("static deflection under gravity (%s):\n  %-16s %12s %12s %12s\n",
+  print_safe(stdout, "static deflection under gravity (%s):\n  %-16s %12s %12s %12s\n",
               sag.converged() ? "converged" : "not converged", "", "dx (mm)", "dy (mm)", "dz (mm)");
   for (const LinkTip& l : arm.links) {
     const Pose& root = poses[static_cast<std::size_t>(l.root_body)];
     const Vec3 d2 = root.rotation.transpose() * (poses[static_cast<std::size_t>(l.tip_body)].point(l.tip_point) - root.position) - l.rigid_tip;
-    std::printf("  %-16s %12.4f %12.4f %12.4f   (tip, link frame)\n", l.name.c_str(), 1e3 * d2.x(), 1e3 * d2.y(), 1e3 * d2.z());
+    print_safe(stdout, "  %-16s %12.4f %12.4f %12.4f   (tip, link frame)\n", l.name.c_str(), 1e3 * d2.x(), 1e3 * d2.y(), 1e3 * d2.z());
   }
   for (const ArmTool& t : arm.tools) {
     const Vec3 tool = poses[static_cast<std::size_t>(t.body)].point(t.point) - rigid[static_cast<std::size_t>(t.body)].point(t.point);
-    std::printf("  %-16s %12.4f %12.4f %12.4f   (base frame; |sag| %.4f mm)\n", t.name.c_str(), 1e3 * tool.x(),
+    print_safe(stdout, "  %-16s %12.4f %12.4f %12.4f   (base frame; |sag| %.4f mm)\n", t.name.c_str(), 1e3 * tool.x(),
                 1e3 * tool.y(), 1e3 * tool.z(), 1e3 * tool.norm());
   }
 }
@@ -213,14 +213,15 @@ void add_modes_verb(CLI::App& app) {
     bool statics = false;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("model", args->model, "model YAML file, e.g. configs/fbtb.yaml")->required()->check(CLI::ExistingFile);
+  cmd->add_option("model", args->model, "model YAML file, e.g. configs/fbtb.yaml")->required()->check(kPath)->check(CLI::ExistingFile);
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE (e.g. segments=24); repeatable");
   cmd->add_option("--count", args->count, "modes to list per table")->check(CLI::PositiveNumber);
   cmd->add_option("--sidecar", args->sidecar, "tree: a flexfarm sidecar YAML for a URDF (joint springs)")
+      ->check(kPath)
       ->check(CLI::ExistingFile);
   cmd->add_option("--at", args->at, "tree: the pose, JOINT=VALUE (rad or m; others 0); repeatable");
   cmd->add_option("--lock", args->lock, "tree: hold this joint still (a clamped joint); repeatable");
-  cmd->add_option("--shapes", args->shapes, "tree: write every mode's frequency, damping and shape to this CSV");
+  cmd->add_option("--shapes", args->shapes, "tree: write every mode's frequency, damping and shape to this CSV")->check(kPath);
   cmd->add_flag("--static", args->statics, "arm: also print the static deflection under gravity at the pose");
   cmd->callback([args] {
     const ModesOptions o{args->at, args->lock, args->count, args->shapes, args->statics};
@@ -242,21 +243,21 @@ void add_modes_verb(CLI::App& app) {
     const Model m = load_model_with(args->model, args->sets);
     const auto& b = m.spec.beam;
     if (m.nseg > 1)
-      std::printf("model %s: N = %d segments, cell l = %.5f m, joint k = %.5g N m/rad, c = %.5g N m s/rad\n",
+      print_safe(stdout, "model %s: N = %d segments, cell l = %.5f m, joint k = %.5g N m/rad, c = %.5g N m s/rad\n",
                   args->model.c_str(), m.nseg, m.cell, m.joint_k[1], m.joint_c[1]);
     else
-      std::printf("model %s: N = 1, one rigid arm (no joints)\n", args->model.c_str());
-    std::printf("beam mass %.2f kg, EI = %.5g N m^2\n", calc_beam_mass(b), b.youngs_modulus * calc_area_moment(b));
-    std::printf("equivalent cantilever stiffness 3EI/L (seed eq. 5):\n");
-    std::printf("  one cell   (L = %.5f m): %10.2f kN m/rad\n", m.cell, 1e-3 * calc_cantilever_stiffness(b, m.cell));
-    std::printf("  whole beam (L = %.5f m): %10.2f kN m/rad\n", b.length, 1e-3 * calc_cantilever_stiffness(b, b.length));
+      print_safe(stdout, "model %s: N = 1, one rigid arm (no joints)\n", args->model.c_str());
+    print_safe(stdout, "beam mass %.2f kg, EI = %.5g N m^2\n", calc_beam_mass(b), b.youngs_modulus * calc_area_moment(b));
+    print_safe(stdout, "equivalent cantilever stiffness 3EI/L (seed eq. 5):\n");
+    print_safe(stdout, "  one cell   (L = %.5f m): %10.2f kN m/rad\n", m.cell, 1e-3 * calc_cantilever_stiffness(b, m.cell));
+    print_safe(stdout, "  whole beam (L = %.5f m): %10.2f kN m/rad\n", b.length, 1e-3 * calc_cantilever_stiffness(b, b.length));
     print_modes("clamped hub:", calc_clamped_modes(m), args->count);
     print_modes("closed loop (continuous-time PD on the hub):", calc_closed_loop_modes(m), args->count);
     const auto res = calc_closed_loop_resonances(m);
     if (res.size() >= 2)
-      std::printf("closed-loop resonances for the notch filter: omega_z1 = %.4f rad/s (%.4f Hz), omega_z2 = %.4f rad/s (%.4f Hz)\n",
+      print_safe(stdout, "closed-loop resonances for the notch filter: omega_z1 = %.4f rad/s (%.4f Hz), omega_z2 = %.4f rad/s (%.4f Hz)\n",
                   res[0], res[0] / (2 * 3.141592653589793), res[1], res[1] / (2 * 3.141592653589793));
-    std::printf("fixed-step substeps per control period: %d (h = %.3g ms)\n", m.substeps,
+    print_safe(stdout, "fixed-step substeps per control period: %d (h = %.3g ms)\n", m.substeps,
                 1e3 * m.control_period / m.substeps);
   });
 }

@@ -20,9 +20,9 @@ void add_plot_verb(CLI::App& app) {
     std::string study, out, evals;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("study", args->study, "study YAML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("study", args->study, "study YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
   cmd->add_option("--eval", args->evals, "eval_ids, comma separated (at most 12), e.g. 0,40,80")->required();
-  cmd->add_option("--out", args->out, "output directory (created)")->required();
+  cmd->add_option("--out", args->out, "output directory (created)")->required()->check(kPath);
   cmd->callback([args] {
     const Study study = load_study(args->study);
     std::vector<int> ids;
@@ -75,7 +75,7 @@ void add_plot_verb(CLI::App& app) {
       write_trace_plots(args->out, labels, ptrs, study.name);
       files = "tip_angle.png,hub_angle.png,tip_deflection.png,hub_torque.png";
     }
-    std::printf("wrote %s/{%s} and trace_NNNNNN.csv for %zu variants\n", args->out.c_str(), files.c_str(), ids.size());
+    print_safe(stdout, "wrote %s/{%s} and trace_NNNNNN.csv for %zu variants\n", args->out.c_str(), files.c_str(), ids.size());
   });
 }
 

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <regex>
 
 #include "apps/verbs.hpp"
@@ -14,6 +16,7 @@
 #include "jobs/report.hpp"
 #include "jobs/report_html.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 #include "results/diff.hpp"
 #include "results/history.hpp"
 
@@ -56,54 +59,84 @@ struct HistoryArgs {
   bool off = false;
   void add(CLI::App* cmd) {
     cmd->add_option("--history", dir, "run history directory (default: $FLEXFARM_HISTORY, else "
-                                      "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)");
+                                      "$XDG_DATA_HOME/flexfarm, else ~/.local/share/flexfarm)")
+        ->check(kPath);
     cmd->add_flag("--no-history", off, "do not record this run in the run history");
+  }
+  // The history directory ("": none), resolved before the run starts: a blank $FLEXFARM_HISTORY is a usage error.
+  std::string resolve() const {
+    try {
+      return off ? "" : resolve_history_dir(dir);
+    } catch (const std::runtime_error& e) {
+      throw ExitError(e.what(), 2);
+    }
   }
 };
 
-// Assembles the journals of `dir` into the final outputs, records the run in the history, compares it
-// with the study's previous run there (DIR/diff.md) and prints where they are.
-void finish_study(const Study& study, const std::string& dir, const RunContext& ctx, const HistoryArgs& history) {
+// Assembles the journals of `dir` into the final outputs, compares the run with the study's previous
+// run in the history `hist` ("": none) into DIR/diff.md, writes DIR/report.html and records the run in
+// the history once that is written (a run that fails before its end is not recorded), and prints where
+// they are.
+void finish_study(const Study& study, const std::string& dir, const RunContext& ctx, const std::string& hist) {
   const ResultTable table = assemble_results(study, dir);
   RunRecord record = make_run_record(study, table, dir, ctx);
   ReportPage page;
   page.description = study.description;
   page.table_md = write_study_report(study, table, dir, record);
-  std::printf("%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", page.table_md.c_str(), dir.c_str());
-  const std::string hist = history.off ? "" : resolve_history_dir(history.dir);
+  print_safe(stdout, "%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", page.table_md.c_str(), dir.c_str());
   page.diff_note = hist.empty() ? "Not recorded in a run history (--no-history, or no home directory)."
                                 : "The first run of this study in the history " + hist + ".";
+  // The results stand without the history: a history that cannot be read or written is a warning.
+  std::string history_error;
   if (!hist.empty()) {
-    // The results stand without the history: a history that cannot be written is a warning.
     try {
-      record.id = record_run(hist, record);
-      std::printf("recorded as run %ld in %s/history.sqlite\n", record.id, hist.c_str());
       if (const auto previous = find_previous_run(hist, record)) {
         if (std::filesystem::exists(previous->out + "/results.sqlite")) {
           const RunDiff d = diff_runs(read_run_dir(*previous), RunDir{record, table}, study.tolerances, study.requirements, study.specs);
           page.diff_md = format_diff_md(d);
-          write_file_atomic(dir + "/diff.md", page.diff_md);
-          std::printf("compared with %s: %s (%s/diff.md)\n", previous->describe().c_str(),
-                      d.regressions.empty() ? "nothing got worse" : (std::to_string(d.regressions.size()) + " regression(s)").c_str(),
-                      dir.c_str());
+          print_safe(stdout, "compared with %s: %s (%s/diff.md)\n", previous->describe().c_str(),
+                     d.regressions.empty() ? "nothing got worse" : (std::to_string(d.regressions.size()) + " regression(s)").c_str(),
+                     dir.c_str());
         } else {
           page.diff_note = "The previous run, " + previous->describe() + ", is gone from " + previous->out + ": not compared.";
-          std::printf("%s\n", page.diff_note.c_str());
+          print_safe(stdout, "%s\n", page.diff_note.c_str());
         }
       }
     } catch (const std::runtime_error& e) {
-      page.diff_note = std::string("The run history was not updated: ") + e.what();
-      std::fprintf(stderr, "flexfarm: warning: the run history was not updated: %s\n", e.what());
+      history_error = e.what();
     }
   }
-  page.record = record;
-  write_report_html(dir, page);
-  std::printf("wrote %s/report.html\n", dir.c_str());
+  if (!page.diff_md.empty()) write_file_atomic(dir + "/diff.md", page.diff_md);
+  if (!hist.empty() && history_error.empty()) {
+    bool reporting = false;  // report.html failing (a full disk) is the run's error: nothing is recorded
+    try {
+      page.record = record;
+      record.id = record_run(hist, record, [&](long id) {
+        page.record.id = id;
+        reporting = true;
+        write_report_html(dir, page);
+        reporting = false;
+      });
+      print_safe(stdout, "recorded as run %ld in %s/history.sqlite\n", record.id, hist.c_str());
+    } catch (const std::runtime_error& e) {
+      if (reporting) throw;
+      history_error = e.what();
+    }
+  }
+  if (record.id == 0) {
+    if (!history_error.empty()) {
+      page.diff_note = "The run history was not updated: " + history_error;
+      print_safe(stderr, "flexfarm: warning: the run history was not updated: %s\n", history_error.c_str());
+    }
+    page.record = record;
+    write_report_html(dir, page);
+  }
+  print_safe(stdout, "wrote %s/report.html\n", dir.c_str());
   if (!record.verdicts.empty()) {
     // The verdicts last, where they are seen (they do not change the exit code).
     const std::size_t n = table.rows.size(), total = study.variants.size();
-    std::printf("\nrequirements (%zu of %zu variants%s):\n%s", n, total, n < total ? ", stopped early: every requirement decided" : "",
-                format_verdict_lines(record.verdicts).c_str());
+    print_safe(stdout, "\nrequirements (%zu of %zu variants%s):\n%s", n, total, n < total ? ", stopped early: every requirement decided" : "",
+               format_verdict_lines(record.verdicts).c_str());
   }
   const std::string failures = describe_failures(study, table);
   if (!failures.empty()) throw ExitError(failures, 3);
@@ -122,8 +155,9 @@ void add_run_verb(CLI::App& app) {
   auto args = std::make_shared<Args>();
   cmd->add_option("study", args->study, "study YAML file, e.g. configs/studies/fbtb_paper.yaml")
       ->required()
+      ->check(kPath)
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", args->out, "output directory (created)")->required();
+  cmd->add_option("--out", args->out, "output directory (created)")->required()->check(kPath);
   cmd->add_flag("--resume", args->resume, "continue the run journalled in --out: compute only the missing variants");
   cmd->add_option("--threads", args->threads, "worker threads per process (default: all cores)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--lanes", args->lanes, "variants advanced together by one kernel call")
@@ -138,6 +172,7 @@ void add_run_verb(CLI::App& app) {
     RunContext ctx{.started = format_utc_now()};
     const bool sharded = shard->count() > 0;  // an empty --shard "$UNSET" is an error, not "no shard"
     if (sharded) parse_shard(args->shard);
+    const std::string hist = args->history.resolve();
     const Study study = load_study(args->study);
     const MpiSession& comm = mpi();
     FarmOptions opt;
@@ -154,22 +189,43 @@ void add_run_verb(CLI::App& app) {
       opt.part = {comm.rank(), comm.size()};
       opt.tag = "rank-" + std::to_string(comm.rank()) + "-of-" + std::to_string(comm.size());
     }
-    if (comm.rank() == 0) make_directories(args->out + (study.keep_traces ? "/traces" : ""));
+    if (comm.rank() == 0) {
+      make_directories(args->out);
+      if (study.keep_traces) make_own_directory(args->out + "/traces");  // never a link planted in a shared --out
+    }
     comm.barrier();
     // One process per journal: a second run on the same --out (and share) refuses before it reads or writes.
     const FileLock lock(args->out + "/journal-" + opt.tag + ".lock",
                         args->out + ": another flexfarm run is writing it (journal-" + opt.tag +
                             ".csv is locked); wait for that run to end, or use another --out");
 
-    opt.notice = [](const std::string& m) { std::fprintf(stderr, "flexfarm: %s\n", m.c_str()); };
+    opt.notice = [](const std::string& m) { print_safe(stderr, "flexfarm: %s\n", m.c_str()); };
     if (study.requirements.stop_when_decided && opt.part.count > 1 && comm.rank() == 0)
       opt.notice("requirements.stop_when_decided: " + std::string(sharded ? "shards" : "MPI ranks") +
                  " do not see each other's rows, so every variant runs; the results stop where one process would have");
     Progress progress(study.name + (opt.tag == "main" ? "" : " " + opt.tag), stderr_is_terminal());
     int already = -1;
+    // This attempt's wall time, kept after each batch and at its end however it ends (a throw, not a kill),
+    // so the run is recorded with every attempt's (jobs/farm.hpp). Rank 0's, from its first batch on:
+    // run_farm has refused a journal that is not to be resumed by then.
+    std::optional<AttemptLog> attempts;
+    const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    struct NoteAtEnd {
+      std::optional<AttemptLog>& log;
+      std::function<double()> seconds;
+      ~NoteAtEnd() {
+        try {
+          if (log) log->note(seconds());
+        } catch (const std::exception&) {  // a full disk: the run's own error says so
+        }
+      }
+    } note_at_end{attempts, elapsed};
     opt.progress = [&](int done, int total, double seconds) {
       if (already < 0) already = done;
-      if (comm.rank() == 0) progress.update(done, total, done - already, seconds);
+      if (comm.rank() != 0) return;
+      progress.update(done, total, done - already, seconds);
+      if (!attempts) attempts.emplace(args->out, opt.tag, ctx.started, args->resume);
+      attempts->note(elapsed());
     };
     // Every rank runs its share; a failure on any rank stops them all after the barrier.
     std::string error;
@@ -184,16 +240,20 @@ void add_run_verb(CLI::App& app) {
       throw std::runtime_error("another rank failed");
     }
     if (sharded) {
-      std::printf("shard %s of %s done in %s; when every shard is done: flexfarm merge %s --out %s\n",
+      print_safe(stdout, "shard %s of %s done in %s; when every shard is done: flexfarm merge %s --out %s\n",
                   args->shard.c_str(), study.name.c_str(), args->out.c_str(), args->study.c_str(), args->out.c_str());
       return;
     }
     comm.barrier();
-    ctx.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ctx.seconds = elapsed();
+    if (attempts) {  // with --resume, every attempt's: the run's first start, the sum of their wall times
+      ctx.started = attempts->first_started();
+      ctx.seconds = attempts->total_seconds(ctx.seconds);
+    }
     ctx.processes = comm.size();
     ctx.threads = args->threads > 0 ? args->threads : omp_get_max_threads();
     ctx.lanes = args->lanes;
-    if (comm.rank() == 0) finish_study(study, args->out, ctx, args->history);
+    if (comm.rank() == 0) finish_study(study, args->out, ctx, hist);
   });
 }
 
@@ -205,11 +265,11 @@ void add_merge_verb(CLI::App& app) {
     HistoryArgs history;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("study", args->study, "the study YAML file the shards ran")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--out", args->out, "the directory the shards wrote into")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("study", args->study, "the study YAML file the shards ran")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--out", args->out, "the directory the shards wrote into")->required()->check(kPath)->check(CLI::ExistingDirectory);
   args->history.add(cmd);
   // The shards' start and wall time are their own: the record says when the merge finished.
-  cmd->callback([args] { finish_study(load_study(args->study), args->out, RunContext{}, args->history); });
+  cmd->callback([args] { finish_study(load_study(args->study), args->out, RunContext{}, args->history.resolve()); });
 }
 
 }  // namespace ff

@@ -12,6 +12,7 @@
 #include "kernel/simulate.hpp"
 #include "results/run_metrics.hpp"
 #include "results/table.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -20,7 +21,7 @@ namespace {
 // An arm model (arm/): trace.csv, metrics.csv, table.md (metric | value) and the arm plots.
 void simulate_arm(const std::string& path, const std::vector<std::string>& sets, const std::string& out) {
   const ArmModel m = load_arm_with(path, sets);
-  std::fprintf(stderr, "simulating %s: %d bodies, %d joints (%zu actuated), %.2f s, %s with %d substeps of %.3g ms\n",
+  print_safe(stderr, "simulating %s: %d bodies, %d joints (%zu actuated), %.2f s, %s with %d substeps of %.3g ms\n",
                path.c_str(), m.tree.num_bodies(), m.tree.nv(), m.actuated.size(), m.duration,
                integrator_name(m.integrator), m.substeps, 1e3 * m.control_period / m.substeps);
   const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1));
@@ -37,7 +38,7 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
     std::snprintf(v, sizeof v, "%.6g", row.values[i]);
     // No number: a settling time the run could not confirm, or (first contact, a trip) an event that did not happen.
     const std::string none = table.columns[i].ends_with("_settling_s") ? "not settled" : "-";
-    md += "| " + table.columns[i] + " | " + (std::isnan(row.values[i]) ? none : std::string(v)) + " |\n";
+    md += "| " + md_cell(table.columns[i]) + " | " + (std::isnan(row.values[i]) ? none : std::string(v)) + " |\n";
   }
   make_directories(out);
   write_arm_trace_csv(run.traces[0], out + "/trace.csv");
@@ -46,7 +47,7 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
   const std::vector<std::string> plots = write_arm_plots(out, {"simulation"}, {&run.traces[0]}, m.spec.description.empty() ? "simulation" : m.spec.description);
   std::string files = "trace.csv, metrics.csv, table.md";
   for (const std::string& p : plots) files += ", " + p;
-  std::printf("%s\nstatus: %s\nwrote %s/{%s}\n", md.c_str(), row.status.c_str(), out.c_str(), files.c_str());
+  print_safe(stdout, "%s\nstatus: %s\nwrote %s/{%s}\n", md.c_str(), row.status.c_str(), out.c_str(), files.c_str());
 }
 
 }  // namespace
@@ -61,13 +62,14 @@ void add_simulate_verb(CLI::App& app) {
   auto args = std::make_shared<Args>();
   cmd->add_option("model", args->model, "model YAML file: the reference rig's, or an arm's (docs/formats.md)")
       ->required()
+      ->check(kPath)
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", args->out, "output directory (created)")->required();
+  cmd->add_option("--out", args->out, "output directory (created)")->required()->check(kPath);
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
   cmd->callback([args] {
     if (is_arm_model_file(args->model)) return simulate_arm(args->model, args->sets, args->out);
     const Model m = load_model_with(args->model, args->sets);
-    std::fprintf(stderr, "simulating %s: N = %d, %.1f s, integrator %s\n", args->model.c_str(), m.nseg, m.duration,
+    print_safe(stderr, "simulating %s: N = %d, %.1f s, integrator %s\n", args->model.c_str(), m.nseg, m.duration,
                  integrator_name(m.spec.simulation.integrator));
     const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
     const BatchRun run = simulate(bm);
@@ -85,7 +87,7 @@ void add_simulate_verb(CLI::App& app) {
     const std::string md = format_settling_table_md(table, moves);
     write_file_atomic(args->out + "/table.md", md);
     write_trace_plots(args->out, {"simulation"}, {&run.traces[0]}, "simulation");
-    std::printf("%s\nstatus: %s\nwrote %s/{trace.csv, metrics.csv, table.md, tip_angle.png, hub_angle.png, "
+    print_safe(stdout, "%s\nstatus: %s\nwrote %s/{trace.csv, metrics.csv, table.md, tip_angle.png, hub_angle.png, "
                 "tip_deflection.png, hub_torque.png}\n",
                 md.c_str(), row.status.c_str(), args->out.c_str());
   });

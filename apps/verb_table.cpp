@@ -38,7 +38,7 @@ void add_table_verb(CLI::App& app) {
     int bins = Binning{}.bins;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("results", args->input, "a study's output directory or its results.csv")->required()->check(CLI::ExistingPath);
+  cmd->add_option("results", args->input, "a study's output directory or its results.csv")->required()->check(kPath)->check(CLI::ExistingPath);
   cmd->add_option("--by", args->by, "parameters to group by, comma separated (e.g. payload.mass,segments); none = all rows. "
                                     "One with more than --bins distinct values is grouped by bins, each an interval [a, b)");
   cmd->add_option("--metric", args->metrics, "metrics to summarise, comma separated")
@@ -79,8 +79,8 @@ void add_table_verb(CLI::App& app) {
     try {
       const auto by = split_list(args->by);
       const Binning binning{args->bins, args->binning == "width" ? Binning::kWidth : Binning::kQuantile};
-      std::fputs((args->format == "csv" ? format_groupby_csv(t, by, metrics, specs, binning)
-                                        : format_groupby_md(t, by, metrics, specs, binning)).c_str(), stdout);
+      print_safe(stdout, "%s", (args->format == "csv" ? format_groupby_csv(t, by, metrics, specs, binning)
+                                                      : format_groupby_md(t, by, metrics, specs, binning)).c_str());
     } catch (const std::invalid_argument& e) {
       throw CLI::ValidationError("--by/--metric", e.what());
     }

@@ -76,9 +76,9 @@ void add_diagnose_verb(CLI::App& app) {
     int iterations = 25, samples = 1500;
   };
   auto a = std::make_shared<Args>();
-  cmd->add_option("--model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--data", a->data, "measurement record CSV (docs/formats.md)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--json", a->json, "write the ranking here as JSON")->required();
+  cmd->add_option("--model", a->model, "model YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--data", a->data, "measurement record CSV (docs/formats.md)")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--json", a->json, "write the ranking here as JSON")->required()->check(kPath);
   cmd->add_option("--mode", a->mode, "closed-loop (ref drives the model's controller), open-loop (hub_torque "
                                      "drives the plant) or inverse-dynamics")->capture_default_str();
   cmd->add_option("--effects", a->effects, "only these effects, comma separated (default: every one that applies)");
@@ -94,20 +94,20 @@ void add_diagnose_verb(CLI::App& app) {
     opt.max_iterations = a->iterations;
     opt.max_samples = a->samples;
     const auto [arm, src, r] = read_fit_inputs(a->model, a->sets, a->data, opt.mode, "diagnosed");
-    std::fprintf(stderr, "diagnosing %s against %s (%s, %zu samples)...\n", a->model.c_str(), a->data.c_str(),
+    print_safe(stderr, "diagnosing %s against %s (%s, %zu samples)...\n", a->model.c_str(), a->data.c_str(),
                  a->mode.c_str(), r.size());
     // One line per candidate as its fit ends, with the time since the start.
     const auto start = std::chrono::steady_clock::now();
     opt.on_fitted = [start](int done, int total, const EffectFit& f) {
       const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (f.ok)
-        std::fprintf(stderr, "  [%d/%d] %s: delta BIC %.1f (%.0f s)\n", done, total, f.effect.c_str(), f.delta_bic, s);
+        print_safe(stderr, "  [%d/%d] %s: delta BIC %.1f (%.0f s)\n", done, total, f.effect.c_str(), f.delta_bic, s);
       else
-        std::fprintf(stderr, "  [%d/%d] %s: no fit (%.0f s)\n", done, total, f.effect.c_str(), s);
+        print_safe(stderr, "  [%d/%d] %s: no fit (%.0f s)\n", done, total, f.effect.c_str(), s);
     };
     const Diagnosis d = arm ? diagnose_arm(src, r, opt) : diagnose(src, r, opt);
     write_file_atomic(a->json, format_diagnosis_json(d));
-    std::printf("%swrote %s\n", format_diagnosis_text(d).c_str(), a->json.c_str());
+    print_safe(stdout, "%swrote %s\n", format_diagnosis_text(d).c_str(), a->json.c_str());
   });
 }
 
@@ -121,11 +121,11 @@ void add_calibrate_verb(CLI::App& app) {
     int iterations = 25, samples = 1500;
   };
   auto a = std::make_shared<Args>();
-  cmd->add_option("--model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--data", a->data, "measurement record CSV")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--model", a->model, "model YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--data", a->data, "measurement record CSV")->required()->check(kPath)->check(CLI::ExistingFile);
   cmd->add_option("--add", a->add, "the effect to add (see `flexfarm diagnose`)")->required();
-  cmd->add_option("--out", a->out, "the new model YAML")->required();
-  cmd->add_option("--ledger", a->ledger, "model ledger (default: ledger.sqlite beside --out)");
+  cmd->add_option("--out", a->out, "the new model YAML")->required()->check(kPath);
+  cmd->add_option("--ledger", a->ledger, "model ledger (default: ledger.sqlite beside --out)")->check(kPath);
   cmd->add_option("--mode", a->mode, "closed-loop, open-loop or inverse-dynamics")->capture_default_str();
   cmd->add_option("--refit", a->refit, kRefitHelp)->capture_default_str();
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
@@ -164,10 +164,10 @@ void add_calibrate_verb(CLI::App& app) {
     const auto before = arm ? calc_arm_record_fits(build_arm(src), r) : calc_record_fits(build_model(src), r, opt.mode);
     const auto after = arm ? calc_arm_record_fits(load_arm_with(a->out, {}), r) : calc_record_fits(load_model(a->out), r, opt.mode);
     const auto versions = record_calibration(ledger, a->model, before, a->out, after, f, r, opt.mode);
-    std::printf("added %s to %s -> %s (delta BIC %.1f)\n", a->add.c_str(), a->model.c_str(), a->out.c_str(),
+    print_safe(stdout, "added %s to %s -> %s (delta BIC %.1f)\n", a->add.c_str(), a->model.c_str(), a->out.c_str(),
                 f.delta_bic);
-    for (const auto& [p, v] : f.params) std::printf("  %s = %.6g\n", p.c_str(), v);
-    std::printf("%s", versions.c_str());
+    for (const auto& [p, v] : f.params) print_safe(stdout, "  %s = %.6g\n", p.c_str(), v);
+    print_safe(stdout, "%s", versions.c_str());
   });
 }
 
@@ -184,8 +184,8 @@ void add_record_verb(CLI::App& app) {
     ArmRecordNoise arm;
   };
   auto a = std::make_shared<Args>();
-  cmd->add_option("model", a->model, "model YAML file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--out", a->out, "record CSV to write")->required();
+  cmd->add_option("model", a->model, "model YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
+  cmd->add_option("--out", a->out, "record CSV to write")->required()->check(kPath);
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
   auto* noise = cmd->add_option("--noise", a->noise, "noise standard deviation per channel, as a fraction of the channel's")
       ->capture_default_str();
@@ -210,7 +210,7 @@ void add_record_verb(CLI::App& app) {
       const ArmModel m = load_arm_with(a->model, a->sets);
       const Record r = make_arm_record(m, a->arm, a->seed);
       write_record_csv(r, arm_record_columns(m), a->out, 17);
-      std::printf("wrote %s: %zu samples\n", a->out.c_str(), r.size());
+      print_safe(stdout, "wrote %s: %zu samples\n", a->out.c_str(), r.size());
       return;
     }
     for (CLI::Option* o : arm_noise)
@@ -218,7 +218,7 @@ void add_record_verb(CLI::App& app) {
     const Model m = load_model_with(a->model, a->sets);
     const Record r = make_synthetic_record(m, a->noise, a->seed, a->decimate);
     write_record_csv(r, {"ref", "hub_torque", "hub_angle", "hub_rate", "tip_deflection"}, a->out);
-    std::printf("wrote %s: %zu samples\n", a->out.c_str(), r.size());
+    print_safe(stdout, "wrote %s: %zu samples\n", a->out.c_str(), r.size());
   });
 }
 

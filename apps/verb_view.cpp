@@ -32,23 +32,23 @@ struct ViewArgs {
 ViewVariant run_view_variant(const ArmModel& m, const std::string& label) {
   const ArmRun run = simulate_arms(std::span<const ArmModel>(&m, 1), {.keep_q = true});
   if (run.status[0] != LaneStatus::kOk)
-    std::fprintf(stderr, "warning: %s: the run ended %s; the page shows it up to there\n", label.c_str(),
+    print_safe(stderr, "warning: %s: the run ended %s; the page shows it up to there\n", label.c_str(),
                  lane_status_name(run.status[0]));
   return make_arm_view_variant(m, run.traces[0].t(), run.q[0], label);
 }
 
 void print_written(const std::string& out, const ViewScene& s) {
   const ViewVariant& v = s.variants.front();
-  std::printf("wrote %s: %s solid%s, %zu samples, %zu capsules, %zu obstacles", out.c_str(), v.label.c_str(),
+  print_safe(stdout, "wrote %s: %s solid%s, %zu samples, %zu capsules, %zu obstacles", out.c_str(), v.label.c_str(),
               s.variants.size() > 1 ? (" and " + std::to_string(s.variants.size() - 1) + " ghosts").c_str() : "",
               v.t.size(), s.capsules.size(), s.shapes.size());
   if (v.worst_capsule >= 0) {
     const std::string other = v.worst_shape >= 0 ? s.shapes[static_cast<std::size_t>(v.worst_shape)].name
                                                  : s.capsules[static_cast<std::size_t>(-v.worst_shape - 2)].name;
-    std::printf("; least clearance %.4g m, %s to %s at %.3f s", v.min_clearance,
+    print_safe(stdout, "; least clearance %.4g m, %s to %s at %.3f s", v.min_clearance,
                 s.capsules[static_cast<std::size_t>(v.worst_capsule)].name.c_str(), other.c_str(), v.worst_time);
   }
-  std::printf("\n");
+  print_safe(stdout, "\n");
 }
 
 // The variants of `study` shown: `solid` (-1: of those shown, the one that comes closest) and up to
@@ -75,7 +75,7 @@ void view_study(const Study& study, int solid, const ViewArgs& a) {
     std::fprintf(stderr, "\rview: simulating %zu/%zu", i + 1, ids.size());
     variants.push_back(run_view_variant(m, "variant " + std::to_string(ids[i]) + ": " + v.label));
   }
-  std::fprintf(stderr, "\n");
+  print_safe(stderr, "\n");
   // Without one given, the variant that comes closest is shown solid.
   if (solid < 0) {
     std::size_t worst = 0;
@@ -134,8 +134,9 @@ void add_view_verb(CLI::App& app) {
   auto args = std::make_shared<ViewArgs>();
   cmd->add_option("input", args->input, "arm model YAML, a study YAML, or a finished run's output directory")
       ->required()
+      ->check(kPath)
       ->check(CLI::ExistingPath);
-  cmd->add_option("--out", args->out, "the HTML file")->required();
+  cmd->add_option("--out", args->out, "the HTML file")->required()->check(kPath);
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable (model input only)");
   cmd->add_option("--eval", args->eval_id,
                   "study or run: the variant shown solid (default: a run's least clearance; a study's closest of those shown)");

@@ -1,9 +1,13 @@
 #include "jobs/farm.hpp"
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include "jobs/journal.hpp"
@@ -60,7 +64,7 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   if (!journal.repaired().empty() && opt.notice) opt.notice(journal.repaired());
   const std::string timings_path = opt.out + "/timings-" + opt.tag + ".csv";
   const bool new_timings = !std::filesystem::exists(timings_path);
-  std::FILE* timings = std::fopen(timings_path.c_str(), "ab");
+  std::FILE* timings = ::fdopen(open_append_nofollow(timings_path), "ab");
   if (!timings) throw std::runtime_error(timings_path + ": cannot open for writing");
   if (new_timings) std::fputs("first_eval_id,variants,seconds\n", timings);
 
@@ -118,6 +122,46 @@ FarmStatus run_farm(const Study& study, const FarmOptions& opt) {
   }
   std::fclose(timings);
   return st;
+}
+
+AttemptLog::AttemptLog(const std::string& out, const std::string& tag, const std::string& started, bool resume)
+    : path_(out + "/attempts-" + tag + ".csv"), started_(started), first_started_(started) {
+  std::map<int, std::pair<std::string, double>> earlier;  // attempt: its start and its latest seconds
+  if (resume && std::filesystem::exists(path_)) {
+    std::istringstream text(read_file(path_));
+    std::string line;
+    while (std::getline(text, line)) {
+      const std::size_t c1 = line.find(','), c2 = line.find(',', c1 + 1);
+      if (c1 == std::string::npos || c2 == std::string::npos) continue;  // the header, a torn line
+      try {
+        auto& [start, seconds] = earlier[std::stoi(line.substr(0, c1))];
+        start = line.substr(c1 + 1, c2 - c1 - 1);
+        seconds = std::max(seconds, std::stod(line.substr(c2 + 1)));
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  for (const auto& [attempt, at] : earlier) earlier_ += at.second;
+  if (!earlier.empty()) {
+    attempt_ = earlier.rbegin()->first + 1;
+    first_started_ = earlier.begin()->second.first;
+  } else {
+    try {
+      write_file_atomic(path_, "attempt,started,seconds\n");
+    } catch (const std::runtime_error&) {  // bookkeeping, as the timings: a full disk is the journal's error
+    }
+  }
+}
+
+void AttemptLog::note(double seconds) {
+  char line[96];
+  const int n = std::snprintf(line, sizeof line, "%d,%s,%.3f\n", attempt_, started_.c_str(), seconds);
+  try {
+    const int fd = open_append_nofollow(path_);  // never through a planted link
+    if (n > 0 && ::write(fd, line, static_cast<std::size_t>(n)) != n) {}  // a torn line is skipped when read
+    ::close(fd);
+  } catch (const std::runtime_error&) {  // bookkeeping, as the timings: a full disk is the journal's error
+  }
 }
 
 ResultTable assemble_results(const Study& study, const std::string& out) {

@@ -53,6 +53,25 @@ ResultTable assemble_results(const Study& study, const std::string& out);
 // find_stop_point (results/requirements.hpp) on them, -1 while not known. The study's size otherwise.
 int find_study_stop_point(const Study& study, const std::map<int, std::string>& rows);
 
+// DIR/attempts-<tag>.csv: the wall time of every attempt at the run in DIR (a run killed or failed,
+// then each --resume), so that the run, once finished, is recorded with its whole wall time. Lines
+// "attempt,started,seconds": the attempt's number, its start (UTC) and its seconds so far, appended
+// after each batch and when it ends (a killed attempt's time counts up to its last batch). Bookkeeping,
+// as the timings: a line that cannot be written (a full disk) is lost, not an error.
+class AttemptLog {
+ public:
+  // Reads the earlier attempts (none unless `resume`: a fresh run starts the file afresh).
+  AttemptLog(const std::string& out, const std::string& tag, const std::string& started, bool resume);
+  void note(double seconds);  // this attempt's seconds so far
+  const std::string& first_started() const { return first_started_; }      // the first attempt's start
+  double total_seconds(double seconds) const { return earlier_ + seconds; }  // every attempt's, this one's at `seconds`
+
+ private:
+  std::string path_, started_, first_started_;
+  int attempt_ = 1;
+  double earlier_ = 0.0;
+};
+
 // The verdicts of a study's requirements on its result table (the whole study, or the rows it
 // stopped at). Empty without requirements.
 std::vector<Verdict> calc_study_verdicts(const Study& study, const ResultTable& table);

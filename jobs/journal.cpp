@@ -11,6 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/files.hpp"
+#include "results/table.hpp"
+
 namespace ff {
 
 namespace {
@@ -35,23 +38,27 @@ std::size_t count_cells(const std::string& line) {
   return n;
 }
 
-// A results row: as many cells as the header, led by a whole-number eval_id.
-bool is_row(const std::string& line, std::size_t cells) {
+// A whole results row: as many cells as the header, led by a whole-number eval_id, and read by the
+// results' own reader (every number a number: a row torn, or corrupted with its cell count intact, is not).
+bool is_row(const std::string& line, const std::string& header) {
   const std::size_t comma = line.find(',');
-  if (line.empty() || comma == 0 || comma == std::string::npos || count_cells(line) != cells) return false;
+  if (line.empty() || comma == 0 || comma == std::string::npos || comma > 9 ||
+      count_cells(line) != count_cells(header.substr(0, header.size() - 1)))
+    return false;
   for (std::size_t i = 0; i < comma; ++i)
     if (line[i] < '0' || line[i] > '9') return false;
-  return comma <= 9;
+  try {
+    return parse_results_csv(header + line + "\n", "journal row").rows.size() == 1;
+  } catch (const std::runtime_error&) {
+    return false;
+  }
 }
-
-std::size_t header_cells(const std::string& header) { return count_cells(header.substr(0, header.size() - 1)); }
 
 }  // namespace
 
 std::map<int, std::string> read_journals(const std::string& dir, const std::string& hash, const std::string& header) {
   std::map<int, std::string> rows;
   if (!std::filesystem::is_directory(dir)) return rows;
-  const std::size_t cells = header_cells(header);
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();
     if (name.rfind("journal-", 0) != 0 || entry.path().extension() != ".csv") continue;
@@ -65,14 +72,15 @@ std::map<int, std::string> read_journals(const std::string& dir, const std::stri
     const std::size_t hdr_end = text.find('\n', pos + 1);
     if (hdr_end == std::string::npos) continue;
     if (text.substr(pos + 1, hdr_end - pos) != header) throw std::runtime_error(path + ":2: journal with other columns");
-    // Complete rows only: a line without its newline, or with the wrong cell count, is a torn write.
+    // Whole rows only: a line without its newline (a torn write), or one that is no row (corrupted), is
+    // skipped here, so its variant is computed again; JournalWriter drops it from its own journal, saying so.
     pos = hdr_end + 1;
     while (pos < text.size()) {
       const std::size_t end = text.find('\n', pos);
       if (end == std::string::npos) break;
       const std::string line = text.substr(pos, end - pos);
       pos = end + 1;
-      if (is_row(line, cells)) rows.emplace(std::stoi(line.substr(0, line.find(','))), line + "\n");
+      if (is_row(line, header)) rows.emplace(std::stoi(line.substr(0, line.find(','))), line + "\n");
     }
   }
   return rows;
@@ -88,7 +96,6 @@ JournalWriter::JournalWriter(const std::string& dir, const std::string& tag, con
   // line that is not a row (garbage appended): their variants are computed again. Another study's
   // journal (or none) starts afresh.
   if (old.rfind(head, 0) == 0) {
-    const std::size_t cells = header_cells(header);
     std::size_t pos = head.size(), torn = 0, dropped = 0;
     while (pos < old.size()) {
       const std::size_t end = old.find('\n', pos);
@@ -97,7 +104,7 @@ JournalWriter::JournalWriter(const std::string& dir, const std::string& tag, con
         break;
       }
       const std::string line = old.substr(pos, end - pos);
-      if (is_row(line, cells)) text += line + "\n";
+      if (is_row(line, header)) text += line + "\n";
       else ++dropped;
       pos = end + 1;
     }
@@ -108,22 +115,20 @@ JournalWriter::JournalWriter(const std::string& dir, const std::string& tag, con
                   (dropped ? std::to_string(dropped) + " line(s) that are not result rows dropped" : std::string()) +
                   "; their variants are computed again";
   }
-  // Replace the file whole (temporary + rename), then append: a kill at any point loses no row.
-  const std::string tmp = path_ + ".tmp";
-  fd_ = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw std::runtime_error(path_ + ": cannot open the journal for writing: " + std::strerror(errno));
+  // Replace the file whole (an exclusive temporary, renamed over it), then append to that same file
+  // (never reopened by name, so never through a link planted at it): a kill at any point loses no row.
+  AtomicFile tmp(path_);
+  fd_ = tmp.fd();
   try {
     append(text);
   } catch (...) {
-    ::close(fd_);
-    fd_ = -1;
-    ::unlink(tmp.c_str());
+    fd_ = -1;  // the temporary's, removed with it
     throw;
   }
-  ::close(fd_);
-  std::filesystem::rename(tmp, path_);
-  fd_ = ::open(path_.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
-  if (fd_ < 0) throw std::runtime_error(path_ + ": cannot open the journal for writing: " + std::strerror(errno));
+  tmp.commit();
+  fd_ = tmp.release();
+  if (::fcntl(fd_, F_SETFL, O_APPEND) != 0)
+    throw std::runtime_error(path_ + ": cannot open the journal for appending: " + std::strerror(errno));
 }
 
 JournalWriter::~JournalWriter() {

@@ -4,11 +4,13 @@
 
 #include <cstdio>
 
+#include "common/text.hpp"
+
 namespace ff {
 
 bool stderr_is_terminal() { return isatty(fileno(stderr)) != 0; }
 
-Progress::Progress(std::string what, bool terminal) : what_(std::move(what)), terminal_(terminal) {}
+Progress::Progress(std::string what, bool terminal) : what_(terminal_safe(what)), terminal_(terminal) {}
 
 namespace {
 std::string clock_text(double s) {

@@ -19,6 +19,7 @@
 #include "results/statistics.hpp"
 #include "results/summaries.hpp"
 #include "sweep/design.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -308,7 +309,7 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
     const double unsettled_line = 1.05 * top;
     bool any_unsettled = false;
     for (std::size_t c = 0; c < cell.size(); ++c) {
-      md += "| " + study.case_labels[c] + " |";
+      md += "| " + md_cell(study.case_labels[c]) + " |";
       Series line, unsettled;
       line.label = study.case_labels[c];
       line.colour = unsettled.colour = static_cast<int>(c);
@@ -492,12 +493,12 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     std::vector<std::string> shown;
     for (const std::string& c : km.all())
       if (!c.empty()) shown.push_back(c);
-    for (const std::string& c : shown) md += " " + c + " |";
+    for (const std::string& c : shown) md += " " + md_cell(c) + " |";
     md += "\n|---|---|";
     for (std::size_t i = 0; i < shown.size(); ++i) md += "---|";
     md += "\n";
     for (const auto& r : table.rows) {
-      md += "| " + r.label + " | " + r.status + " |";
+      md += "| " + md_cell(r.label) + " | " + r.status + " |";
       for (const std::string& c : shown) {
         const double v = r.values[static_cast<std::size_t>(std::find(table.columns.begin(), table.columns.end(), c) - table.columns.begin())];
         char buf[32];

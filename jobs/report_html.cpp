@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "common/files.hpp"
+#include "common/text.hpp"
 #include "plotting/view_html.hpp"
 
 // The page's template (jobs/report/report.html), compiled in by cmake/embed.cmake.
@@ -65,20 +66,24 @@ std::string inline_html(const std::string& s) {
   return out;
 }
 
+// A table row's cells, split at each '|' that is not escaped ("\|", common/text.hpp md_cell: a '|' in the cell).
 std::vector<std::string> table_cells(const std::string& line) {
   std::vector<std::string> cells;
   std::string t = line;
   if (!t.empty() && t.front() == '|') t.erase(0, 1);
-  if (!t.empty() && t.back() == '|') t.pop_back();
-  std::size_t from = 0;
-  while (true) {
-    const std::size_t bar = t.find('|', from);
-    std::string cell = t.substr(from, bar == std::string::npos ? std::string::npos : bar - from);
+  if (!t.empty() && t.back() == '|' && (t.size() < 2 || t[t.size() - 2] != '\\')) t.pop_back();
+  std::string cell;
+  const auto end_cell = [&] {
     const auto a = cell.find_first_not_of(' '), b = cell.find_last_not_of(' ');
     cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
-    if (bar == std::string::npos) break;
-    from = bar + 1;
+    cell.clear();
+  };
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (t[i] == '\\' && i + 1 < t.size() && t[i + 1] == '|') cell += t[++i];
+    else if (t[i] == '|') end_cell();
+    else cell += t[i];
   }
+  end_cell();
   return cells;
 }
 
@@ -226,10 +231,8 @@ void write_report_html(const std::string& dir, const ReportPage& page) {
   b += "<details><summary>The study file as it ran</summary><pre>" + html_escape(r.study_text) + "</pre></details>\n";
   b += "<details><summary>The model file as it ran</summary><pre>" + html_escape(r.model_text) + "</pre></details>\n";
 
-  std::string html(report_assets::report_html);
-  html.replace(html.find("@@TITLE@@"), 9, html_escape(r.study + ": flexfarm report"));
-  html.replace(html.find("@@BODY@@"), 8, b);
-  write_file_atomic(dir + "/report.html", html);
+  write_file_atomic(dir + "/report.html", fill_template(report_assets::report_html, {{"@@TITLE@@", html_escape(r.study + ": flexfarm report")},
+                                                                                    {"@@BODY@@", std::move(b)}}));
 }
 
 }  // namespace ff

@@ -41,8 +41,8 @@ ArmFrame exaggerate_frame(const ArmFrame& f, double factor);
 // Writes the video. The container and codec follow the extension: ".mp4"/".m4v"/".mov" try
 // mp4v then avc1 (FFmpeg); anything else — normally ".avi" — is Motion-JPEG in AVI (FFmpeg, then
 // OpenCV's built-in writer). If no mp4 codec opens, Motion-JPEG/AVI data is written under the
-// requested name (players detect the content). The file is written as "<path>.tmp<ext>" (the
-// writers pick the container from the extension) and renamed to `video_path` when complete.
+// requested name (players detect the content). The file is written to an exclusive temporary
+// beside it with the container's extension (the writers pick the container from it) and renamed to `video_path` when complete.
 // Throws std::runtime_error naming the path when it cannot be written or no codec works, and
 // std::invalid_argument for no frames, a frame with mismatched x/y, fps <= 0 or a too small size.
 void render_animation(const Animation& a, const std::string& video_path);

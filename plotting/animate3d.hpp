@@ -166,8 +166,8 @@ std::vector<int> arm_animation_samples(std::span<const double> times, double fps
 // Writes the video of the arm at the samples (times[i], qs.col(i)): the frames of
 // arm_animation_samples, each rendered by render_arm_frame with the fitted view and the tool path of
 // the last trace_seconds (at most ~300 points, evenly thinned). The container follows the extension
-// (".avi": Motion-JPEG; ".mp4": mp4v or avc1; plotting/animate.hpp's render_animation), written to
-// "<path>.tmp<ext>" and renamed when complete. With options.still_path, the PNG of the frame at
+// (".avi": Motion-JPEG; ".mp4": mp4v or avc1; plotting/animate.hpp's render_animation), written to an
+// exclusive temporary beside it and renamed when complete. With options.still_path, the PNG of the frame at
 // still_time too (same view). Throws std::invalid_argument for qs.rows() != nv, qs.cols() !=
 // times.size() and the errors of arm_animation_samples and render_arm_frame; std::runtime_error
 // naming the path when a file cannot be written.

@@ -18,6 +18,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "common/files.hpp"
+
 namespace ff::canvas {
 
 // ---------------------------------------------------------------- colours
@@ -553,22 +555,14 @@ void draw_legend(cv::Mat& img, const cv::Rect& area, const std::vector<LegendEnt
 // ---------------------------------------------------------------- output
 
 void write_atomically(const std::string& who, const std::string& path, const std::vector<uchar>& bytes) {
-  const std::string tmp = path + ".tmp";
-  const auto fail = [&](const std::string& why) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error(who + ": cannot write '" + path + "': " + why);
-  };
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) fail(std::generic_category().message(errno));
-    f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-    f.close();
-    if (!f) fail("write to '" + tmp + "' failed");
+  try {
+    AtomicFile tmp(path);
+    tmp.write(std::string(bytes.begin(), bytes.end()));
+    tmp.close();
+    tmp.commit();
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(who + ": cannot write " + e.what());  // e names the file and the reason
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) fail(ec.message());
 }
 
 void write_png(const std::string& who, const cv::Mat& bgr_image, const std::string& path) {
@@ -667,47 +661,34 @@ WriteVideo video_writer(const std::string& who) {
 
 void write_video(const std::string& who, const std::string& path, double fps, cv::Size size, int frames,
                  const std::function<cv::Mat(int)>& frame) {
-  const auto fail = [&](const std::string& why) {
-    throw std::runtime_error(who + ": cannot write '" + path + "': " + why);
-  };
-  {  // a file next to it can be created at all
-    const std::string probe = path + ".tmp";
-    {
-      std::ofstream f(probe, std::ios::binary | std::ios::trunc);
-      if (!f) fail(std::generic_category().message(errno));
-    }
-    std::error_code ignored;
-    std::filesystem::remove(probe, ignored);
+  const auto fail = [&](const std::string& why) { throw std::runtime_error(who + ": cannot write " + why); };
+  try {
+    AtomicFile probe(path);  // a temporary beside it can be made at all, before the module loads
+  } catch (const std::runtime_error& e) {
+    fail(e.what());
   }
   const WriteVideo write = video_writer(who);
   std::vector<std::string> tried;
   for (const Codec& c : codecs_for(path)) {
-    const std::string tmp = path + ".tmp" + (c.ext ? c.ext : lower_extension(path));
-    const auto discard = [&] {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-    };
+    // The encoder writes by name: into an exclusive temporary with the container's extension.
+    AtomicFile tmp(path, c.ext ? c.ext : lower_extension(path));
+    tmp.close();
     tried.push_back(c.name + std::string(c.api == cv::CAP_FFMPEG ? " (FFmpeg)" : " (OpenCV)"));
     const int fourcc = c.name[0] | c.name[1] << 8 | c.name[2] << 16 | c.name[3] << 24;  // VideoWriter::fourcc
     char why[512] = "";
-    try {
-      if (!write(tmp.c_str(), c.api, fourcc, fps, size.width, size.height, frames, &frame, why, sizeof why)) {
-        discard();
-        continue;
-      }
-    } catch (...) {
-      discard();
-      throw;
-    }
+    if (!write(tmp.path().c_str(), c.api, fourcc, fps, size.width, size.height, frames, &frame, why, sizeof why)) continue;
     std::error_code ec;
-    if (std::filesystem::file_size(tmp, ec) == 0 || ec) { discard(); continue; }
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) { discard(); fail(ec.message()); }
+    if (std::filesystem::file_size(tmp.path(), ec) == 0 || ec) continue;
+    try {
+      tmp.commit();
+    } catch (const std::runtime_error& e) {
+      fail(e.what());
+    }
     return;
   }
   std::string list;
   for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t;
-  fail("no video codec could be opened (tried " + list + ")");
+  fail(path + ": no video codec could be opened (tried " + list + ")");
 }
 
 }  // namespace ff::canvas

@@ -225,8 +225,9 @@ void draw_legend(cv::Mat& img, const cv::Rect& area, const std::vector<LegendEnt
 
 // ---------------------------------------------------------------- output
 
-// Writes `bytes` to "<path>.tmp" and renames it to `path`; throws std::runtime_error
-// "<who>: cannot write '<path>': why" on failure, leaving no temporary file behind.
+// Writes `bytes` to an exclusive temporary beside `path` and renames it over `path` (common/files.hpp,
+// AtomicFile); throws std::runtime_error "<who>: cannot write <path>: why" on failure, leaving no
+// temporary file behind.
 void write_atomically(const std::string& who, const std::string& path, const std::vector<uchar>& bytes);
 // Encodes a BGR image as PNG and writes it atomically.
 void write_png(const std::string& who, const cv::Mat& bgr_image, const std::string& path);
@@ -238,8 +239,9 @@ std::vector<unsigned char> rgb_bytes(const cv::Mat& bgr_image);
 // Writes `frames` BGR frames of `size` (frame(k) draws frame k) as a video at `fps`. The container and
 // codec follow the extension: ".mp4"/".m4v"/".mov" try mp4v then avc1 (FFmpeg); anything else,
 // normally ".avi", is Motion-JPEG in AVI (FFmpeg, then OpenCV's built-in writer); if no mp4 codec
-// opens, Motion-JPEG/AVI data goes under the requested name. Written as "<path>.tmp<ext>" and renamed
-// to `path` when complete. Throws std::runtime_error "<who>: cannot write '<path>': why" when no file
+// opens, Motion-JPEG/AVI data goes under the requested name. Written to an exclusive temporary with the
+// container's extension beside `path` (AtomicFile) and renamed over `path` when complete. Throws
+// std::runtime_error "<who>: cannot write <path>: why" when no file
 // can be created there or no codec works, leaving no temporary file behind.
 void write_video(const std::string& who, const std::string& path, double fps, cv::Size size, int frames,
                  const std::function<cv::Mat(int)>& frame);

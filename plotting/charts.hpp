@@ -5,7 +5,7 @@
 //   Histogram  counts of a sample (Freedman–Diaconis bins by default) or its empirical CDF
 //   BarChart   grouped bars with error whiskers, e.g. Sobol' first/total indices per parameter
 // Every render_* throws std::runtime_error naming the path if the PNG cannot be written (it is
-// written to "<path>.tmp" and renamed), and std::invalid_argument for inconsistent input or an
+// written to an exclusive temporary beside it and renamed), and std::invalid_argument for inconsistent input or an
 // image smaller than 320 × 240. The *_rgb variants return the pixels and where the data landed.
 #pragma once
 

@@ -74,7 +74,7 @@ struct PlotFrame {
 PlotFrame line_plot_frame(const LinePlot& plot);
 
 // Renders to a PNG file. Throws std::runtime_error naming the path if it cannot be written.
-// Writes atomically: render to "<path>.tmp" and rename, so a killed run never leaves half a PNG.
+// Writes atomically: render to an exclusive temporary beside it and rename, so a killed run never leaves half a PNG.
 // Throws std::invalid_argument for a series whose x and y differ in length, or a too small size.
 void render_line_plot(const LinePlot& plot, const std::string& png_path);
 // Same, into an RGB buffer (row-major, 3 bytes per pixel, width × height), for tests and composing.

@@ -1,6 +1,7 @@
 #include "plotting/view_html.hpp"
 
 #include "common/files.hpp"
+#include "common/text.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -256,33 +257,13 @@ std::string script_safe(std::string_view js) {
   return out;
 }
 
-// The template with each "@KEY@" (each once) replaced; the inserted texts are not searched.
-std::string fill(std::string_view page, std::vector<std::pair<std::string, std::string>> parts) {
-  std::vector<std::pair<std::size_t, std::size_t>> at;  // position in the template, part
-  for (std::size_t k = 0; k < parts.size(); ++k) {
-    const std::size_t p = page.find(parts[k].first);
-    if (p == std::string_view::npos) throw std::logic_error("view: the page template lacks " + parts[k].first);
-    at.emplace_back(p, k);
-  }
-  std::sort(at.begin(), at.end());
-  std::string out;
-  std::size_t from = 0;
-  for (const auto& [p, k] : at) {
-    out.append(page.substr(from, p - from));
-    out += parts[k].second;
-    from = p + parts[k].first.size();
-  }
-  out.append(page.substr(from));
-  return out;
-}
-
 }  // namespace
 
 void write_view_html(const ViewScene& scene, const std::string& path) {
   check_scene(scene);
   std::string json;
   put_scene(json, scene);
-  write_file_atomic(path, fill(view_assets::view_html, {
+  write_file_atomic(path, fill_template(view_assets::view_html, {
                                    {"@TITLE@", html_escape(scene.title)},
                                    {"@LICENSE@", std::string(view_assets::three_license)},
                                    {"@THREE_CORE@", script_safe(view_assets::three_core)},

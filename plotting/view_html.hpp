@@ -73,7 +73,7 @@ struct ViewScene {
   std::vector<ViewVariant> variants;    // variants[0] is played solid; the others are ghosts (translucent)
 };
 
-// Writes the page to `path` atomically ("<path>.tmp", then renamed). Throws std::invalid_argument for an
+// Writes the page to `path` atomically (an exclusive temporary, then renamed). Throws std::invalid_argument for an
 // inconsistent scene (no variants, array sizes not matching the samples and capsules, times not finite
 // and increasing, an unknown shape type, an index out of range, a non-finite pose, radius or up),
 // std::runtime_error naming the path when it cannot be written.

@@ -9,6 +9,7 @@
 
 #include "common/version.hpp"
 #include "results/summaries.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -276,7 +277,7 @@ std::string describe_build(const RunRecord& r) {
 std::string key_table(const std::vector<KeyChange>& keys) {
   std::string md = "| key | before | now |\n|---|---|---|\n";
   for (const KeyChange& k : keys)
-    md += "| " + k.key + " | " + (k.a.empty() ? "(absent)" : k.a) + " | " + (k.b.empty() ? "(absent)" : k.b) + " |\n";
+    md += "| " + md_cell(k.key) + " | " + (k.a.empty() ? "(absent)" : md_cell(k.a)) + " | " + (k.b.empty() ? "(absent)" : md_cell(k.b)) + " |\n";
   return md;
 }
 
@@ -286,10 +287,10 @@ std::string format_diff_md(const RunDiff& d) {
   const RunRecord &a = d.a, &b = d.b;
   std::string md = "# What changed: " + a.describe() + " -> " + b.describe() + "\n\n";
   md += "| | before | now |\n|---|---|---|\n";
-  md += "| run | " + a.describe() + " | " + b.describe() + " |\n";
-  md += "| directory | " + a.out + " | " + b.out + " |\n";
-  md += "| flexfarm | " + describe_build(a) + " | " + describe_build(b) + " |\n";
-  md += "| finished | " + a.finished + " | " + b.finished + " |\n";
+  md += "| run | " + md_cell(a.describe()) + " | " + md_cell(b.describe()) + " |\n";
+  md += "| directory | " + md_cell(a.out) + " | " + md_cell(b.out) + " |\n";
+  md += "| flexfarm | " + md_cell(describe_build(a)) + " | " + md_cell(describe_build(b)) + " |\n";
+  md += "| finished | " + md_cell(a.finished) + " | " + md_cell(b.finished) + " |\n";
   md += "| variants | " + describe_counts(a) + " | " + describe_counts(b) + " |\n\n";
 
   md += "## Inputs\n\n";
@@ -317,10 +318,10 @@ std::string format_diff_md(const RunDiff& d) {
       (c.identical ? identical : within)++;
       continue;
     }
-    md += "| " + c.metric + " | " + describe_statistic(c) + (std::isnan(c.horizon) ? "" : " (restricted to " + num(c.horizon, "%.3g") + " s)") +
+    md += "| " + md_cell(c.metric) + " | " + describe_statistic(c) + (std::isnan(c.horizon) ? "" : " (restricted to " + num(c.horizon, "%.3g") + " s)") +
           " | " + num(c.a) + " | " + num(c.b) + " | " + num(c.change) + " [" + num(c.lower) + ", " + num(c.upper) + "] | " +
           (c.identical ? "identical" : c.beyond_noise ? "yes" : "no") + " | " +
-          (c.tolerance.empty() ? "" : c.tolerance + (c.regression ? ": **regression**" : ": within")) + " |\n";
+          (c.tolerance.empty() ? "" : md_cell(c.tolerance) + (c.regression ? ": **regression**" : ": within")) + " |\n";
   }
   md += "\n";
   if (identical || within)
@@ -330,7 +331,7 @@ std::string format_diff_md(const RunDiff& d) {
   if (!d.verdicts.empty()) {
     md += "## Requirements\n\n| requirement | before | now |\n|---|---|---|\n";
     for (const VerdictChange& v : d.verdicts)
-      md += "| " + v.requirement + " | " + (v.a.empty() ? "-" : v.a) + " | " + (v.b.empty() ? "-" : v.b) +
+      md += "| " + md_cell(v.requirement) + " | " + (v.a.empty() ? "-" : v.a) + " | " + (v.b.empty() ? "-" : v.b) +
             (v.worse ? " (worse)" : "") + " |\n";
     md += "\n";
   }

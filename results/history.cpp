@@ -244,8 +244,11 @@ RunDir read_run_dir(const RunRecord& recorded) {
 
 std::string resolve_history_dir(const std::string& option) {
   if (!option.empty()) return option;
-  for (const char* var : {"FLEXFARM_HISTORY"})
-    if (const char* v = std::getenv(var); v && *v) return v;
+  // Set but blank ("  "): an error, not the current directory; set empty: as unset.
+  for (const char* var : {"FLEXFARM_HISTORY", "XDG_DATA_HOME"})
+    if (const char* v = std::getenv(var); v && *v && is_blank_path(v))
+      throw std::runtime_error(std::string("$") + var + ": a blank path; unset it or give --history DIR");
+  if (const char* v = std::getenv("FLEXFARM_HISTORY"); v && *v) return v;
   if (const char* v = std::getenv("XDG_DATA_HOME"); v && *v) return std::string(v) + "/flexfarm";
   if (const char* v = std::getenv("HOME"); v && *v) return std::string(v) + "/.local/share/flexfarm";
   return "";
@@ -338,7 +341,7 @@ void read_details(SqliteDb& db, RunRecord& r) {
 
 }  // namespace
 
-long record_run(const std::string& history_dir, const RunRecord& r) {
+long record_run(const std::string& history_dir, const RunRecord& r, const std::function<void(long)>& finish) {
   make_directories(history_dir);
   HistoryDb h(history_file(history_dir));
   SqliteDb& db = h.db;
@@ -394,6 +397,7 @@ long record_run(const std::string& history_dir, const RunRecord& r) {
       bind_text(q, 9, v.evidence);
       db.step(q);
     }
+    if (finish) finish(id);
     db.exec("COMMIT");
     return id;
   } catch (...) {

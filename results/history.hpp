@@ -4,6 +4,7 @@
 // (SQLite, DIR/history.sqlite) that `flexfarm history` lists and `flexfarm diff` reads.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -80,13 +81,16 @@ RunDir read_run_dir(const std::string& dir);
 RunDir read_run_dir(const RunRecord& recorded);
 
 // The history directory: `option` when given, else $FLEXFARM_HISTORY, else $XDG_DATA_HOME/flexfarm,
-// else $HOME/.local/share/flexfarm; "" when none can be found.
+// else $HOME/.local/share/flexfarm; "" when none can be found. A variable set to "" counts as unset; one
+// set blank ("  ") throws std::runtime_error naming it.
 std::string resolve_history_dir(const std::string& option);
 
 // Appends `r` (with its summaries and verdicts) to DIR/history.sqlite, creating it; returns its id.
 // Waits for another process that is writing it (up to 30 s). Throws std::runtime_error naming the
-// file when it cannot, or when the file is no flexfarm history.
-long record_run(const std::string& history_dir, const RunRecord& r);
+// file when it cannot, or when the file is no flexfarm history. `finish(id)`, when given, runs inside
+// the transaction, before it commits (flexfarm run writes report.html there, naming the id): a run is
+// recorded only once it has finished; when finish throws, nothing is recorded and the exception passes on.
+long record_run(const std::string& history_dir, const RunRecord& r, const std::function<void(long)>& finish = {});
 
 // The runs in the history, oldest first: all, or those whose study is `study` (a name, or a study
 // file's absolute path). Summaries and verdicts are read too when `full`. An absent history: none.

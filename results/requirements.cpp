@@ -11,6 +11,7 @@
 #include "common/errors.hpp"
 #include "results/censoring.hpp"
 #include "results/summaries.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -474,7 +475,7 @@ std::string format_requirements_md(const std::vector<Verdict>& verdicts) {
   for (const Verdict& v : verdicts) {
     std::string est = num(v.estimate);
     if (!std::isnan(v.lower)) est += " [" + num(v.lower) + ", " + num(v.upper) + "]";
-    md += "| `" + v.requirement + "` | " + v.verdict + " | " + est + " | " + std::to_string(v.n) + " | " + v.evidence + " |\n";
+    md += "| `" + md_cell(v.requirement) + "` | " + v.verdict + " | " + est + " | " + std::to_string(v.n) + " | " + md_cell(v.evidence) + " |\n";
   }
   return md;
 }

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "common/files.hpp"
+
 namespace ff {
 
 namespace {
@@ -54,10 +56,10 @@ void SqliteDb::step(sqlite3_stmt* st) {
 }
 
 void write_results_sqlite(const ResultTable& t, const std::map<std::string, std::string>& info, const std::string& path) {
-  const std::string tmp = path + ".tmp";
-  std::filesystem::remove(tmp);
-  try {
-    SqliteDb d(tmp, path);
+  AtomicFile tmp(path);  // made exclusively; SQLite opens it by name in its private directory
+  tmp.close();
+  {
+    SqliteDb d(tmp.path(), path);
     d.exec("BEGIN");
     d.exec("CREATE TABLE study (key TEXT PRIMARY KEY, value TEXT)");
     const SqliteStmt statement = d.prepare("INSERT INTO study VALUES (?, ?)");
@@ -93,14 +95,8 @@ void write_results_sqlite(const ResultTable& t, const std::map<std::string, std:
       d.step(st);
     }
     d.exec("COMMIT");
-  } catch (...) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);  // nothing half-written is left behind (a full disk)
-    throw;
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error(path + ": cannot rename the database into place");
+  tmp.commit();  // a failure above (a full disk) leaves nothing behind: the temporary goes with `tmp`
 }
 
 }  // namespace ff

@@ -9,6 +9,7 @@
 #include "results/censoring.hpp"
 #include "results/run_metrics.hpp"
 #include "results/statistics.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -223,7 +224,9 @@ std::string format_groupby_md(const ResultTable& t, const std::vector<std::strin
                               const std::vector<std::string>& metrics, const std::map<std::string, double>& specs,
                               const Binning& binning) {
   return groupby(t, by, metrics, specs, binning, false, [](const std::vector<std::string>& cells, bool header) {
-    std::string line = "| " + join(cells, " | ") + " |\n";
+    std::string line = "|";
+    for (const std::string& c : cells) line += " " + md_cell(c) + " |";
+    line += "\n";
     if (header) {
       line += "|";
       for (std::size_t i = 0; i < cells.size(); ++i) line += "---|";
@@ -266,7 +269,7 @@ std::string format_monte_carlo_md(const ResultTable& t, const std::vector<std::s
       censored += " (horizon " + horizon_range(s) + " s)";
       any_censored = true;
     }
-    std::string line = "| " + m + " | " + std::to_string(v.size()) + " | " + censored + " | " +
+    std::string line = "| " + md_cell(m) + " | " + std::to_string(v.size()) + " | " + censored + " | " +
                        std::to_string(s.missing) + " | " + ci(calc_bootstrap_mean(v, h, 1000, 0.95, seed), s.horizon) +
                        (s.censored > 0 ? " restricted to " + num(s.horizon, "%.3g") + " s" : "") + " | ";
     for (double p : {5.0, 50.0, 95.0}) line += ci(calc_bootstrap_percentile(v, h, p, 1000, 0.95, seed), s.horizon) + " | ";
@@ -325,7 +328,7 @@ std::string format_sobol_md(const std::map<std::string, SobolIndices>& idx, cons
   std::string out = "| metric | parameter | first order S_i (± 95 %) | total S_Ti (± 95 %) |\n|---|---|---|---|\n";
   for (const auto& [m, s] : idx)
     for (std::size_t i = 0; i < params.size(); ++i)
-      out += "| " + m + " | " + params[i] + " | " + num(s.first[i], "%.3f") + " ± " + num(s.first_ci[i], "%.3f") +
+      out += "| " + md_cell(m) + " | " + md_cell(params[i]) + " | " + num(s.first[i], "%.3f") + " ± " + num(s.first_ci[i], "%.3f") +
              " | " + num(s.total[i], "%.3f") + " ± " + num(s.total_ci[i], "%.3f") + " |\n";
   return out;
 }
@@ -345,7 +348,7 @@ std::string format_morris_md(const std::map<std::string, MorrisIndices>& idx, co
   std::string out = "| metric | parameter | mu* | mu | sigma |\n|---|---|---|---|---|\n";
   for (const auto& [m, s] : idx)
     for (std::size_t i = 0; i < params.size(); ++i)
-      out += "| " + m + " | " + params[i] + " | " + num(s.mu_star[i]) + " | " + num(s.mu[i]) + " | " + num(s.sigma[i]) + " |\n";
+      out += "| " + md_cell(m) + " | " + md_cell(params[i]) + " | " + num(s.mu_star[i]) + " | " + num(s.mu[i]) + " | " + num(s.sigma[i]) + " |\n";
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "results/run_metrics.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -119,6 +120,10 @@ ResultTable parse_results_csv(const std::string& text, const std::string& source
     if (cells.size() != header.size())
       bad("row", "has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
     ResultRow r;
+    // Whole numbers, every character a digit ("12x" is no id, "-1" no seed).
+    for (int c : {0, 1})
+      if (cells[c].empty() || cells[c].size() > 20 || cells[c].find_first_not_of("0123456789") != std::string::npos)
+        bad(header[c], "'" + cells[c] + "' is not a whole number");
     try {
       r.eval_id = std::stoi(cells[0]);
       r.seed = std::stoull(cells[1]);
@@ -159,7 +164,7 @@ std::string format_settling_table_md(const ResultTable& t, const std::vector<std
     const auto& r = t.rows[i];
     for (std::size_t j = 0; j < moves[i].size() && (j + 1) * per_move <= r.values.size(); ++j) {
       const double* v = &r.values[j * per_move];
-      out += "| " + r.label + " | " + moves[i][j] + " | " + settle(v[0], v[7]) + " | " + number("%.1f", v[1]) + " | " +
+      out += "| " + md_cell(r.label) + " | " + md_cell(moves[i][j]) + " | " + settle(v[0], v[7]) + " | " + number("%.1f", v[1]) + " | " +
              settle(v[2], v[7]) + " | " + number("%.1f", v[3]) + " | " + number("%.1f", 1e3 * v[4]) + " | " +
              number("%.2f", 1e3 * v[5]) + " | " + number("%.2f", 1e-3 * v[6]) + " |\n";
     }

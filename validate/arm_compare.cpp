@@ -11,6 +11,7 @@
 #include "validate/arm_record.hpp"
 #include "validate/replay.hpp"  // calc_fit
 #include "validate/report_text.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -85,13 +86,13 @@ std::string format_arm_fit_table(const ArmCompareResult& r) {
   if (r.k_ahead == 0) {
     std::string s = "| channel | unit | fit % | RMSE |\n|---|---|---:|---:|\n";
     for (const auto& c : r.channels)
-      s += "| " + c.name + " | " + c.unit + " | " + fit_cell(c.fit_free.percent) + " | " + num_cell(c.fit_free.rmse) + " |\n";
+      s += "| " + md_cell(c.name) + " | " + md_cell(c.unit) + " | " + fit_cell(c.fit_free.percent) + " | " + num_cell(c.fit_free.rmse) + " |\n";
     return s;
   }
   std::string s = "| channel | unit | fit % free run | fit % k-step | RMSE free run | RMSE k-step |\n"
                   "|---|---|---:|---:|---:|---:|\n";
   for (const auto& c : r.channels)
-    s += "| " + c.name + " | " + c.unit + " | " + fit_cell(c.fit_free.percent) + " | " + fit_cell(c.fit_k.percent) +
+    s += "| " + md_cell(c.name) + " | " + md_cell(c.unit) + " | " + fit_cell(c.fit_free.percent) + " | " + fit_cell(c.fit_k.percent) +
          " | " + num_cell(c.fit_free.rmse) + " | " + num_cell(c.fit_k.rmse) + " |\n";
   return s;
 }

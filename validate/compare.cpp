@@ -8,6 +8,7 @@
 #include "common/files.hpp"
 #include "plotting/plot.hpp"
 #include "validate/report_text.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -250,7 +251,7 @@ std::string format_fit_table(const CompareResult& r) {
   std::string s = "| channel | unit | fit % free run | fit % k-step | RMSE free run | RMSE k-step |\n"
                   "|---|---|---:|---:|---:|---:|\n";
   for (const auto& c : r.channels)
-    s += "| " + c.name + " | " + c.unit + " | " + fit_cell(c.fit_free.percent) + " | " + fit_cell(c.fit_k.percent) +
+    s += "| " + md_cell(c.name) + " | " + md_cell(c.unit) + " | " + fit_cell(c.fit_free.percent) + " | " + fit_cell(c.fit_k.percent) +
          " | " + num_cell(c.fit_free.rmse) + " | " + num_cell(c.fit_k.rmse) + " |\n";
   return s;
 }

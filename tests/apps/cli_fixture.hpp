@@ -116,9 +116,10 @@ class CliFixture : public ::testing::Test {
     std::sort(out.begin(), out.end());
     return out;
   }
+  // No atomic write's temporary ("<name>.tmp-XXXXXX", common/files.hpp) left behind.
   static void expect_no_tmp_files(const fs::path& dir) {
     for (const auto& e : fs::recursive_directory_iterator(dir))
-      EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
+      EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "left behind: " << e.path();
   }
   static void expect_png(const fs::path& p) {
     ASSERT_TRUE(fs::exists(p)) << p;

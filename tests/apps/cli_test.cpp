@@ -655,3 +655,110 @@ TEST_F(Cli, ABadArmModelIsOneLineAndWritesNothing) {
                         "--set: trajectory.waypoints[0].tool: a waypoint is either");
   EXPECT_FALSE(fs::exists(work / "out"));
 }
+
+// ---- paths and names from hostile or careless input (issue 32) --------------------------------
+
+// (#32.4) An empty or blank path, an unset $OUT in a script, is a usage error for every verb and every
+// option or argument that names a path: exit 2, one line naming the option, nothing written anywhere
+// (not "/journal-main.csv" at the filesystem root).
+TEST_F(Cli, AnEmptyOrBlankPathIsAUsageErrorForEveryVerbAndPathOption) {
+  write("s.yaml", "name: s\nmodel: configs/fbtb.yaml\nruns:\n  - label: a\n");
+  write("d.csv", "t,ref\n0,0\n");
+  const std::pair<const char*, const char*> cases[] = {
+      {"modes @", "model"},
+      {"modes configs/fbtb.yaml --sidecar @", "--sidecar"},
+      {"modes configs/fbtb.yaml --shapes @", "--shapes"},
+      {"simulate @ --out o", "model"},
+      {"simulate configs/fbtb.yaml --out @", "--out"},
+      {"run @ --out o", "study"},
+      {"run s.yaml --out @", "--out"},
+      {"run s.yaml --out o --history @", "--history"},
+      {"merge @ --out configs", "study"},
+      {"merge s.yaml --out @", "--out"},
+      {"merge s.yaml --out configs --history @", "--history"},
+      {"table @", "results"},
+      {"history @", "what"},
+      {"history --history @", "--history"},
+      {"diff @", "runs"},
+      {"diff configs @", "runs"},
+      {"diff configs --history @", "--history"},
+      {"diff configs --out @", "--out"},
+      {"plot @ --eval 0 --out o", "study"},
+      {"plot s.yaml --eval 0 --out @", "--out"},
+      {"animate @ --out a.avi", "input"},
+      {"animate configs/fbtb.yaml --out @", "--out"},
+      {"animate configs/fbtb.yaml --out a.avi --frame @", "--frame"},
+      {"view @ --out v.html", "input"},
+      {"view configs/fbtb.yaml --out @", "--out"},
+      {"compare --model @ --data d.csv --out o", "--model"},
+      {"compare --model configs/fbtb.yaml --data @ --out o", "--data"},
+      {"compare --model configs/fbtb.yaml --data d.csv --out @", "--out"},
+      {"diagnose --model @ --data d.csv --json j.json", "--model"},
+      {"diagnose --model configs/fbtb.yaml --data @ --json j.json", "--data"},
+      {"diagnose --model configs/fbtb.yaml --data d.csv --json @", "--json"},
+      {"calibrate --model @ --data d.csv --add x --out n.yaml", "--model"},
+      {"calibrate --model configs/fbtb.yaml --data @ --add x --out n.yaml", "--data"},
+      {"calibrate --model configs/fbtb.yaml --data d.csv --add x --out @", "--out"},
+      {"calibrate --model configs/fbtb.yaml --data d.csv --add x --out n.yaml --ledger @", "--ledger"},
+      {"record @ --out r.csv", "model"},
+      {"record configs/fbtb.yaml --out @", "--out"},
+  };
+  const std::vector<std::string> before = tree(work);
+  for (const auto& [command, option] : cases)
+    for (const std::string blank : {"''", "'  '", "'\t'"}) {
+      std::string args = command;
+      args.replace(args.find('@'), 1, blank);
+      const auto r = run(args);
+      EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+      EXPECT_EQ(r.output.rfind(std::string(option) + ": an empty or blank path (an unset variable?)", 0), 0u) << args << "\n" << r.output;
+      EXPECT_EQ(tree(work), before) << args;
+    }
+  for (const char* root : {"/journal-main.csv", "/journal-main.lock", "/timings-main.csv", "/traces"})
+    EXPECT_FALSE(fs::exists(root)) << root;
+  // A history directory from a variable set blank: the same, before anything runs.
+  const auto r = run_shell("FLEXFARM_HISTORY='  ' " + quote(kBinary) + " run s.yaml --out o");
+  expect_one_error_line(r, "$FLEXFARM_HISTORY: a blank path; unset it or give --history DIR");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_FALSE(fs::exists(work / "o"));
+}
+
+// (#32.21) A study named with an escape sequence and the report's placeholder, a run label with '|':
+// report.html is whole (filled in one pass), table.md's rows keep their columns ('|' escaped), and no
+// escape sequence reaches the terminal from the run, its progress line, `history` or an error.
+TEST_F(Cli, HostileNamesKeepTheReportAndTablesWholeAndReachTheTerminalAsText) {
+  write("s.yaml", "name: \"red\\e[31m@@BODY@@\"\nmodel: configs/fbtb.yaml\nset:\n  trajectory.moves: [{target: 0.2, hold: 1}]\n"
+                  "runs:\n  - label: \"left | right\"\n  - label: \"a|b\\e]0;owned\\a\"\n");
+  const std::string history = "FLEXFARM_HISTORY=" + quote((base / "history").string()) + " ";
+  const auto r = run_shell(history + quote(kBinary) + " run s.yaml --out o");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find('\x1b'), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("red?[31m@@BODY@@: 100%"), std::string::npos) << r.output;  // the progress line
+  const std::string html = read_text(work / "o/report.html");
+  EXPECT_NE(html.find("<title>red\x1b[31m@@BODY@@: flexfarm report</title>"), std::string::npos);
+  EXPECT_NE(html.find("<h2 id=\"provenance\">"), std::string::npos);
+  EXPECT_NE(html.find("</html>"), std::string::npos);
+  EXPECT_NE(html.find("<td>left | right</td><td>0 -&gt; 0.2 rad</td>"), std::string::npos);
+  // table.md: a row per run, each with as many unescaped '|' as the header.
+  const auto table = split_lines(read_text(work / "o/table.md"));
+  const auto bars = [](const std::string& line) {
+    int n = 0;
+    for (std::size_t i = 0; i < line.size(); ++i) n += line[i] == '|' && (i == 0 || line[i - 1] != '\\');
+    return n;
+  };
+  const auto header = std::find_if(table.begin(), table.end(), [](const std::string& l) { return l.rfind("| run | move |", 0) == 0; });
+  ASSERT_NE(header, table.end()) << read_text(work / "o/table.md");
+  EXPECT_EQ(header[2].rfind("| left \\| right | 0 -> 0.2 rad |", 0), 0u) << header[2];
+  EXPECT_EQ(header[3].rfind("| a\\|b\x1b]0;owned\a | 0 -> 0.2 rad |", 0), 0u) << header[3];
+  for (int k : {2, 3}) EXPECT_EQ(bars(header[k]), bars(header[0])) << header[k];
+  const auto listed = run_shell(history + quote(kBinary) + " history");
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_EQ(listed.output.find('\x1b'), std::string::npos) << listed.output;
+  EXPECT_NE(listed.output.find("| red?[31m@@BODY@@ |"), std::string::npos) << listed.output;
+  const auto one = run_shell(history + quote(kBinary) + " history 1");
+  EXPECT_EQ(one.output.find('\x1b'), std::string::npos) << one.output;
+  // An error quoting a path with an escape sequence in it.
+  const auto error = run("table 'no\x1b[2Jdir'");
+  EXPECT_EQ(error.exit_code, 2) << error.output;
+  EXPECT_EQ(error.output.find('\x1b'), std::string::npos) << error.output;
+  EXPECT_NE(error.output.find("no?[2Jdir"), std::string::npos) << error.output;
+}

@@ -384,7 +384,7 @@ TEST_F(Farm, ResumeAfterKill9IsByteIdentical) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   expect_reference_tables("out", "killed and resumed");
   for (const auto& e : fs::recursive_directory_iterator(out)) {
-    EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "left behind: " << e.path();
   }
 
   const Journal after = read_journal(journal);
@@ -493,7 +493,7 @@ TEST_F(Farm, DiskFullMidRunKeepsTheJournalWholeAndResumeCompletes) {
   EXPECT_GT(whole.ids.size(), 0u);
   EXPECT_LT(static_cast<int>(whole.ids.size()), n) << "the disk must fill before the study ends for the test to mean anything";
   EXPECT_FALSE(fs::exists(disk / "out" / "results.csv"));
-  for (const auto& e : fs::directory_iterator(disk / "out")) EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+  for (const auto& e : fs::directory_iterator(disk / "out")) EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 
   ASSERT_EQ(std::system(("mount -o remount,size=32m " + quote(disk.string())).c_str()), 0);
   const auto resumed = flexfarm("run small.yaml --out disk/out --threads 2 --resume");
@@ -924,6 +924,143 @@ TEST_F(Farm, BadDistributionNamesTheOffendingKey) {
   const auto r = flexfarm("run study.yaml --out out");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(r.output.rfind("flexfarm: error: study.yaml:4: variables[0].distribution.std: ", 0), 0u) << r.output;
+}
+
+// ---- issue 32 ------------------------------------------------------------------------------
+
+// (#32.19) A journal row corrupted with its cell count intact ("0.x5" for a number) is no result: a
+// merge counts its variant as missing (not a line of the assembled text), and --resume drops it as it
+// drops a torn row, says so, and computes the variant again: results.csv as uninterrupted.
+TEST_F(Farm, ACorruptedRowOfTheRightShapeIsDroppedOnResumeAndComputedAgain) {
+  const int n = 24;
+  write_small_study("small.yaml", 3, n);
+  ASSERT_EQ(flexfarm("run small.yaml --out out --no-history").exit_code, 0);
+  const std::string uninterrupted = read_text(dir / "out" / "results.csv");
+  const fs::path journal = dir / "out" / "journal-main.csv";
+  const std::size_t k = 2 + n / 2;  // a row in the middle
+  int corrupted_id = -1;
+  // Cell `cell` of that row replaced by `bad`, the cell count kept: a metric "0.x5", a seed "x" or "-1".
+  for (const auto& [cell, bad] : {std::pair<int, std::string>{-1, "0.x5"}, {1, "x"}, {1, "-1"}}) {
+    auto lines = split_lines(read_text(journal));
+    auto cells = split_csv(lines[k]);
+    corrupted_id = std::stoi(cells[0]);
+    cells[cell < 0 ? cells.size() - 1 : static_cast<std::size_t>(cell)] = bad;
+    lines[k].clear();
+    for (const auto& c : cells) lines[k] += (lines[k].empty() ? "" : ",") + c;
+    std::string text;
+    for (const auto& l : lines) text += l + "\n";
+    write_text(journal, text);
+    fs::remove(dir / "out" / "results.csv");
+
+    const auto merged = flexfarm("merge small.yaml --out out --no-history");
+    EXPECT_NE(merged.exit_code, 0) << bad << ": " << merged.output;
+    EXPECT_NE(merged.output.find("out: 1 of 24 variants have no result yet (first: eval_id " + std::to_string(corrupted_id) + ")"),
+              std::string::npos)
+        << bad << ": " << merged.output;
+    const auto r = flexfarm("run small.yaml --out out --resume --no-history");
+    ASSERT_EQ(r.exit_code, 0) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find("journal-main.csv: repaired: 1 line(s) that are not result rows dropped; their variants are computed again"),
+              std::string::npos)
+        << bad << ": " << r.output;
+    const std::string repaired = read_text(dir / "out" / "results.csv");
+    EXPECT_EQ(fingerprint(repaired), fingerprint(uninterrupted)) << bad << ": " << first_difference(uninterrupted, repaired);
+    const Journal after = read_journal(journal);
+    EXPECT_EQ(after.ids.size(), static_cast<std::size_t>(n)) << bad;
+    EXPECT_EQ(after.ids.back(), corrupted_id) << bad << ": the corrupted row is computed again, last";
+    EXPECT_EQ(read_text(journal).find("," + bad + (cell < 0 ? "\n" : ",")), std::string::npos) << bad;
+  }
+}
+
+// The value of `key: value` in a run.yaml ("" when absent).
+std::string run_yaml_value(const fs::path& run_yaml, const std::string& key) {
+  for (const auto& l : split_lines(read_text(run_yaml)))
+    if (l.rfind(key + ": ", 0) == 0) return l.substr(key.size() + 2);
+  return "";
+}
+
+// (#32.20) A run is recorded in the history once it has finished: one whose report.html cannot be
+// written (here a directory in its place; a full disk alike) fails and is not recorded; its --resume
+// records it once, started at the first attempt's start, with the wall time of both attempts.
+TEST_F(Farm, ARunIsRecordedOnceFinishedWithTheWallTimeOfEveryAttempt) {
+  write_small_study("small.yaml", 3, 24);
+  fs::create_directories(dir / "out" / "report.html" / "in the way");
+  const auto failed = flexfarm("run small.yaml --out out --history history");
+  EXPECT_EQ(failed.exit_code, 1) << failed.output;
+  EXPECT_NE(failed.output.find("report.html: cannot rename into place: Is a directory"), std::string::npos) << failed.output;
+  EXPECT_EQ(failed.output.find("recorded as run"), std::string::npos) << failed.output;
+  const auto none = flexfarm("history --history history");
+  EXPECT_NE(none.output.find("no runs in"), std::string::npos) << none.output;
+  const auto attempts1 = split_lines(read_text(dir / "out" / "attempts-main.csv"));
+  ASSERT_GE(attempts1.size(), 2u);
+  EXPECT_EQ(attempts1[0], "attempt,started,seconds");
+  const auto first = split_csv(attempts1.back());
+  ASSERT_EQ(first.size(), 3u) << attempts1.back();
+  EXPECT_EQ(first[0], "1");
+  const double first_seconds = std::stod(first[2]);
+  EXPECT_GT(first_seconds, 0.0);
+
+  fs::remove_all(dir / "out" / "report.html");
+  const auto resumed = flexfarm("run small.yaml --out out --resume --history history");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("recorded as run 1 in history/history.sqlite"), std::string::npos) << resumed.output;
+  const auto listed = flexfarm("history --history history");
+  ASSERT_EQ(listed.lines().size(), 3u) << listed.output;  // header, separator, one run
+  const auto second = split_csv(split_lines(read_text(dir / "out" / "attempts-main.csv")).back());
+  ASSERT_EQ(second.size(), 3u);
+  EXPECT_EQ(second[0], "2");
+  // The record (run.yaml, as the history holds it): the first attempt's start, both attempts' time.
+  const double seconds = std::stod(run_yaml_value(dir / "out" / "run.yaml", "seconds"));
+  EXPECT_GE(seconds, first_seconds) << "the first attempt's " << first_seconds << " s are counted";
+  EXPECT_LE(seconds, first_seconds + std::stod(second[2]) + 1e-3);
+  EXPECT_EQ(run_yaml_value(dir / "out" / "run.yaml", "started"), first[1]);
+  const auto record = flexfarm("history 1 --history history");
+  EXPECT_NE(record.output.find("| started | " + first[1] + " |"), std::string::npos) << record.output;
+  EXPECT_NE(read_text(dir / "out" / "report.html").find(", run 1 of the history"), std::string::npos);
+}
+
+// (#32.5) An output directory shared with others: links planted at the temporaries' old names
+// ("<file>.tmp") are never followed (the victim keeps its bytes, every output is a file of its own);
+// a link planted at the timings, the lock or traces/ is refused before anything is written through it.
+TEST_F(Farm, LinksPlantedInASharedOutAreNeverFollowed) {
+  write_small_study("small.yaml", 3, 24);
+  ASSERT_EQ(flexfarm("run small.yaml --out ref --no-history").exit_code, 0);
+  fs::create_directories(dir / "elsewhere");
+  const fs::path victim = dir / "elsewhere" / "victim.txt";
+  write_text(victim, "the victim's own bytes\n");
+  fs::create_directories(dir / "out");
+  int planted = 0;
+  for (const auto& e : fs::directory_iterator(dir / "ref"))
+    if (e.is_regular_file()) fs::create_symlink(victim, dir / "out" / (e.path().filename().string() + ".tmp")), ++planted;
+  EXPECT_GE(planted, 8);  // results.csv, .sqlite, table.md, run.yaml, report.html, the plots, the journal, ...
+  const auto r = flexfarm("run small.yaml --out out --no-history");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_text(victim), "the victim's own bytes\n");
+  for (const auto& e : fs::directory_iterator(dir / "ref")) {
+    const fs::path p = dir / "out" / e.path().filename();
+    EXPECT_FALSE(fs::is_symlink(p)) << p;
+    if (e.is_regular_file()) EXPECT_TRUE(fs::is_regular_file(p)) << p;
+  }
+  EXPECT_EQ(read_text(dir / "out" / "results.csv"), read_text(dir / "ref" / "results.csv"));
+
+  const struct {
+    const char* name;
+    fs::path target;
+    const char* error;
+  } refused[] = {{"timings-main.csv", victim, "timings-main.csv: cannot open for writing: Too many levels of symbolic links"},
+                 {"journal-main.lock", dir / "elsewhere" / "made.lock", "journal-main.lock: cannot open the lock file: Too many levels"},
+                 {"traces", dir / "elsewhere", "traces: not a directory of its own"}};
+  for (const auto& p : refused) {
+    const fs::path out = dir / (std::string("out_") + p.name);
+    fs::create_directories(out);
+    fs::create_symlink(p.target, out / p.name);
+    const auto res = flexfarm("run small.yaml --out " + out.string() + " --no-history");
+    EXPECT_NE(res.exit_code, 0) << p.name << ": " << res.output;
+    EXPECT_NE(res.output.find(p.error), std::string::npos) << p.name << ": " << res.output;
+    EXPECT_FALSE(fs::exists(out / "results.csv")) << p.name;
+  }
+  EXPECT_EQ(read_text(victim), "the victim's own bytes\n");
+  EXPECT_FALSE(fs::exists(dir / "elsewhere" / "made.lock"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "elsewhere"), fs::directory_iterator{}), 1);  // the victim alone
 }
 
 }  // namespace

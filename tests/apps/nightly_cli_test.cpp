@@ -57,6 +57,15 @@ TEST_F(NightlyCli, TheScriptFlagsTheNightTheModelGotWorseAndNotTheNightsAround) 
   EXPECT_NE(first.output.find("the first run of configs/nightly.yaml in the history"), std::string::npos) << first.output;
   EXPECT_TRUE(fs::exists(work / "nightly/n1/report.html"));
   EXPECT_FALSE(fs::exists(work / "nightly/n1/diff.md"));
+  // (#32.22) flexfarm diff of the study's first run: nothing to compare with, said so, exit 0 (2 is for bad input).
+  const Result none = flexfarm("diff nightly/n1 --out first.md");
+  EXPECT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_EQ(none.output.rfind("# Nothing to compare with\n\nrun 1 (nightly, ", 0), 0u) << none.output;
+  EXPECT_NE(none.output.find(" is the first run of " + (work / "configs/nightly.yaml").string() + " in the history " +
+                             (base / "history").string() + ": there is no earlier run to compare it with. Nothing got worse.\n"),
+            std::string::npos)
+      << none.output;
+  EXPECT_EQ(read_text(work / "first.md"), none.output);
 
   // The derivative gain cut by a third: more torque (beyond the 3 % tolerance), the p95 past 1100.
   std::string model = read_text(work / "configs/fbtb.yaml");

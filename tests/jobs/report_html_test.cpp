@@ -45,6 +45,13 @@ TEST(MarkdownHtml, HeadingsTablesListsAndInlineMarksBecomeHtmlAndTheTextIsEscape
   EXPECT_EQ(html.find("|---"), std::string::npos);  // the separator row is not a row
 }
 
+// (#32.21) A '|' escaped in a cell (common/text.hpp md_cell) stays in its cell; the row keeps its columns.
+TEST(MarkdownHtml, AnEscapedBarStaysInItsCell) {
+  const std::string html = format_markdown_html("| run | move |\n|---|---|\n| left \\| right | move 1 |\n| a\\|b\\| | `x\\|y` |\n");
+  EXPECT_NE(html.find("<tr><td>left | right</td><td>move 1</td></tr>"), std::string::npos) << html;
+  EXPECT_NE(html.find("<tr><td>a|b|</td><td><code>x|y</code></td></tr>"), std::string::npos) << html;
+}
+
 // A run's page: three verdicts, a diff, a table with a hostile label, one plot.
 ReportPage sample_page(const std::string& dir) {
   LinePlot p;
@@ -131,6 +138,28 @@ TEST(ReportHtml, LoadsInHeadlessChromiumWithItsPlotDecodedAndTheVerdictTableInCo
       red += std::abs(p[2] - 0xb3) < 12 && std::abs(p[1] - 0x26) < 12 && std::abs(p[0] - 0x1e) < 12;
     }
   EXPECT_GT(red, 500);
+}
+
+// (#32.21) A study named with the template's placeholders: the page is filled in one pass, so its
+// title is the name as written and the whole body is there, once.
+TEST(ReportHtml, AStudyNamedLikeThePlaceholdersIsOnlyItsTitle) {
+  const test::TempDir dir("ff_report_placeholder");
+  ReportPage page = sample_page(dir.path.string());
+  page.record.study = "@@BODY@@ and @@TITLE@@";
+  page.description = "About @@BODY@@.";
+  write_report_html(dir.path.string(), page);
+  const std::string html = read_file((dir.path / "report.html").string());
+  EXPECT_NE(html.find("<title>@@BODY@@ and @@TITLE@@: flexfarm report</title>"), std::string::npos) << html.substr(0, 400);
+  EXPECT_NE(html.find("<h1>@@BODY@@ and @@TITLE@@</h1>"), std::string::npos);
+  EXPECT_NE(html.find("<p>About @@BODY@@.</p>"), std::string::npos);
+  const auto count = [&](const std::string& s) {
+    int n = 0;
+    for (std::size_t p = html.find(s); p != std::string::npos; p = html.find(s, p + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("<h2 id=\"provenance\">"), 1);
+  EXPECT_EQ(count("<h1>"), 1);
+  EXPECT_EQ(count("</html>"), 1);
 }
 
 }  // namespace
