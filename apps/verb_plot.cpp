@@ -7,6 +7,7 @@
 #include "arm/arm_simulate.hpp"
 #include "jobs/report.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 #include "kernel/simulate.hpp"
 #include "sweep/study.hpp"
 
@@ -29,15 +30,11 @@ void add_plot_verb(CLI::App& app) {
     std::stringstream ss(args->evals);
     std::string part;
     while (std::getline(ss, part, ',')) {
-      int id = -1;
-      try {
-        id = std::stoi(part);
-      } catch (const std::exception&) {
-      }
-      if (id < 0 || id >= static_cast<int>(study.variants.size()))
+      const auto id = parse_integer(part, 0, static_cast<long long>(study.variants.size()) - 1);
+      if (!id)
         throw CLI::ValidationError("--eval", "'" + part + "' is not an eval_id of this study (0.." +
                                                  std::to_string(study.variants.size() - 1) + ")");
-      ids.push_back(id);
+      ids.push_back(static_cast<int>(*id));
     }
     if (ids.empty() || ids.size() > 12) throw CLI::ValidationError("--eval", "give 1 to 12 eval_ids");
     make_directories(args->out);

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <chrono>
+#include <climits>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -29,9 +30,10 @@ Partition parse_shard(const std::string& text) {
   std::smatch m;
   const std::regex re("^([0-9]+)/([0-9]+)$");
   if (!std::regex_match(text, m, re)) throw CLI::ValidationError("--shard", "expected I/N, e.g. 3/16, got '" + text + "'");
-  Partition p{std::stoi(m[1]), std::stoi(m[2])};
-  if (p.count < 1 || p.index >= p.count) throw CLI::ValidationError("--shard", "needs 0 <= I < N, got '" + text + "'");
-  return p;
+  const auto index = parse_integer(m.str(1), 0, INT_MAX), count = parse_integer(m.str(2), 1, INT_MAX);
+  if (!index || !count || *index >= *count)
+    throw CLI::ValidationError("--shard", "needs 0 <= I < N <= " + std::to_string(INT_MAX) + ", got '" + text + "'");
+  return {static_cast<int>(*index), static_cast<int>(*count)};
 }
 
 // Exit status 3 when any variant failed numerically or could not run (not_settled is a result).

@@ -10,6 +10,7 @@
 
 #include "apps/verbs.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 #include "arm/arm_metrics.hpp"
 #include "results/summaries.hpp"
 #include "results/table.hpp"
@@ -70,11 +71,9 @@ void add_table_verb(CLI::App& app) {
     for (const auto& s : split_list(args->specs)) {
       const auto eq = s.find('=');
       if (eq == std::string::npos) throw CLI::ValidationError("--spec", "expected METRIC=LIMIT, got '" + s + "'");
-      try {
-        specs[s.substr(0, eq)] = std::stod(s.substr(eq + 1));
-      } catch (const std::exception&) {
-        throw CLI::ValidationError("--spec", "limit of '" + s + "' is not a number");
-      }
+      const auto limit = parse_finite(s.substr(eq + 1));
+      if (!limit) throw CLI::ValidationError("--spec", "limit of '" + s + "' is not a finite number");
+      specs[s.substr(0, eq)] = *limit;
     }
     try {
       const auto by = split_list(args->by);

@@ -11,6 +11,7 @@
 #include "arm/arm_online_metrics.hpp"
 #include "common/errors.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 #include "kernel/sensors.hpp"
 #include "multibody/lane_integrators.hpp"
 #include "multibody/lanes.hpp"
@@ -697,8 +698,9 @@ ArmTrace read_arm_trace_csv(const std::string& path) {
   ArmTrace tr;
   std::string line;
   if (!std::getline(in, line)) throw std::runtime_error(path + ":1: empty file");
-  std::stringstream header(line);
+  std::stringstream header(strip_bom(line));
   for (std::string name; std::getline(header, name, ',');) tr.names.push_back(name);
+  check_csv_header(tr.names, path);
   tr.columns.resize(tr.names.size());
   int row = 1;
   while (std::getline(in, line)) {

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "multibody/limits.hpp"
+
 namespace ff {
 
 Mat3 rpy_rotation(double roll, double pitch, double yaw) { return rotz(yaw) * roty(pitch) * rotx(roll); }
@@ -72,6 +74,7 @@ std::string make_flexible(TreeDescription& d, int body, FlexibleLinkSpec link) {
     return e.what();
   }
   const int added = tip - body;  // bodies beyond the one replaced
+  if (const std::string fault = tree_size_fault(static_cast<std::size_t>(n + added)); !fault.empty()) return fault;
   // The cell joints' names: per cell the joints z, y, x of flexible_link.hpp, as many as it has.
   const int per_cell = link.planar ? 1 : (link.torsion ? 3 : 2);
   std::vector<JointInfo> joints(d.joints.begin(), d.joints.begin() + body + 1);

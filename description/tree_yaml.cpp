@@ -14,6 +14,7 @@
 #include "common/field_table.hpp"
 #include "common/errors.hpp"
 #include "multibody/flexible_link.hpp"
+#include "multibody/limits.hpp"
 
 namespace ff {
 
@@ -157,6 +158,9 @@ struct Named {
 FlexibleLinkSpec read_flexible_block(YamlReader& r) {
   FlexibleBlock fb;
   read_present(r, kFlexibleFields, fb);
+  if (fb.segments > kMaxFlexibleSegments)
+    r.fail("segments", "must be <= " + std::to_string(kMaxFlexibleSegments) + " (a flexible link's limit), got " +
+                           std::to_string(fb.segments));
   FlexibleLinkSpec link;
   YamlReader sr = r.child("section");
   read_present(sr, kSectionFields, link.section);
@@ -243,6 +247,7 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
   top.finish();
   if (!top.has("bodies")) top.fail("bodies", "missing required value");
   if (bodies.empty()) top.fail("bodies", "expected a list of at least one body");
+  if (const std::string fault = tree_size_fault(bodies.size()); !fault.empty()) top.fail("bodies", fault);
 
   // Every name in the list, for "defined later" (the first of a name; a second is an error below).
   std::map<std::string, Named> listed;

@@ -1,4 +1,4 @@
-// URDF import (urdf.hpp). Three passes over one text:
+// URDF import (urdf.hpp). Three passes over one text, after a scan of its depth (DepthScan):
 //   1. TinyXML (the library liburdfdom itself parses with): well-formedness, then the structure with
 //      line numbers (names, joint types, parent and child links, one root, every link reached) and the
 //      Gazebo spring tags liburdfdom skips;
@@ -13,8 +13,11 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -23,7 +26,10 @@
 #include <stdexcept>
 #include <utility>
 
+#include <strings.h>  // strncasecmp
+
 #include "common/errors.hpp"
+#include "multibody/limits.hpp"
 
 namespace ff {
 
@@ -44,6 +50,175 @@ int row(const TiXmlElement* e) { return e ? e->Row() : 0; }
                        const std::string& message) {
   throw ConfigError(source, row(at), what, message);
 }
+
+// ---- pass 0: before TinyXML ---------------------------------------------------------------------
+
+// TinyXML parses nested elements by recursion, a few stack frames per level: a hostile file nests deep
+// enough to overflow the stack. This scan walks the text as TinyXML 2.6 tokenises it (comments, CDATA,
+// declarations and unknown <!...> skipped, attribute values quoted after '=', numeric character
+// references, which TinyXML reads up to the next ';') and refuses the file at the first element deeper
+// than kMaxUrdfDepth, or at the first byte that is not UTF-8 (TinyXML reads a UTF-8 lead byte and the
+// bytes after it as one character: the tags it sees would differ from the ones counted here). It stops
+// only where TinyXML stops with an error, or at a NUL; fuzz/urdf_fuzz.cpp holds it to that.
+class DepthScan {
+ public:
+  DepthScan(const std::string& xml, const std::string& source) : s_(xml.c_str()), source_(source) {}
+
+  void run() {
+    check_utf8();
+    int depth = 0;
+    while (*p_) {
+      if (*p_ != '<') {
+        if (!text_until('<')) return;
+      } else if (starts("</")) {
+        depth = std::max(depth - 1, 0);
+        skip_past(">");
+      } else if (starts("<!--")) {
+        skip_past("-->");
+      } else if (starts("<![CDATA[")) {
+        skip_past("]]>");
+      } else if (starts_nocase("<?xml")) {
+        p_ += 5;
+        if (!declaration()) return;
+      } else if (name_start(p_[1])) {
+        const char* tag = p_;
+        ++p_;
+        const int kind = start_tag();
+        if (kind < 0) return;
+        if (kind == 1 && ++depth > kMaxUrdfDepth)
+          throw ConfigError(source_, line_at(tag), "<" + name_at(tag + 1) + ">",
+                            "elements nested more than " + std::to_string(kMaxUrdfDepth) +
+                                " deep (a URDF nests about 5): refused before parsing");
+      } else {
+        skip_past(">");  // TinyXML's "unknown": <!DOCTYPE ...>, <?...>, < followed by no name
+      }
+    }
+  }
+
+ private:
+  static bool space(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
+  // TinyXML's IsAlpha and IsAlphaNum: any byte from 127 on counts as a letter.
+  static bool name_start(char c) { return static_cast<unsigned char>(c) >= 127 || std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+  static bool name_char(char c) { return name_start(c) || std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '.' || c == ':'; }
+
+  bool starts(const char* text) const { return std::strncmp(p_, text, std::strlen(text)) == 0; }
+  bool starts_nocase(const char* text) const { return strncasecmp(p_, text, std::strlen(text)) == 0; }
+  // TinyXML's SkipWhiteSpace, which in UTF-8 also skips the byte-order mark and U+FFFE, U+FFFF.
+  void skip_space() {
+    for (;;) {
+      if (starts("\xEF\xBB\xBF") || starts("\xEF\xBF\xBE") || starts("\xEF\xBF\xBF")) p_ += 3;
+      else if (space(*p_)) ++p_;
+      else return;
+    }
+  }
+  // TinyXML's ReadText: up to `end` (or the NUL), a character reference "&#...;" read as one character;
+  // false where TinyXML finds a bad reference.
+  bool text_until(char end) {
+    while (*p_ && *p_ != end) {
+      if (p_[0] == '&' && p_[1] == '#' && p_[2]) {
+        // TinyXML takes the next ';' and checks the digits back from it to the last 'x' (or '#').
+        const bool hex = p_[2] == 'x';
+        const char* semi = hex && !p_[3] ? nullptr : std::strchr(p_ + (hex ? 3 : 2), ';');
+        if (!semi) return false;
+        const char* q = semi - 1;
+        for (; *q != (hex ? 'x' : '#'); --q)
+          if (!(hex ? std::isxdigit(static_cast<unsigned char>(*q)) : std::isdigit(static_cast<unsigned char>(*q)))) return false;
+        p_ = semi + 1;
+      } else {
+        ++p_;
+      }
+    }
+    return true;
+  }
+  void skip_past(const char* end) {
+    const char* at = std::strstr(p_, end);
+    p_ = at ? at + std::strlen(end) : p_ + std::strlen(p_);
+  }
+  int line_at(const char* at) const { return 1 + static_cast<int>(std::count(s_, at, '\n')); }
+  static std::string name_at(const char* at) {
+    std::string name;
+    while (name_char(*at) && name.size() < 40) name += *at++;
+    return name;
+  }
+
+  // name = value, the value quoted or bare; false where TinyXML stops with an error.
+  bool attribute() {
+    if (!name_start(*p_)) return false;
+    while (name_char(*p_)) ++p_;
+    skip_space();
+    if (*p_ != '=') return false;
+    ++p_;
+    skip_space();
+    if (*p_ == '"' || *p_ == '\'') {
+      const char quote = *p_++;
+      if (!text_until(quote) || !*p_) return false;
+      ++p_;
+      return true;
+    }
+    for (; *p_ && !space(*p_) && *p_ != '/' && *p_ != '>'; ++p_)
+      if (*p_ == '"' || *p_ == '\'') return false;
+    return *p_ != '\0';
+  }
+
+  // After "<": the name, the attributes, then "/>" (0) or ">" (1: an element with content); -1 where
+  // TinyXML stops with an error.
+  int start_tag() {
+    skip_space();
+    while (name_char(*p_)) ++p_;
+    for (;;) {
+      skip_space();
+      if (!*p_) return -1;
+      if (*p_ == '/') {
+        if (p_[1] != '>') return -1;
+        p_ += 2;
+        return 0;
+      }
+      if (*p_ == '>') {
+        ++p_;
+        return 1;
+      }
+      if (!attribute()) return -1;
+    }
+  }
+
+  // After "<?xml": version, encoding and standalone read as attributes, other words skipped, up to ">".
+  bool declaration() {
+    while (*p_) {
+      if (*p_ == '>') {
+        ++p_;
+        return true;
+      }
+      skip_space();
+      if (starts_nocase("version") || starts_nocase("encoding") || starts_nocase("standalone")) {
+        if (!attribute()) return false;
+      } else {
+        while (*p_ && *p_ != '>' && !space(*p_)) ++p_;
+      }
+    }
+    return false;
+  }
+
+  // Well-formed UTF-8 up to the first NUL (where TinyXML stops reading).
+  void check_utf8() const {
+    const auto* u = reinterpret_cast<const unsigned char*>(s_);
+    for (std::size_t i = 0; u[i];) {
+      const unsigned char c = u[i];
+      const int n = c < 0x80 ? 0 : c >= 0xC2 && c <= 0xDF ? 1 : c >= 0xE0 && c <= 0xEF ? 2 : c >= 0xF0 && c <= 0xF4 ? 3 : -1;
+      bool ok = n >= 0;
+      for (int k = 1; ok && k <= n; ++k) ok = (u[i + k] & 0xC0) == 0x80;
+      if (!ok) {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "0x%02X", c);
+        throw ConfigError(source_, line_at(s_ + i), "", std::string("byte ") + hex + " is not UTF-8 text (a URDF is UTF-8)");
+      }
+      i += static_cast<std::size_t>(n) + 1;
+    }
+  }
+
+  const char* s_;
+  const char* p_ = s_;
+  const std::string& source_;
+};
 
 // ---- pass 1: the structure, with lines --------------------------------------------------------
 
@@ -153,6 +328,11 @@ XmlIndex index_xml(const std::string& source, const TiXmlDocument& doc) {
     link_order.push_back(name);
   }
   if (x.links.empty()) fail(source, x.robot, "", "no <link> in <robot>");
+  // Every link but the root is a body: refused here, before liburdfdom reads them all.
+  if (const std::string fault = tree_size_fault(x.links.size() - 1); !fault.empty()) {
+    const std::string& past = link_order[static_cast<std::size_t>(kMaxTreeBodies) + 1];
+    fail(source, x.links.at(past).element, quoted("link", past), fault);
+  }
 
   for (const TiXmlElement* e = x.robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
     const std::string name = text_attribute(source, e, "name", "joint");
@@ -341,6 +521,7 @@ const TiXmlElement* part(const TiXmlElement* e, const char* tag) {
 }  // namespace
 
 TreeDescription parse_urdf(const std::string& xml, const std::string& source) {
+  DepthScan(xml, source).run();
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error()) throw ConfigError(source, doc.ErrorRow(), "", std::string("malformed XML: ") + doc.ErrorDesc());

@@ -15,6 +15,10 @@
 
 namespace ff {
 
+// The deepest nesting of XML elements a URDF may have (one holds about 5: robot, link, visual, geometry,
+// mesh); a deeper file is refused before it is parsed, at the line of the first element too deep.
+inline constexpr int kMaxUrdfDepth = 100;
+
 // Parses URDF text; errors and notes name `source`. The returned spec passes make_tree.
 TreeDescription parse_urdf(const std::string& xml, const std::string& source);
 // Loads a URDF file and, when `sidecar` is not empty, applies that flexfarm sidecar YAML to it.

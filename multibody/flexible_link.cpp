@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "multibody/limits.hpp"
+
 namespace ff {
 
 namespace {
@@ -31,7 +33,8 @@ void validate(const FlexibleLinkSpec& link, int parent, int num_bodies) {
     fail(link, "parent " + std::to_string(parent) + " is not a body of the tree (" + std::to_string(num_bodies) +
                    " bodies; -1 = the base)");
   positive(link, link.length, "length");
-  if (link.segments < 1) fail(link, "segments " + std::to_string(link.segments) + " must be >= 1");
+  if (link.segments < 1 || link.segments > kMaxFlexibleSegments)
+    fail(link, "segments " + std::to_string(link.segments) + " must be 1.." + std::to_string(kMaxFlexibleSegments));
   const BeamSection& s = link.section;
   positive(link, s.density, "density");
   positive(link, s.area, "area");

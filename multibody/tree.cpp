@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "multibody/limits.hpp"
+
 namespace ff {
 
 namespace {
@@ -94,8 +96,15 @@ SpatialMotion Tree::base_acceleration() const {
   return a;
 }
 
+std::string tree_size_fault(std::size_t bodies) {
+  if (bodies <= static_cast<std::size_t>(kMaxTreeBodies)) return "";
+  return "the tree has " + std::to_string(bodies) + " bodies (flexible links' segments and joint bodies counted), "
+         "over the limit of " + std::to_string(kMaxTreeBodies);
+}
+
 Tree make_tree(const TreeSpec& spec) {
   if (!finite(spec.gravity)) throw std::invalid_argument("tree: gravity is not finite");
+  if (const std::string fault = tree_size_fault(spec.bodies.size()); !fault.empty()) throw std::invalid_argument(fault);
   Tree t;
   t.gravity_ = spec.gravity;
   t.bodies_.reserve(spec.bodies.size());

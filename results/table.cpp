@@ -2,12 +2,14 @@
 
 #include <cmath>
 #include <cctype>
+#include <climits>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
-#include "results/run_metrics.hpp"
 #include "common/text.hpp"
+#include "results/run_metrics.hpp"
 
 namespace ff {
 
@@ -97,7 +99,7 @@ ResultTable parse_results_csv(const std::string& text, const std::string& source
     };
     std::vector<std::string> cells;
     try {
-      cells = split_csv_line(line);
+      cells = split_csv_line(header.empty() ? strip_bom(line) : line);
     } catch (const std::invalid_argument& e) {
       bad(header.empty() ? "header" : "row", e.what());
     }
@@ -107,8 +109,10 @@ ResultTable parse_results_csv(const std::string& text, const std::string& source
         bad("header", "expected eval_id,seed,label,status,...");
       // Parameters come before the metrics: from the first name "m<digit>..." (the reference rig's) or
       // "..._settling_s" (an arm's first, arm/arm_metrics.hpp) on, every column is a metric.
-      for (std::size_t c = 4; c < header.size(); ++c) {
+      for (std::size_t c = 4; c < header.size(); ++c)
         if (header[c].empty()) bad("header", "column " + std::to_string(c + 1) + " has no name");
+      check_csv_header(header, source, line_no);  // a name twice
+      for (std::size_t c = 4; c < header.size(); ++c) {
         const bool metric = (header[c].size() > 1 && header[c][0] == 'm' && std::isdigit(static_cast<unsigned char>(header[c][1]))) ||
                             header[c].ends_with("_settling_s");
         if (metric && nparams < 0) nparams = static_cast<int>(c) - 4;
@@ -120,16 +124,12 @@ ResultTable parse_results_csv(const std::string& text, const std::string& source
     if (cells.size() != header.size())
       bad("row", "has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
     ResultRow r;
-    // Whole numbers, every character a digit ("12x" is no id, "-1" no seed).
-    for (int c : {0, 1})
-      if (cells[c].empty() || cells[c].size() > 20 || cells[c].find_first_not_of("0123456789") != std::string::npos)
-        bad(header[c], "'" + cells[c] + "' is not a whole number");
-    try {
-      r.eval_id = std::stoi(cells[0]);
-      r.seed = std::stoull(cells[1]);
-    } catch (const std::exception&) {
-      bad("eval_id", "not a number");
-    }
+    const auto eval_id = parse_integer(cells[0], 0, INT_MAX);
+    const auto seed = parse_integer<std::uint64_t>(cells[1]);
+    if (!eval_id) bad("eval_id", "'" + cells[0] + "' is not an eval_id (an integer from 0)");
+    if (!seed) bad("seed", "'" + cells[1] + "' is not a seed (an unsigned 64-bit integer)");
+    r.eval_id = static_cast<int>(*eval_id);
+    r.seed = *seed;
     r.label = cells[2];
     r.status = cells[3];
     for (std::size_t c = 4; c < cells.size(); ++c) {

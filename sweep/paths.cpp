@@ -1,10 +1,12 @@
 #include "sweep/paths.hpp"
 
 #include <cctype>
+#include <climits>
 #include <vector>
 
 #include "arm/arm_yaml.hpp"
 #include "common/errors.hpp"
+#include "common/text.hpp"
 #include "common/yaml_reader.hpp"
 #include "kernel/model_io.hpp"
 
@@ -43,8 +45,14 @@ std::vector<Step> split_path(const std::string& path, const std::string& source)
       for (char c : digits) number &= std::isdigit(static_cast<unsigned char>(c)) != 0;
       const bool name = std::isalpha(static_cast<unsigned char>(digits[0])) || digits[0] == '_';
       if (!number && !name) bad("index '" + digits + "' is neither a number nor a name");
-      if (number) steps.push_back({"", std::stoi(digits), ""});
-      else steps.push_back({"", -1, digits});
+      if (number) {
+        // An index past any list's length (int's range included) names no element.
+        const auto index = parse_integer(digits, 0, INT_MAX);
+        if (!index) throw ConfigError(source, 0, path, "index [" + digits + "] is not in the list");
+        steps.push_back({"", static_cast<int>(*index), ""});
+      } else {
+        steps.push_back({"", -1, digits});
+      }
       i = close + 1;
       if (i < path.size() && path[i] == '.') ++i;
       continue;

@@ -136,8 +136,11 @@ Distribution parse_distribution(YamlReader r) {
   return d;
 }
 
-// One entry of `variables:`.
-Variable parse_variable(YamlReader& r, bool& integer) {
+// One entry of `variables:`. A range's levels are made as it is read: first its count is held to the
+// variant limit `max_variants` with the ranges before it. A grid or centered design has at least
+// 1 + sum(count - 1) rows, so that sum over the ranges is kept within the limit (`levels_left` counts
+// it down from max_variants - 1), which refuses no design the limit would let through.
+Variable parse_variable(YamlReader& r, bool& integer, int max_variants, long long& levels_left) {
   Variable v;
   if (!r.has("path")) r.fail("path", "missing required value (the model parameter, e.g. payload.mass)");
   r.optional("path", v.path);
@@ -159,6 +162,10 @@ Variable parse_variable(YamlReader& r, bool& integer) {
     rg.finish();
     if (count < 2 || !(hi > lo)) r.fail("range", "needs upper > lower and count >= 2");
     if (!v.levels.empty()) r.fail("range", "give levels or range, not both");
+    if (count - 1 > levels_left)
+      rg.fail("count", std::to_string(count) + " levels take the study's ranges over " + std::to_string(max_variants) +
+                           " variants, its limit (a grid or centered design has at least 1 + the sum of count - 1)");
+    levels_left -= count - 1;
     for (int i = 0; i < count; ++i) v.levels.push_back(lo + (hi - lo) * i / (count - 1));
   }
   v.nominal = v.levels.empty() ? 0.0 : v.levels[v.levels.size() / 2];
@@ -232,9 +239,10 @@ void parse_design(Study& st, YamlReader& top, int max_variants) {
   std::vector<bool>& integer = st.integer;
   integer.assign(vars.size(), false);
   std::vector<int>& lines = st.variable_lines;
+  long long levels_left = static_cast<long long>(max_variants) - 1;
   for (std::size_t i = 0; i < vars.size(); ++i) {
     bool is_int = false;
-    st.variables.push_back(parse_variable(vars[i], is_int));
+    st.variables.push_back(parse_variable(vars[i], is_int, max_variants, levels_left));
     integer[i] = is_int;
     lines.push_back(vars[i].line());
     st.params.push_back(st.variables.back().path);

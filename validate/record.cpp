@@ -8,6 +8,7 @@
 
 #include "common/errors.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -46,12 +47,11 @@ Record read_record_csv(const std::string& path, const std::vector<std::string>& 
   r.source = path;
   std::string line;
   if (!std::getline(in, line)) throw ConfigError(path, 1, "", "the record is empty (expected a header row)");
-  const auto header = split(line);
+  const auto header = split(strip_bom(line));
+  check_csv_header(header, path);
   int tcol = -1;
-  for (std::size_t c = 0; c < header.size(); ++c) {
-    if (header[c].empty()) throw ConfigError(path, 1, "", "column " + std::to_string(c + 1) + " has no name");
+  for (std::size_t c = 0; c < header.size(); ++c)
     if (header[c] == "t") tcol = static_cast<int>(c);
-  }
   if (tcol < 0) throw ConfigError(path, 1, "t", "missing column 't' (time, s)");
   for (const auto& name : required)
     if (std::find(header.begin(), header.end(), name) == header.end())

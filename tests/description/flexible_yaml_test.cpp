@@ -323,6 +323,19 @@ TEST(FlexibleYaml, OtherBadValuesAreNamedAtTheirKeys) {
             "arm.yaml:17: bodies[1].flexible.section: expected a map of keys");
 }
 
+TEST(FlexibleYaml, SegmentsOverTheLimitAreNamedAtTheKeyAndATreeGrownPastItsLimitAtTheLink) {
+  EXPECT_EQ(yaml_error(with_line(kFlexArm, 14, "      segments: 1000000")),
+            "arm.yaml:14: bodies[1].flexible.segments: must be <= 256 (a flexible link's limit), got 1000000");
+  EXPECT_NO_THROW(parse(with_line(kFlexArm, 14, "      segments: 256")));  // 1 + 766 + 1 bodies
+  // Two links of 256 segments: 766 bodies each, 1532 in all.
+  const std::string link = "    flexible: {length: 1, segments: 256, section: {E: 7.0e10, G: 2.6e10, density: 2700, "
+                           "area: 1.8e-4, I_y: 5.4e-10, I_z: 1.35e-8, J: 1.9e-9}}\n";
+  EXPECT_EQ(yaml_error("bodies:\n  - name: a\n    parent: base\n    joint: {name: ja, axis: [0, 0, 1]}\n" + link +
+                       "  - name: b\n    parent: a\n    joint: {name: jb, axis: [0, 0, 1], position: [1, 0, 0]}\n" + link),
+            "arm.yaml:5: bodies[0].flexible: the tree has 1532 bodies (flexible links' segments and joint bodies counted), "
+            "over the limit of 1000");
+}
+
 TEST(FlexibleYaml, AGeneratedNameThatIsTakenIsNamedAtTheFlexibleBlock) {
   EXPECT_EQ(yaml_error(with_line(kFlexArm, 29, "  - name: forearm.seg2")),
             "arm.yaml:12: bodies[1].flexible: its segment body \"forearm.seg2\" would take the name of another body");

@@ -212,4 +212,14 @@ TEST(TreeYaml, DocsListEveryKeyWithTheReadersUnitRequirementAndDefault) {
   ff::test::expect_documented("Kinematic trees (YAML) and URDF", all);
 }
 
+TEST(TreeYaml, ABodiesListOverTheLimitIsRefusedBeforeItsBodiesAreRead) {
+  std::string text = "bodies:\n";
+  for (int i = 0; i < 1001; ++i)
+    text += "  - {name: b" + std::to_string(i) + ", parent: " + (i ? "b" + std::to_string(i - 1) : std::string("base")) +
+            ", joint: {name: j" + std::to_string(i) + ", type: fixed}, mass: 1, inertia: {ixx: 1, iyy: 1, izz: 1}}\n";
+  EXPECT_EQ(yaml_error(text),
+            "arm.yaml:1: bodies: the tree has 1001 bodies (flexible links' segments and joint bodies counted), over the "
+            "limit of 1000");
+}
+
 }  // namespace

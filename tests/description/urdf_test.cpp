@@ -388,4 +388,65 @@ TEST(Urdf, EveryTruncatedFileIsOneConfigErrorNeverACrash) {
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
 }
 
+TEST(Urdf, AChainOfMoreLinksThanATreeMayHaveIsRefusedAtTheFirstLinkPastTheLimit) {
+  // 10,000 links (ran past 100 s at 2.5 GB): refused before liburdfdom reads them, at link 1001's line.
+  std::string xml = "<robot name=\"chain\">\n<link name=\"l0\"/>\n";
+  for (int i = 1; i <= 10000; ++i)
+    xml += "<link name=\"l" + std::to_string(i) + "\"/><joint name=\"j" + std::to_string(i) + "\" type=\"fixed\"><parent link=\"l" +
+           std::to_string(i - 1) + "\"/><child link=\"l" + std::to_string(i) + "\"/></joint>\n";
+  EXPECT_STREQ(urdf_error(xml + "</robot>\n").what(),
+               "arm.urdf:1003: link \"l1001\": the tree has 10000 bodies (flexible links' segments and joint bodies "
+               "counted), over the limit of 1000");
+}
+
+// --- nesting: refused before TinyXML's recursive parse -------------------------------------------
+
+// `depth` elements nested in <robot>, one a line from line 3, each opened with `open` and closed with
+// `close` (a valid file's tail after them).
+std::string nested_urdf(int depth, const std::string& open = "<link>", const std::string& close = "</link>") {
+  std::string xml = "<?xml version=\"1.0\"?>\n<robot name=\"deep\">\n";
+  xml.reserve(static_cast<std::size_t>(depth) * (open.size() + close.size() + 2) + 200);
+  for (int i = 0; i < depth; ++i) xml += open + "\n";
+  for (int i = 0; i < depth; ++i) xml += close;
+  return xml + "\n  <link name=\"base\"/>\n</robot>\n";
+}
+
+TEST(Urdf, FiftyThousandNestedElementsAreRefusedAtTheFirstTooDeepOneBeforeParsing) {
+  // robot is level 1 (line 2), the k-th <link> level k + 1 (line k + 2): level 101 is line 102.
+  const ff::ConfigError e = urdf_error(nested_urdf(50000));
+  EXPECT_STREQ(e.what(), "arm.urdf:102: <link>: elements nested more than 100 deep (a URDF nests about 5): "
+                         "refused before parsing");
+  // Through a file, as a study's arm names it.
+  const ff::test::TempDir dir("urdf_depth");
+  const std::string path = dir.write("deep.urdf", nested_urdf(50000));
+  EXPECT_EQ(config_error([&] { ff::load_urdf(path); }).line(), 102);
+}
+
+TEST(Urdf, NestingUpToTheLimitIsParsedAndOneLevelMoreIsRefused) {
+  // At the limit TinyXML reads the file: it then fails on what the elements are, not on their depth.
+  EXPECT_STREQ(urdf_error(nested_urdf(ff::kMaxUrdfDepth - 1)).what(), "arm.urdf:3: link: <link> has no name=\"...\"");
+  EXPECT_EQ(urdf_error(nested_urdf(ff::kMaxUrdfDepth)).line(), ff::kMaxUrdfDepth + 2);
+  // Self-closed elements, comments, CDATA and quoted values do not nest.
+  std::string opens;
+  for (int i = 0; i < 2 * ff::kMaxUrdfDepth; ++i) opens += "<a>";
+  std::string base = "  <link name=\"base_link\"><!-- " + opens + " --><![CDATA[" + opens + "]]><foo n=\"" + opens + "\"/>";
+  for (int i = 0; i < 2 * ff::kMaxUrdfDepth; ++i) base += "<bar/>";
+  EXPECT_EQ(ff::parse_urdf(with_line(kTwoLink, 3, base + "</link>"), "arm.urdf").base, "base_link");
+}
+
+TEST(Urdf, NestingHiddenFromANaiveTagCountIsStillCounted) {
+  // TinyXML reads "&#x</link>x1;" as one character reference and a byte-order mark inside a tag as white
+  // space: neither closes an element, so both files nest 50,000 deep.
+  EXPECT_EQ(urdf_error(nested_urdf(50000, "<link>&#x</link>x1;")).line(), 102);
+  EXPECT_EQ(urdf_error(nested_urdf(50000, "<link \xEF\xBB\xBF>")).line(), 102);
+  EXPECT_EQ(urdf_error(nested_urdf(50000, "<link a=\"&#</link>#1;\">")).line(), 102);
+}
+
+TEST(Urdf, AByteThatIsNotUtf8IsRefusedWithItsLine) {
+  EXPECT_STREQ(urdf_error(with_line(kTwoLink, 3, "  <link name=\"base\xE9link\"/>")).what(),
+               "arm.urdf:3: byte 0xE9 is not UTF-8 text (a URDF is UTF-8)");
+  // A lead byte would make TinyXML read the '<' after it as part of one character.
+  EXPECT_EQ(urdf_error(nested_urdf(50000, "<link>\xE0</link>")).line(), 3);
+}
+
 }  // namespace

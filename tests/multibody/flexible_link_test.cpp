@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "multibody/algorithms.hpp"
+#include "multibody/limits.hpp"
 #include "multibody/statics.hpp"
 #include "tests/multibody/test_support.hpp"
 
@@ -228,7 +229,13 @@ TEST(FlexibleLink, BadSpecsAreRejectedNamingTheLink) {
   rejects(b, -1, "length");
   b = good;
   b.segments = 0;
-  rejects(b, -1, "segments");
+  rejects(b, -1, "segments 0 must be 1..256");
+  b.segments = kMaxFlexibleSegments + 1;  // was built: a million segments reached 2 GB in 90 s
+  rejects(b, -1, "segments 257 must be 1..256");
+  b.segments = kMaxFlexibleSegments;
+  TreeSpec longest;
+  EXPECT_EQ(append_flexible_link(longest, -1, Vec3::Zero(), Mat3::Identity(), b), 3 * kMaxFlexibleSegments - 3);
+  EXPECT_EQ(make_tree(longest).num_bodies(), 3 * kMaxFlexibleSegments - 2);
   b = good;
   b.section.second_moment_y = -1.0;
   rejects(b, -1, "I_y");

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "multibody/limits.hpp"
 #include "tests/multibody/test_support.hpp"
 
 namespace ff {
@@ -78,6 +79,22 @@ TEST(Tree, CountsOnlyMovingJointsAsCoordinates) {
   // The spatial inertia about the body origin: mass block and first moment m c×.
   EXPECT_NEAR(t.body(0).inertia(3, 3), 1.0, 1e-15);
   EXPECT_NEAR(t.body(0).inertia(0, 4), -(-0.25), 1e-15);  // (m c×)_{xy} = -m c_z
+}
+
+TEST(Tree, RejectsMoreBodiesThanItsLimit) {
+  // A chain of kMaxTreeBodies is a tree; one body more is refused before any body is built.
+  TreeSpec s = two_links();
+  while (s.bodies.size() < static_cast<std::size_t>(kMaxTreeBodies)) {
+    BodySpec b = s.bodies.back();
+    b.name = "link" + std::to_string(s.bodies.size());
+    b.parent = static_cast<int>(s.bodies.size()) - 1;
+    s.bodies.push_back(b);
+  }
+  EXPECT_EQ(make_tree(s).num_bodies(), 1000);
+  s.bodies.push_back(s.bodies.back());
+  s.bodies.back().name = "one_too_many";
+  expect_rejected(s, "the tree has 1001 bodies (flexible links' segments and joint bodies counted), over the limit of 1000");
+  EXPECT_EQ(tree_size_fault(1000), "");
 }
 
 TEST(Tree, RejectsAParentAfterItsChild) {

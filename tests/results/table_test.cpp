@@ -80,6 +80,26 @@ TEST(Table, ResultsCsvColumnWithoutANameIsRefused) {
   EXPECT_EQ(parse_error("eval_id,seed,label,status,,m1,\n9,9,,,,,\n"), "results.csv:1: header: column 5 has no name");
 }
 
+TEST(Table, ResultsCsvWithAByteOrderMarkReadsAndTwoColumnsOfOneNameAreRefused) {
+  const ResultTable t = parse_results_csv("\xEF\xBB\xBF" "eval_id,seed,label,status,p,m1_a\n3,9,,ok,1,2\n", "results.csv");
+  ASSERT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.rows[0].eval_id, 3);
+  EXPECT_EQ(t.rows[0].values, std::vector<double>({2.0}));
+  EXPECT_EQ(parse_error("eval_id,seed,label,status,m1_a,m1_b,m1_a\n0,1,,ok,1,2,3\n"),
+            "results.csv:1: m1_a: columns 5 and 7 are both named 'm1_a': each column needs its own name");
+}
+
+TEST(Table, ResultsCsvEvalIdAndSeedAreWholeIntegersInRange) {
+  EXPECT_EQ(parse_error("eval_id,seed,label,status,m1_a\n99999999999,1,,ok,1\n"),
+            "results.csv:2: eval_id: '99999999999' is not an eval_id (an integer from 0)");
+  EXPECT_EQ(parse_error("eval_id,seed,label,status,m1_a\n12abc,1,,ok,1\n"),
+            "results.csv:2: eval_id: '12abc' is not an eval_id (an integer from 0)");
+  EXPECT_EQ(parse_error("eval_id,seed,label,status,m1_a\n0,-1,,ok,1\n"),
+            "results.csv:2: seed: '-1' is not a seed (an unsigned 64-bit integer)");
+  EXPECT_EQ(parse_results_csv("eval_id,seed,label,status,m1_a\n0,18446744073709551615,,ok,1\n", "r").rows[0].seed,
+            18446744073709551615ull);
+}
+
 TEST(Table, EveryColumnFromTheFirstMetricOnIsAMetric) {
   const ResultTable t = parse_results_csv("eval_id,seed,label,status,p,m1_a,q\n9,9,,,1,2,3\n", "results.csv");
   EXPECT_EQ(t.params, std::vector<std::string>({"p"}));

@@ -104,6 +104,23 @@ TEST(SetPath, IndexOutOfRangeIsRejected) {
   EXPECT_EQ(d["trajectory"]["moves"].size(), 2u);  // nothing appended
 }
 
+TEST(SetPath, AnIndexBeyondIntsRangeIsOutOfTheListNotACrash) {
+  for (const std::string index : {"2147483648", "99999999999", "99999999999999999999999"}) {
+    auto d = doc();
+    const auto e = set_error(d, "trajectory.moves[" + index + "].target");
+    EXPECT_EQ(e.file(), "study.yaml");
+    EXPECT_EQ(e.key(), "trajectory.moves[" + index + "].target");
+    EXPECT_EQ(e.message(), "index [" + index + "] is not in the list") << e.what();
+  }
+  // As a --set: the same one error, naming --set and the path (from the command line: exit 2).
+  try {
+    (void)ff::parse_assignment("trajectory.moves[99999999999].target=1");
+    ADD_FAILURE() << "accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "--set: trajectory.moves[99999999999].target: index [99999999999] is not in the list");
+  }
+}
+
 TEST(SetPath, IndexIntoAMapIsRejected) {
   auto d = doc();
   const auto e = set_error(d, "payload[0]");

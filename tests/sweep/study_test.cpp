@@ -420,6 +420,33 @@ TEST_F(StudyFiles, DesignOverTheVariantLimitIsRefusedBeforeItIsDrawn) {
   EXPECT_NE(e.message().find("2000000 variants, over the limit of 1000000"), std::string::npos) << e.what();
 }
 
+// A range's levels are made as it is read: its count is held to the variant limit first, with the
+// ranges before it (a grid or centered design has at least 1 + the sum of count - 1 rows), whatever the
+// design.
+TEST_F(StudyFiles, ARangeCountOverTheLimitIsRefusedBeforeItsLevelsAreMade) {
+  for (const std::string design : {"grid", "centered", "monte_carlo"}) {
+    const auto path = write("s.yaml", "model: " + kModel +
+                                          "\nvariables:\n  - path: payload.mass\n    range: {lower: 1, upper: 2, count: 2000000000}\n"
+                                          "    distribution: {type: uniform, lower: 1, upper: 2}\ndesign: {type: " + design + ", samples: 4}\n");
+    const auto e = load_error(path);
+    EXPECT_EQ(e.key(), "variables[0].range.count") << design;
+    EXPECT_EQ(e.line(), 4) << design;
+    EXPECT_EQ(e.message(), "2000000000 levels take the study's ranges over 1000000 variants, its limit (a grid or centered "
+                           "design has at least 1 + the sum of count - 1)")
+        << design;
+  }
+  // Two ranges within the limit each, over it together: the second is named. At the limit, the centered
+  // design (the centre and 3 + 3 levels off it) is read.
+  const auto two = write("t.yaml", "model: " + kModel +
+                                       "\nvariables:\n  - path: payload.mass\n    range: {lower: 1, upper: 2, count: 4}\n"
+                                       "  - path: payload.inertia\n    range: {lower: 1, upper: 2, count: 4}\ndesign: {type: centered}\n");
+  EXPECT_EQ(ff::read_study(two, 7).variants.size(), 7u);
+  const auto e = read_error(two, 6);
+  EXPECT_EQ(e.key(), "variables[1].range.count");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(e.message().find("4 levels take the study's ranges over 6 variants"), std::string::npos) << e.what();
+}
+
 // The limit counts the design's rows times its cases, and a list of runs.
 TEST_F(StudyFiles, CasesAndRunsCountTowardsTheVariantLimit) {
   const auto crossed = write("c.yaml", "model: " + kModel +

@@ -59,6 +59,27 @@ TEST_F(Records, MissingColumnIsNamed) {
   EXPECT_EQ(e.key(), "ref");
 }
 
+TEST_F(Records, AByteOrderMarkBeforeTheHeaderIsSkipped) {
+  // As a spreadsheet program saves CSV as "UTF-8": the mark would join the name of the first column, 't'.
+  const Record r = read_record_csv(write(50, "\xEF\xBB\xBFt,hub_angle,hub_torque"), {"hub_angle", "hub_torque"});
+  ASSERT_EQ(r.size(), 50u);
+  EXPECT_DOUBLE_EQ(r.t[10], 0.1);
+  EXPECT_DOUBLE_EQ(r.at("hub_angle")[10], 0.1);
+}
+
+TEST_F(Records, TwoColumnsOfOneNameAreRefusedNotReadLastWins) {
+  // hub_angle,hub_torque and the torque again: compare would fit whichever column came last.
+  const auto path = (dir / "r.csv").string();
+  {
+    std::ofstream out(path);
+    out << "t,hub_torque,hub_angle,hub_torque\n";
+    for (int k = 0; k < 50; ++k) out << k / 100.0 << ",1," << 0.01 * k << ",-1\n";
+  }
+  const auto e = error_of(path);
+  EXPECT_STREQ(e.what(), (path + ":1: hub_torque: columns 2 and 4 are both named 'hub_torque': each column needs "
+                                 "its own name").c_str());
+}
+
 TEST_F(Records, TimeThatDoesNotIncreaseNamesItsLine) {
   const auto e = error_of(write(50, "t,hub_angle,hub_torque", 5, "0.03,0.05,1"));
   EXPECT_EQ(e.line(), 7);
