@@ -109,7 +109,18 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
     }
   }
   if (!page.diff_md.empty()) write_file_atomic(dir + "/diff.md", page.diff_md);
-  if (!hist.empty() && history_error.empty()) {
+  // A --resume of a run already finished and recorded (a requeued job): the same run, recorded once.
+  if (!hist.empty() && history_error.empty() && !record.started.empty()) {
+    try {
+      for (const RunRecord& r : list_runs(hist, record.study_path))
+        if (r.out == record.out && r.started == record.started && r.study_hash == record.study_hash) record.id = r.id;
+    } catch (const std::runtime_error& e) {
+      history_error = e.what();
+    }
+    if (record.id > 0) print_safe(stdout, "already recorded as run %ld in %s/history.sqlite\n", record.id, hist.c_str());
+  }
+  bool reported = false;  // report.html written with the record, in its transaction
+  if (!hist.empty() && history_error.empty() && record.id == 0) {
     bool reporting = false;  // report.html failing (a full disk) is the run's error: nothing is recorded
     try {
       page.record = record;
@@ -119,13 +130,14 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
         write_report_html(dir, page);
         reporting = false;
       });
+      reported = true;
       print_safe(stdout, "recorded as run %ld in %s/history.sqlite\n", record.id, hist.c_str());
     } catch (const std::runtime_error& e) {
       if (reporting) throw;
       history_error = e.what();
     }
   }
-  if (record.id == 0) {
+  if (!reported) {
     if (!history_error.empty()) {
       page.diff_note = "The run history was not updated: " + history_error;
       print_safe(stderr, "flexfarm: warning: the run history was not updated: %s\n", history_error.c_str());

@@ -10,6 +10,7 @@
 #include <variant>
 #include <vector>
 
+#include "common/files.hpp"  // is_blank_path
 #include "common/yaml_reader.hpp"
 #include <Eigen/Core>
 
@@ -97,7 +98,7 @@ void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) 
                           },
                           [&](std::string T::*m) {
                             r.optional(f.key, out.*m);
-                            if ((out.*m).empty()) r.fail(f.key, "must not be empty");
+                            if (is_blank_path(out.*m)) r.fail(f.key, "must not be empty or blank");  // a path ("  ": no file)
                           }},
                f.member);
   }

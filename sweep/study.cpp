@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "common/errors.hpp"
+#include "common/files.hpp"
 #include "kernel/model_io.hpp"
 #include "common/yaml_reader.hpp"
 #include "common/random.hpp"
@@ -385,6 +386,7 @@ Study read_study(const std::string& path, int max_variants) {
   std::string model;
   if (!top.has("model")) top.fail("model", "missing required value (path of the model YAML, relative to this file)");
   top.optional("model", model);
+  if (is_blank_path(model)) top.fail("model", "must not be empty or blank (the path of the model YAML)");  // not this directory
   st.model_path = (std::filesystem::path(path).parent_path() / model).lexically_normal().string();
   if (!std::filesystem::exists(st.model_path)) top.fail("model", "model file '" + st.model_path + "' does not exist");
   load_yaml_file(st.model_path);  // syntax errors name the model file and line

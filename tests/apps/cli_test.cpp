@@ -715,6 +715,12 @@ TEST_F(Cli, AnEmptyOrBlankPathIsAUsageErrorForEveryVerbAndPathOption) {
     }
   for (const char* root : {"/journal-main.csv", "/journal-main.lock", "/timings-main.csv", "/traces"})
     EXPECT_FALSE(fs::exists(root)) << root;
+  // A path in a file, blank: one line naming the file, line and key.
+  write("blank_model.yaml", "name: s\nmodel: \"  \"\nruns:\n  - label: a\n");
+  expect_one_error_line(run("run blank_model.yaml --out o"), "blank_model.yaml:2: model: must not be empty or blank");
+  write("blank_urdf.yaml", "urdf: \" \"\n");
+  expect_one_error_line(run("modes blank_urdf.yaml"), "blank_urdf.yaml:1: urdf: must not be empty or blank");
+  EXPECT_FALSE(fs::exists(work / "o"));
   // A history directory from a variable set blank: the same, before anything runs.
   const auto r = run_shell("FLEXFARM_HISTORY='  ' " + quote(kBinary) + " run s.yaml --out o");
   expect_one_error_line(r, "$FLEXFARM_HISTORY: a blank path; unset it or give --history DIR");

@@ -1016,6 +1016,12 @@ TEST_F(Farm, ARunIsRecordedOnceFinishedWithTheWallTimeOfEveryAttempt) {
   const auto record = flexfarm("history 1 --history history");
   EXPECT_NE(record.output.find("| started | " + first[1] + " |"), std::string::npos) << record.output;
   EXPECT_NE(read_text(dir / "out" / "report.html").find(", run 1 of the history"), std::string::npos);
+  // Resumed once more, finished already (a requeued job): the same run, not recorded again.
+  const auto again = flexfarm("run small.yaml --out out --resume --history history");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("already recorded as run 1 in history/history.sqlite"), std::string::npos) << again.output;
+  EXPECT_EQ(flexfarm("history --history history").lines().size(), 3u);
+  EXPECT_NE(read_text(dir / "out" / "report.html").find(", run 1 of the history"), std::string::npos);
 }
 
 // (#32.5) An output directory shared with others: links planted at the temporaries' old names
