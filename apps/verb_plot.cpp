@@ -61,7 +61,7 @@ void add_plot_verb(CLI::App& app) {
             return std::move(simulate_arms(std::span<const ArmModel>(&m, 1)).traces[0]);
           },
           write_arm_trace_csv);
-      for (const std::string& f : write_arm_plots(args->out, labels, ptrs, study.name)) files += (files.empty() ? "" : ",") + f;
+      for (const std::string& f : write_arm_plots(args->out, labels, ptrs, study.name, study.arm_nominal)) files += (files.empty() ? "" : ",") + f;
     } else {
       const auto [traces, ptrs] = run_each(
           [&](int id) {

@@ -84,8 +84,9 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
   RunRecord record = make_run_record(study, table, dir, ctx);
   ReportPage page;
   page.description = study.description;
-  page.table_md = write_study_report(study, table, dir, record);
-  print_safe(stdout, "%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", page.table_md.c_str(), dir.c_str());
+  const StudyReport report = write_study_report(study, table, dir, record);
+  page.results_md = report.results;
+  print_safe(stdout, "%s\nwrote %s/results.csv, results.sqlite, table.md and plots\n", report.md().c_str(), dir.c_str());
   page.diff_note = hist.empty() ? "Not recorded in a run history (--no-history, or no home directory)."
                                 : "The first run of this study in the history " + hist + ".";
   // The results stand without the history: a history that cannot be read or written is a warning.
@@ -96,6 +97,7 @@ void finish_study(const Study& study, const std::string& dir, const RunContext& 
         if (std::filesystem::exists(previous->out + "/results.sqlite")) {
           const RunDiff d = diff_runs(read_run_dir(*previous), RunDir{record, table}, study.tolerances, study.requirements, study.specs);
           page.diff_md = format_diff_md(d);
+          page.regressions = d.regressions;
           print_safe(stdout, "compared with %s: %s (%s/diff.md)\n", previous->describe().c_str(),
                      d.regressions.empty() ? "nothing got worse" : (std::to_string(d.regressions.size()) + " regression(s)").c_str(),
                      dir.c_str());

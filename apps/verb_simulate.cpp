@@ -44,7 +44,8 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
   write_arm_trace_csv(run.traces[0], out + "/trace.csv");
   write_file_atomic(out + "/metrics.csv", format_results_csv(table));
   write_file_atomic(out + "/table.md", md);
-  const std::vector<std::string> plots = write_arm_plots(out, {"simulation"}, {&run.traces[0]}, m.spec.description.empty() ? "simulation" : m.spec.description);
+  const std::vector<std::string> plots =
+      write_arm_plots(out, {"simulation"}, {&run.traces[0]}, m.spec.description.empty() ? "simulation" : m.spec.description, m);
   std::string files = "trace.csv, metrics.csv, table.md";
   for (const std::string& p : plots) files += ", " + p;
   print_safe(stdout, "%s\nstatus: %s\nwrote %s/{%s}\n", md.c_str(), row.status.c_str(), out.c_str(), files.c_str());

@@ -13,7 +13,7 @@
 #include "kernel/batch.hpp"
 #include "common/files.hpp"
 #include "plotting/view_arm.hpp"
-#include "results/sqlite.hpp"
+#include "results/history.hpp"
 #include "results/table.hpp"
 #include "sweep/study.hpp"
 
@@ -51,26 +51,47 @@ void print_written(const std::string& out, const ViewScene& s) {
   print_safe(stdout, "\n");
 }
 
+// Whether two arms play on one time base: the same waypoint times and duration (a trade study's other
+// move times would play out of step beside the solid one: an unreadable fan).
+bool same_time_base(const ArmModel& a, const ArmModel& b) {
+  const auto& wa = a.trajectory.waypoints;
+  const auto& wb = b.trajectory.waypoints;
+  return a.duration == b.duration && wa.size() == wb.size() &&
+         std::equal(wa.begin(), wa.end(), wb.begin(), [](const auto& x, const auto& y) { return x.time == y.time; });
+}
+
+// `count` of `ids` (all if fewer), evenly spaced over them, in their order.
+std::vector<int> spread(const std::vector<int>& ids, int count) {
+  const std::size_t m = ids.size(), k = std::min(m, static_cast<std::size_t>(std::max(count, 0)));
+  std::vector<int> out;
+  for (std::size_t j = 0; j < k; ++j) out.push_back(ids[j * m / k]);  // j * m / k < m, and increasing
+  return out;
+}
+
 // The variants of `study` shown: `solid` (-1: of those shown, the one that comes closest) and up to
-// a.ghosts others, evenly spaced over the eval_ids.
+// a.ghosts others, evenly spaced over the eval_ids of the variants on the solid one's time base (without
+// `solid`, eval_id 0's); the others are left out, and the count said.
 void view_study(const Study& study, int solid, const ViewArgs& a) {
   if (!study.arm) throw CLI::ValidationError("input", "the viewer shows arm models; this study's model is the reference rig");
   const int n = static_cast<int>(study.variants.size());
   if (solid >= n) throw CLI::ValidationError("--eval", "the study has eval_ids 0.." + std::to_string(n - 1));
-  std::vector<int> ids;
-  if (solid >= 0) ids.push_back(solid);
-  const int others = std::min(a.ghosts + (solid >= 0 ? 0 : 1), n - (solid >= 0 ? 1 : 0));
-  for (int i = 0, k = 0; k < others && i < n; ++i) {
-    const int id = static_cast<int>(std::floor(static_cast<double>(i) * n / std::max(others, 1)));
-    if (id == solid || std::find(ids.begin(), ids.end(), id) != ids.end()) continue;
-    ids.push_back(id);
-    ++k;
-  }
+  std::vector<ArmModel> arms;
+  for (const Variant& v : study.variants) arms.push_back(make_variant_arm(study, v));
+  const ArmModel& base = arms[static_cast<std::size_t>(std::max(solid, 0))];
+  std::vector<int> shared;  // on base's time base, solid apart
+  for (int i = 0; i < n; ++i)
+    if (i != solid && same_time_base(arms[static_cast<std::size_t>(i)], base)) shared.push_back(i);
+  std::vector<int> ids = spread(shared, a.ghosts + (solid >= 0 ? 0 : 1));
+  if (solid >= 0) ids.insert(ids.begin(), solid);
+  const int others = n - 1 - static_cast<int>(shared.size()) + (solid >= 0 ? 0 : 1);
+  if (others > 0)
+    std::fprintf(stderr, "view: %d of the %d variants move on another time base (waypoint times, duration) than "
+                         "variant %d: not ghosted\n", others, n, std::max(solid, 0));
   std::vector<ViewVariant> variants;
   ViewScene scene;
   for (std::size_t i = 0; i < ids.size(); ++i) {
     const Variant& v = study.variants[static_cast<std::size_t>(ids[i])];
-    const ArmModel m = make_variant_arm(study, v);
+    const ArmModel& m = arms[static_cast<std::size_t>(ids[i])];
     if (i == 0) scene = make_arm_view_scene(m, study.name);
     std::fprintf(stderr, "\rview: simulating %zu/%zu", i + 1, ids.size());
     variants.push_back(run_view_variant(m, "variant " + std::to_string(ids[i]) + ": " + v.label));
@@ -88,37 +109,32 @@ void view_study(const Study& study, int solid, const ViewArgs& a) {
   print_written(a.out, scene);
 }
 
-// A finished run (the output directory of `flexfarm run`): its study, as results.sqlite names it (checked
-// against the run's fingerprint), and the variant shown solid: --eval's, or the one whose result has
-// the least clearance (without a world: eval_id 0).
+// A finished run (the output directory of `flexfarm run`, read as `flexfarm diff` reads it): its study,
+// as the run named it (checked against the run's fingerprint), and the variant shown solid: --eval's, or
+// the one whose result has the least clearance (without a world: eval_id 0).
 void view_run(const ViewArgs& a) {
-  const std::string db_path = a.input + "/results.sqlite", csv_path = a.input + "/results.csv";
-  if (!std::filesystem::exists(db_path) || !std::filesystem::exists(csv_path))
-    throw ExitError(a.input + " is not a finished run's output directory (no results.sqlite and results.csv)", 2);
-  std::map<std::string, std::string> info;
-  {
-    SqliteDb db(db_path);
-    SqliteStmt st = db.prepare("SELECT key, value FROM study");
-    while (db.next_row(st.get()))
-      info[reinterpret_cast<const char*>(sqlite3_column_text(st.get(), 0))] =
-          reinterpret_cast<const char*>(sqlite3_column_text(st.get(), 1));
+  RunDir run;
+  try {
+    run = read_run_dir(a.input);
+  } catch (const std::runtime_error& e) {
+    throw ExitError(e.what(), 2);
   }
-  const std::string source = info["study"];
-  if (source.empty() || !std::filesystem::exists(source))
+  const std::string& source = run.record.study_path;
+  if (source.empty() || !std::filesystem::is_regular_file(source))
     throw ExitError(a.input + "'s study '" + source + "' (as the run named it) is not found from here: give the study file instead", 2);
   const Study study = load_study(source);
-  if (study.hash != info["hash"])
+  if (study.hash != run.record.study_hash)
     throw ExitError(source + " has changed since the run in " + a.input + ": give the study file instead", 2);
   int solid = a.eval_id;
   if (solid < 0) {
     solid = 0;
-    const ResultTable t = parse_results_csv(read_file(csv_path), csv_path);
+    const ResultTable& t = run.table;
     const auto c = std::find(t.columns.begin(), t.columns.end(), "min_clearance_m");
     if (c != t.columns.end()) {
       const std::size_t at = static_cast<std::size_t>(c - t.columns.begin());
       double least = INFINITY;
       for (const ResultRow& r : t.rows)
-        if (r.values[at] < least) least = r.values[at], solid = r.eval_id;
+        if (r.values[at] < least && r.eval_id >= 0) least = r.values[at], solid = r.eval_id;
     }
   }
   view_study(study, solid, a);

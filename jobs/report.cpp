@@ -31,6 +31,13 @@ void write_trace_plots(const std::string& dir, const std::vector<std::string>& l
     double scale;
     const std::vector<double> Trace::*member;
   };
+  // The angles' reference (the first trace's) and the settling band about its final target: ±2 % of the
+  // last move's amplitude (kernel/metrics.hpp), from where that move starts.
+  const std::vector<double>& ref = traces.empty() ? std::vector<double>{} : traces.front()->ref;
+  std::size_t move = ref.size();  // the last sample not at the final target, then the last move's start
+  while (move > 0 && ref[move - 1] == ref.back()) --move;
+  while (move > 1 && ref[move - 1] != ref[move - 2]) --move;
+  const double amplitude = move > 0 ? std::abs(ref.back() - ref[move - 1]) : 0.0;  // rad
   const Signal signals[] = {
       {"tip_angle", "tip angle (rad)", 1.0, &Trace::tip_angle},
       {"hub_angle", "hub angle (rad)", 1.0, &Trace::hub_angle},
@@ -51,12 +58,38 @@ void write_trace_plots(const std::string& dir, const std::vector<std::string>& l
       for (auto& y : s.y) y *= sig.scale;
       p.series.push_back(std::move(s));
     }
+    if (!traces.empty() && (sig.member == &Trace::tip_angle || sig.member == &Trace::hub_angle)) {
+      Series r{.label = "reference", .x = traces.front()->t, .y = ref, .colour = 6, .width = 1.5, .dashed = true};  // black
+      p.series.push_back(std::move(r));
+      if (amplitude > 0)
+        p.hlines = {{ref.back() + 0.02 * amplitude, "target ±2 % of the move"}, {ref.back() - 0.02 * amplitude, ""}};
+    }
     render_line_plot(p, dir + "/" + sig.file + ".png");
   }
 }
 
+namespace {
+
+// An axis over joints: "joint angle (rad)", "joint position (m)", or both, naming the prismatic joints
+// ("joint angle (rad) or position (m: lift)"); `revolute` and `prismatic` name the quantity and unit.
+std::string joint_axis(const ArmModel& arm, const std::vector<std::string>& joints, const std::string& revolute,
+                       const std::string& prismatic) {
+  std::string slides;
+  std::size_t n = 0;
+  for (const std::string& j : joints)
+    if (is_prismatic(arm, j)) slides += (n++ ? ", " : "") + j;
+  if (n == 0) return "joint " + revolute;
+  if (n == joints.size()) return "joint " + prismatic;
+  const std::size_t open = prismatic.find(" (");
+  return "joint " + revolute + " or " + prismatic.substr(0, open) + " (" +
+         prismatic.substr(open + 2, prismatic.size() - open - 3) + ": " + slides + ")";
+}
+
+}  // namespace
+
 std::vector<std::string> write_arm_plots(const std::string& dir, const std::vector<std::string>& labels,
-                                         const std::vector<const ArmTrace*>& traces, const std::string& title) {
+                                         const std::vector<const ArmTrace*>& traces, const std::string& title,
+                                         const ArmModel& arm) {
   std::vector<std::string> written;
   if (traces.empty()) return written;
   const ArmTrace& first = *traces.front();
@@ -77,7 +110,7 @@ std::vector<std::string> write_arm_plots(const std::string& dir, const std::vect
     written.push_back(file);
   };
   // One colour per joint for one trace; per trace (the joints dashed apart) for several.
-  plot("joints.png", "joint angle (rad or m)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+  plot("joints.png", joint_axis(arm, joints, "angle (rad)", "position (m)"), [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
     for (std::size_t j = 0; j < joints.size(); ++j) {
       Series q{.label = many ? label + " " + joints[j] : joints[j], .x = tr.t(), .y = tr.column(joints[j] + ".q")};
       Series r{.label = many ? "" : joints[j] + " reference", .x = tr.t(), .y = tr.column(joints[j] + ".ref")};
@@ -88,7 +121,7 @@ std::vector<std::string> write_arm_plots(const std::string& dir, const std::vect
       p.series.push_back(std::move(r));
     }
   });
-  plot("torques.png", "joint torque (N m or N)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+  plot("torques.png", joint_axis(arm, joints, "torque (N m)", "force (N)"), [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
     for (const std::string& j : joints)
       p.series.push_back({.label = many ? label + " " + j : j, .x = tr.t(), .y = tr.column(j + ".torque")});
   });
@@ -112,15 +145,32 @@ std::vector<std::string> write_arm_plots(const std::string& dir, const std::vect
            p.series.push_back(std::move(e));
          }
        });
+  // Signed, along each link's y and z (its own frame), so a swing's overshoot shows on the other side;
+  // a component that stays below 1 µm in every trace (a planar arm's z) is left out.
+  const auto moves = [&](const std::string& column) {
+    for (const ArmTrace* tr : traces)
+      for (double v : tr->column(column))
+        if (std::abs(v) > 1e-6) return true;
+    return false;
+  };
   if (!links.empty())
-    plot("deflection.png", "link tip deflection (mm)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
-      for (const std::string& l : links) {
-        Series d{.label = many ? label + " " + l : l, .x = tr.t(), .y = {}};
-        const auto& y = tr.column(l + ".deflection_y");
-        const auto& z = tr.column(l + ".deflection_z");
-        for (std::size_t k = 0; k < y.size(); ++k) d.y.push_back(1e3 * std::hypot(y[k], z[k]));
-        p.series.push_back(std::move(d));
-      }
+    plot("deflection.png", "link tip deflection, signed (mm)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+      for (const std::string& l : links)
+        for (const char* axis : {"y", "z"}) {
+          const std::string column = l + ".deflection_" + axis;
+          if (!moves(column)) continue;
+          Series d{.label = (many ? label + " " : "") + l + " " + axis, .x = tr.t(), .y = tr.column(column)};
+          for (double& v : d.y) v *= 1e3;
+          d.dashed = axis[0] == 'z';
+          p.series.push_back(std::move(d));
+        }
+    });
+  // With a world: the arm's least clearance to it (and between parts) over time.
+  if (std::find(first.names.begin(), first.names.end(), "clearance") != first.names.end())
+    plot("clearance.png", "least clearance (mm; below 0: contact)", [&](LinePlot& p, const ArmTrace& tr, const std::string& label) {
+      Series c{.label = many ? label : "least clearance", .x = tr.t(), .y = tr.column("clearance")};
+      for (double& v : c.y) v *= 1e3;
+      p.series.push_back(std::move(c));
     });
   return written;
 }
@@ -158,12 +208,21 @@ KeyMetrics key_metrics(const ResultTable& t) {
   return k;
 }
 
-// A heat map over parameters x and y of the table: each cell's value from its rows (NaN: none).
+// What each point of a plot over the first `shown` parameters is taken over: " over a, b" naming the
+// others, or "" when there are none (each point is one variant).
+std::string over_others(const std::vector<std::string>& params, std::size_t shown) {
+  std::string out;
+  for (std::size_t i = shown; i < params.size(); ++i) out += (i > shown ? ", " : " over ") + params[i];
+  return out;
+}
+
+// A heat map over parameters x and y of the table, axes with their units: each cell's value from its rows
+// (NaN: none).
 template <class Cell>
-HeatMap make_heat_map(const ResultTable& t, const std::string& x, const std::string& y, const Cell& cell) {
+HeatMap make_heat_map(const Study& study, const ResultTable& t, const std::string& x, const std::string& y, const Cell& cell) {
   HeatMap h;
-  h.x_label = x;
-  h.y_label = y;
+  h.x_label = parameter_axis_label(study, x);
+  h.y_label = parameter_axis_label(study, y);
   const auto groups = make_groups({column_values(t, x), column_values(t, y)});
   for (const auto& g : groups) {
     if (std::find(h.x.begin(), h.x.end(), g.key[0]) == h.x.end()) h.x.push_back(g.key[0]);
@@ -189,13 +248,13 @@ std::string report_clearance_grid(const Study& study, const ResultTable& t, cons
                           {"min_clearance_m", "contact"}, study.specs);
   if (p.size() >= 2) {
     const auto clearance = column_values(t, "min_clearance_m");
-    HeatMap h = make_heat_map(t, p[0], p[1], [&](const std::vector<int>& rows) {
+    HeatMap h = make_heat_map(study, t, p[0], p[1], [&](const std::vector<int>& rows) {
       double least = INFINITY;
       for (int r : rows) least = std::min(least, clearance[r]);
       return least;
     });
     h.title = std::string("least clearance of the arm (m; <= 0: contact)") +
-              (p.size() > 2 ? ", the least over the other parameters" : "");
+              (p.size() > 2 ? ", the least" + over_others(p, 2) : "");
     h.value_label = "least clearance (m)";
     render_heat_map(h, dir + "/heatmap_clearance.png");
     md += "Heat map: heatmap_clearance.png.\n\n";
@@ -230,12 +289,15 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   for (std::size_t r = 0; r < settle.size() && !horizon.empty(); ++r) censored |= std::isnan(settle[r]) && !std::isnan(horizon[r]);
   if (p.size() >= 2) {
     // Heat map: mean settling over the other parameters (restricted mean where some did not settle).
-    HeatMap h = make_heat_map(t, p[0], p[1], [&](const std::vector<int>& rows) {
+    HeatMap h = make_heat_map(study, t, p[0], p[1], [&](const std::vector<int>& rows) {
       const Summary s = summary_of(rows);
       return at_most_horizon(s.mean, s);
     });
-    h.title = censored ? km.what + " settling time (restricted mean over the other parameters; not settled counted at the horizon)"
-                       : km.what + " settling time (mean over the other parameters)";
+    const std::string over = over_others(p, 2);
+    h.title = censored ? km.what + " settling time (" + (over.empty() ? "" : "restricted mean" + over + "; ") +
+                             "not settled counted at the horizon)"
+          : over.empty() ? km.what + " settling time"
+                         : km.what + " settling time (mean" + over + ")";
     h.value_label = km.what + " settling time (s)";
     render_heat_map(h, dir + "/heatmap_settling.png");
   }
@@ -243,11 +305,13 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   for (const auto& name : p) {
     BandPlot b;
     b.title = km.what + " settling time against " + name;
-    b.x_label = name;
+    b.x_label = parameter_axis_label(study, name);
     b.y_label = km.what + " settling time (s)";
+    std::vector<std::string> rest;  // the other parameters, the band's spread
+    for (const std::string& q : p)
+      if (q != name) rest.push_back(q);
     BandSeries series;
-    series.label = censored ? "p50, band p5-p95 over the other parameters (Kaplan-Meier; above the horizon: at it)"
-                            : "p50, band p5-p95 over the other parameters";
+    series.label = "p50, band p5-p95" + over_others(rest, 0) + (censored ? " (Kaplan-Meier; above the horizon: at it)" : "");
     for (const auto& g : make_groups({column_values(t, name)})) {
       const Summary s = summary_of(g.rows);
       series.x.push_back(g.key[0]);
@@ -297,8 +361,8 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
     for (std::size_t i = 0; i < xs.size(); ++i) md += "---|";
     md += "\n";
     LinePlot plot;
-    plot.title = std::string(title) + " against " + x_name;
-    plot.x_label = x_name;
+    plot.title = std::string(title) + " against " + x_name + (t.params.size() > 2 ? ", mean" + over_others(t.params, 2) : "");
+    plot.x_label = parameter_axis_label(study, x_name);
     plot.y_label = title;
     // Cells where nothing settled are crosses above a dashed line over the highest value, one row per case.
     double top = 0.0;
@@ -471,7 +535,7 @@ std::string format_study_requirements_md(const Study& study, const ResultTable& 
   return md + conf + format_requirements_md(verdicts);
 }
 
-std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir, const RunRecord& record) {
+StudyReport write_study_report(const Study& study, const ResultTable& table, const std::string& dir, const RunRecord& record) {
   write_file_atomic(dir + "/results.csv", format_results_csv(table));
   // results.sqlite is the same bits for the same results; what differs from run to run goes in run.yaml.
   write_results_sqlite(table, {{"name", study.name}, {"study", study.source}, {"model", study.model_path}, {"hash", study.hash}},
@@ -479,7 +543,8 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
   write_file_atomic(dir + "/run.yaml", format_run_yaml(record));
 
   // Readable table: per run and move when the runs are few, a summary of every metric otherwise.
-  std::string md = "# " + study.name + "\n\n" + (study.description.empty() ? "" : study.description + "\n\n");
+  StudyReport report{"# " + study.name + "\n\n" + (study.description.empty() ? "" : study.description + "\n\n"), "", ""};
+  std::string& md = report.results;
   const auto& n = record.status;
   char status[256];
   std::snprintf(status, sizeof status, "%zu variants: %d ok, %d not settled, %d nonfinite, %d solver failures%s.\n\n",
@@ -526,8 +591,8 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     }
     md += "\n## Every metric\n\n" + format_groupby_md(table, {}, table.columns, study.specs);
   }
-  md += format_study_requirements_md(study, table, record.verdicts);
-  write_file_atomic(dir + "/table.md", md);
+  report.requirements = format_study_requirements_md(study, table, record.verdicts);
+  write_file_atomic(dir + "/table.md", report.md());
 
   // Time series of every variant whose trace is on disk, when they are few enough to tell apart.
   if (study.arm) {
@@ -543,9 +608,9 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     if (!traces.empty() && traces.size() == table.rows.size()) {
       std::vector<const ArmTrace*> ptrs;
       for (const auto& t : traces) ptrs.push_back(&t);
-      write_arm_plots(dir, labels, ptrs, study.name);
+      write_arm_plots(dir, labels, ptrs, study.name, study.arm_nominal);
     }
-    return md;
+    return report;
   }
   std::vector<Trace> traces;
   std::vector<std::string> labels;
@@ -561,7 +626,7 @@ std::string write_study_report(const Study& study, const ResultTable& table, con
     for (const auto& t : traces) ptrs.push_back(&t);
     write_trace_plots(dir, labels, ptrs, study.name);
   }
-  return md;
+  return report;
 }
 
 }  // namespace ff

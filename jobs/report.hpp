@@ -17,12 +17,15 @@ namespace ff {
 void write_trace_plots(const std::string& dir, const std::vector<std::string>& labels,
                        const std::vector<const Trace*>& traces, const std::string& title);
 
-// Plots of arm traces (arm/arm_simulate.hpp) against time, one line per trace: DIR/joints.png (each
-// actuated joint's angle and, dashed, its reference), DIR/torques.png, DIR/tool_error.png (|tool -
-// where the rigid arm at the reference puts it|, mm) and, with flexible links, DIR/deflection.png (each
-// link tip's |deflection|, mm). Returns the file names written.
+// Plots of arm traces (arm/arm_simulate.hpp) of arms like `arm` (its joints' types) against time, one line per
+// trace: DIR/joints.png (each actuated joint's angle, rad, or a prismatic joint's position, m, and
+// dashed its reference), DIR/torques.png (N·m, or N), DIR/tool_error.png (|tool - where the rigid arm
+// at the reference puts it|, mm), with flexible links DIR/deflection.png (each link tip's deflection
+// along its y and z, signed, mm; a component that stays 0 left out) and with a world
+// DIR/clearance.png (the arm's least clearance, mm; below 0: contact). Returns the file names written.
 std::vector<std::string> write_arm_plots(const std::string& dir, const std::vector<std::string>& labels,
-                                         const std::vector<const ArmTrace*>& traces, const std::string& title);
+                                         const std::vector<const ArmTrace*>& traces, const std::string& title,
+                                         const ArmModel& arm);
 
 // How a run ran, beyond its study and results: when it started (UTC, "" when not known), its wall
 // time so far and how it was spread.
@@ -36,9 +39,15 @@ struct RunContext {
 // times, counts by status and per-metric summaries; finished now.
 RunRecord make_run_record(const Study& study, const ResultTable& table, const std::string& dir, const RunContext& ctx);
 
-// Writes everything into `dir` (run.yaml holds `record`); returns the Markdown table it also wrote to
-// table.md.
-std::string write_study_report(const Study& study, const ResultTable& table, const std::string& dir,
+// table.md in its parts: the title and description, the results (tables of the variants, every metric,
+// by case or parameter), the requirements' verdicts (report.html shows the first and last its own way).
+struct StudyReport {
+  std::string head, results, requirements;
+  std::string md() const { return head + results + requirements; }
+};
+
+// Writes everything into `dir` (run.yaml holds `record`); returns the Markdown it also wrote to table.md.
+StudyReport write_study_report(const Study& study, const ResultTable& table, const std::string& dir,
                                const RunRecord& record);
 
 // table.md's "## Requirements" section: `verdicts` (calc_study_verdicts, jobs/farm.hpp, on `table`), and

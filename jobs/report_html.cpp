@@ -176,10 +176,16 @@ void write_report_html(const std::string& dir, const ReportPage& page) {
   }
   b += "<span class=\"badge\">" + std::to_string(r.variants) + (r.planned > r.variants ? " of " + std::to_string(r.planned) : "") +
        " variants, " + std::to_string(r.status.count("ok") ? r.status.at("ok") : 0) + " ok</span>\n";
-  if (!page.diff_md.empty()) {
-    const bool worse = page.diff_md.find("\nNothing got worse.") == std::string::npos;
-    b += std::string("<span class=\"badge ") + (worse ? "fail" : "pass") + "\">" +
-         (worse ? "regressions since the last run" : "nothing worse than the last run") + "</span>\n";
+  if (!page.diff_md.empty() && page.regressions.empty()) b += "<span class=\"badge pass\">nothing worse than the last run</span>\n";
+  if (!page.diff_md.empty() && !page.regressions.empty()) {
+    // Named by what got worse (a regression's text up to its first ": "), each whole in the tooltip.
+    std::string names, whole;
+    for (const std::string& g : page.regressions) {
+      names += (names.empty() ? "" : "; ") + g.substr(0, g.find(": "));
+      whole += (whole.empty() ? "" : "\n") + g;
+    }
+    b += "<span class=\"badge fail\" title=\"" + html_escape(whole) + "\">regressions since the last run (" +
+         std::to_string(page.regressions.size()) + "): " + html_escape(names) + "</span>\n";
   }
   b += "</div>\n";
 
@@ -201,7 +207,7 @@ void write_report_html(const std::string& dir, const ReportPage& page) {
   b += "<h2 id=\"changes\">Since the last run</h2>\n";
   b += page.diff_md.empty() ? "<p>" + html_escape(page.diff_note) + "</p>\n" : format_markdown_html(page.diff_md);
 
-  b += "<h2 id=\"results\">Results</h2>\n" + format_markdown_html(page.table_md);
+  b += "<h2 id=\"results\">Results</h2>\n" + format_markdown_html(page.results_md);
 
   // Every plot of the run, inlined.
   std::vector<std::string> plots;

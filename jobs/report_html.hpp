@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "results/history.hpp"
 
@@ -13,8 +14,10 @@ namespace ff {
 struct ReportPage {
   RunRecord record;          // provenance and verdicts
   std::string description;   // the study's
-  std::string table_md;      // table.md
+  std::string results_md;    // table.md's results (StudyReport::results: the page has its own title,
+                             // description and requirements)
   std::string diff_md;       // the diff against the previous run (results/diff.hpp); "" when none
+  std::vector<std::string> regressions;  // the diff's (RunDiff::regressions), "metric: what got worse"
   std::string diff_note;     // why there is none ("the first run of this study in the history")
 };
 

@@ -163,13 +163,6 @@ RunRecord parse_run_info(const std::map<std::string, std::string>& info) {
 
 namespace {
 
-std::string column_text(sqlite3_stmt* st, int i) {
-  const unsigned char* s = sqlite3_column_text(st, i);
-  return s ? reinterpret_cast<const char*>(s) : "";
-}
-double column_number(sqlite3_stmt* st, int i) {
-  return sqlite3_column_type(st, i) == SQLITE_NULL ? kStatsNaN : sqlite3_column_double(st, i);
-}
 void bind_number(sqlite3_stmt* st, int i, double x) {
   if (std::isnan(x)) sqlite3_bind_null(st, i);
   else sqlite3_bind_double(st, i, x);
@@ -222,9 +215,7 @@ RunDir read_run_dir(const std::string& dir) {
       throw std::runtime_error(yaml_path + ": not a run record (" + e.what() + ")");
     }
   } else {
-    SqliteDb db(db_path);
-    const SqliteStmt st = db.prepare("SELECT key, value FROM study");
-    while (db.next_row(st.get())) info[column_text(st.get(), 0)] = column_text(st.get(), 1);
+    info = read_results_study_info(db_path);
   }
   RunDir d{parse_run_info(info), parse_results_csv(read_file(csv_path), csv_path)};
   d.record.verdicts = std::move(verdicts);
@@ -280,7 +271,7 @@ struct HistoryDb {
         "CREATE TABLE IF NOT EXISTS verdicts (run_id INTEGER, requirement TEXT, verdict TEXT, estimate REAL, "
         "lower REAL, upper REAL, n INTEGER, more INTEGER, evidence TEXT);");
     const SqliteStmt st = db.prepare("SELECT value FROM meta WHERE key = 'schema'");
-    if (!db.next_row(st.get()) || column_text(st.get(), 0) != kSchema)
+    if (!db.next_row(st.get()) || sqlite_text(st.get(), 0) != kSchema)
       throw std::runtime_error(path + ": not a flexfarm run history (schema " + kSchema + ")");
   }
 };
@@ -289,26 +280,26 @@ std::string history_file(const std::string& dir) { return dir + "/history.sqlite
 
 RunRecord read_run_row(sqlite3_stmt* st) {
   RunRecord r;
-  r.id = sqlite3_column_int64(st, 0);
-  r.study = column_text(st, 1);
-  r.study_path = column_text(st, 2);
-  r.out = column_text(st, 3);
-  r.study_hash = column_text(st, 4);
-  r.study_sha256 = column_text(st, 5);
-  r.model_sha256 = column_text(st, 6);
-  r.model_path = column_text(st, 7);
-  r.version = column_text(st, 8);
-  r.commit = column_text(st, 9);
-  r.host = column_text(st, 10);
-  r.started = column_text(st, 11);
-  r.finished = column_text(st, 12);
-  r.seconds = column_number(st, 13);
-  r.processes = sqlite3_column_int(st, 14);
-  r.threads = sqlite3_column_int(st, 15);
-  r.lanes = sqlite3_column_int(st, 16);
-  r.planned = sqlite3_column_int(st, 17);
-  r.variants = sqlite3_column_int(st, 18);
-  for (int k = 0; k < 5; ++k) r.status[kStatuses[k]] = sqlite3_column_int(st, 19 + k);
+  r.id = sqlite_int(st, 0);
+  r.study = sqlite_text(st, 1);
+  r.study_path = sqlite_text(st, 2);
+  r.out = sqlite_text(st, 3);
+  r.study_hash = sqlite_text(st, 4);
+  r.study_sha256 = sqlite_text(st, 5);
+  r.model_sha256 = sqlite_text(st, 6);
+  r.model_path = sqlite_text(st, 7);
+  r.version = sqlite_text(st, 8);
+  r.commit = sqlite_text(st, 9);
+  r.host = sqlite_text(st, 10);
+  r.started = sqlite_text(st, 11);
+  r.finished = sqlite_text(st, 12);
+  r.seconds = sqlite_real(st, 13);
+  r.processes = static_cast<int>(sqlite_int(st, 14));
+  r.threads = static_cast<int>(sqlite_int(st, 15));
+  r.lanes = static_cast<int>(sqlite_int(st, 16));
+  r.planned = static_cast<int>(sqlite_int(st, 17));
+  r.variants = static_cast<int>(sqlite_int(st, 18));
+  for (int k = 0; k < 5; ++k) r.status[kStatuses[k]] = static_cast<int>(sqlite_int(st, 19 + k));
   return r;
 }
 
@@ -316,26 +307,27 @@ RunRecord read_run_row(sqlite3_stmt* st) {
 void read_details(SqliteDb& db, RunRecord& r) {
   const SqliteStmt in = db.prepare("SELECT name, text FROM inputs WHERE run_id = ?");
   sqlite3_bind_int64(in.get(), 1, r.id);
-  while (db.next_row(in.get())) (column_text(in.get(), 0) == "study" ? r.study_text : r.model_text) = column_text(in.get(), 1);
+  while (db.next_row(in.get())) (sqlite_text(in.get(), 0) == "study" ? r.study_text : r.model_text) = sqlite_text(in.get(), 1);
   const SqliteStmt su = db.prepare(
       "SELECT metric, count, censored, missing, mean, mean_lower, mean_upper, min, p5, p50, p95, max, spec, p_miss, "
       "p_miss_lower, p_miss_upper FROM summaries WHERE run_id = ? ORDER BY rowid");
   sqlite3_bind_int64(su.get(), 1, r.id);
   while (db.next_row(su.get())) {
     sqlite3_stmt* s = su.get();
-    r.summaries.push_back({column_text(s, 0), sqlite3_column_int(s, 1), sqlite3_column_int(s, 2), sqlite3_column_int(s, 3),
-                           column_number(s, 4), column_number(s, 5), column_number(s, 6), column_number(s, 7),
-                           column_number(s, 8), column_number(s, 9), column_number(s, 10), column_number(s, 11),
-                           column_number(s, 12), column_number(s, 13), column_number(s, 14), column_number(s, 15)});
+    const auto count = [s](int col) { return static_cast<int>(sqlite_int(s, col)); };
+    r.summaries.push_back({sqlite_text(s, 0), count(1), count(2), count(3),
+                           sqlite_real(s, 4), sqlite_real(s, 5), sqlite_real(s, 6), sqlite_real(s, 7),
+                           sqlite_real(s, 8), sqlite_real(s, 9), sqlite_real(s, 10), sqlite_real(s, 11),
+                           sqlite_real(s, 12), sqlite_real(s, 13), sqlite_real(s, 14), sqlite_real(s, 15)});
   }
   const SqliteStmt ve = db.prepare(
       "SELECT requirement, verdict, estimate, lower, upper, n, more, evidence FROM verdicts WHERE run_id = ? ORDER BY rowid");
   sqlite3_bind_int64(ve.get(), 1, r.id);
   while (db.next_row(ve.get())) {
     sqlite3_stmt* s = ve.get();
-    r.verdicts.push_back({.requirement = column_text(s, 0), .verdict = column_text(s, 1), .estimate = column_number(s, 2),
-                          .lower = column_number(s, 3), .upper = column_number(s, 4), .n = sqlite3_column_int(s, 5),
-                          .more = sqlite3_column_int64(s, 6), .evidence = column_text(s, 7)});
+    r.verdicts.push_back({.requirement = sqlite_text(s, 0), .verdict = sqlite_text(s, 1), .estimate = sqlite_real(s, 2),
+                          .lower = sqlite_real(s, 3), .upper = sqlite_real(s, 4), .n = static_cast<int>(sqlite_int(s, 5)),
+                          .more = sqlite_int(s, 6), .evidence = sqlite_text(s, 7)});
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 
 #include "common/files.hpp"
@@ -53,6 +54,27 @@ bool SqliteDb::next_row(sqlite3_stmt* st) {
 void SqliteDb::step(sqlite3_stmt* st) {
   if (sqlite3_step(st) != SQLITE_DONE) fail();
   sqlite3_reset(st);
+}
+
+std::string sqlite_text(sqlite3_stmt* st, int col) {
+  const unsigned char* s = sqlite3_column_text(st, col);
+  return s ? std::string(reinterpret_cast<const char*>(s), static_cast<std::size_t>(sqlite3_column_bytes(st, col))) : "";
+}
+
+double sqlite_real(sqlite3_stmt* st, int col) {
+  return sqlite3_column_type(st, col) == SQLITE_NULL ? std::numeric_limits<double>::quiet_NaN()
+                                                     : sqlite3_column_double(st, col);
+}
+
+std::int64_t sqlite_int(sqlite3_stmt* st, int col) { return sqlite3_column_int64(st, col); }  // NULL reads 0
+
+std::map<std::string, std::string> read_results_study_info(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(path + ": not found");
+  SqliteDb db(path);
+  std::map<std::string, std::string> info;
+  const SqliteStmt st = db.prepare("SELECT key, value FROM study");
+  while (db.next_row(st.get())) info[sqlite_text(st.get(), 0)] = sqlite_text(st.get(), 1);
+  return info;
 }
 
 void write_results_sqlite(const ResultTable& t, const std::map<std::string, std::string>& info, const std::string& path) {

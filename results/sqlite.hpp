@@ -4,6 +4,7 @@
 
 #include <sqlite3.h>
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -39,6 +40,16 @@ class SqliteDb {
   sqlite3* db_ = nullptr;
   std::string name_;
 };
+
+// The one way to read a cell of a result row (every SQLite read in flexfarm goes through these): a NULL
+// cell, as a file edited by hand may hold, reads as "" (text), NaN (real) or 0 (integer).
+std::string sqlite_text(sqlite3_stmt* st, int col);
+double sqlite_real(sqlite3_stmt* st, int col);
+std::int64_t sqlite_int(sqlite3_stmt* st, int col);
+
+// The `study` table (key, value) of a run's results.sqlite, as `flexfarm view RUN_DIR` reads it. Throws
+// std::runtime_error naming `path` when it is not such a database.
+std::map<std::string, std::string> read_results_study_info(const std::string& path);
 
 // Writes `path` whole (a temporary database renamed into place). Throws std::runtime_error naming
 // the path on failure.

@@ -2,6 +2,8 @@
 
 #include "arm/arm_metrics.hpp"
 #include "arm/arm_yaml.hpp"
+#include "description/tree_yaml.hpp"
+#include "description/urdf.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -532,6 +534,73 @@ std::string explain_moves_mismatch(const Study& study, const Model& m) {
   auto moves = [](std::size_t k) { return std::to_string(k) + (k == 1 ? " move" : " moves"); };
   return study.source + ": " + moves(n) + " where the study's nominal model has " + moves(nominal) +
          " (every variant of a study needs the same number of moves)";
+}
+
+namespace {
+
+// A path's segments: "bodies[forearm].flexible.mass" -> bodies, [forearm], flexible, mass.
+std::vector<std::string> path_segments(const std::string& path) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : path) {
+    if (c == '.' || c == '[') {
+      if (!cur.empty()) out.push_back(cur);
+      cur = c == '[' ? "[" : "";
+    } else {
+      cur += c;
+      if (c == ']') out.push_back(cur), cur.clear();
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+}  // namespace
+
+std::string parameter_unit(const Study& study, const std::string& path) {
+  std::vector<KeyDoc> keys;
+  if (study.arm) {
+    for (auto* list : {arm_yaml_keys, tree_yaml_keys, urdf_sidecar_keys})
+      for (KeyDoc& k : list()) keys.push_back(std::move(k));
+  } else {
+    keys = rig_model_keys();
+  }
+  const std::vector<std::string> p = path_segments(path);
+  // [i] in a key stands for any index or name, NAME for any one key; past the key's end one more segment
+  // may follow (a vector's element, [2], or a joint of a map of joints, trajectory.start.shoulder), tried
+  // after the keys of the whole path.
+  for (std::size_t extra : {0, 1})
+    for (const KeyDoc& k : keys) {
+      const std::vector<std::string> d = path_segments(k.key);
+      if (d.empty() || p.size() != d.size() + extra) continue;
+      std::string name;  // the joint or body named (the last one): its type picks "rad (m)"'s unit
+      bool match = true;
+      for (std::size_t i = 0; i < d.size() && match; ++i) {
+        if (d[i] == "[i]" && p[i].front() == '[') name = p[i].substr(1, p[i].size() - 2);
+        else if (d[i] == "NAME") name = p[i];
+        else match = d[i] == p[i];
+      }
+      if (!match) continue;
+      if (extra) name = p.back();
+      const auto open = k.unit.find(" (");
+      if (open == std::string::npos || !k.unit.ends_with(")")) return k.unit;
+      return study.arm && is_prismatic(study.arm_nominal, name) ? k.unit.substr(open + 2, k.unit.size() - open - 3)
+                                                                 : k.unit.substr(0, open);
+    }
+  return "";
+}
+
+bool is_prismatic(const ArmModel& m, const std::string& name) {
+  for (const ActuatedJoint& j : m.actuated)
+    if (j.name == name) return m.tree.body(j.body).joint == JointType::kPrismatic;
+  for (const Body& b : m.tree.bodies())
+    if (b.name == name) return b.joint == JointType::kPrismatic;
+  return false;
+}
+
+std::string parameter_axis_label(const Study& study, const std::string& path) {
+  const std::string unit = parameter_unit(study, path);
+  return unit.empty() ? path : path + " (" + unit + ")";
 }
 
 }  // namespace ff

@@ -100,6 +100,17 @@ std::vector<Assignment> make_variant_set(const Study& study, const Variant& v);
 // The model of one variant. Errors in an overridden value name the study file, line and key.
 Model make_variant_model(const Study& study, const Variant& v);
 
+// The unit of a study parameter (a path as `--set` takes it) from the model's field tables
+// (docs/formats.md): "kg" for bodies[forearm].flexible.payload.mass, "m" for world.floor.position[2];
+// a joint's key written "rad (m)" by the joint's type (prismatic: m). "" when it has none (a count, a
+// gain without one, `case`) or the path is not in the tables.
+std::string parameter_unit(const Study& study, const std::string& path);
+// A plot axis of a parameter: "bodies[forearm].flexible.payload.mass (kg)", or the path alone.
+std::string parameter_axis_label(const Study& study, const std::string& path);
+// Whether `name`, an actuated joint's (`joints.NAME`) or a body's (`bodies[NAME]`), moves along a
+// prismatic joint: its values are m (N, N/m) where a revolute one's are rad (N·m, N·m/rad).
+bool is_prismatic(const ArmModel& m, const std::string& name);
+
 // The arm model of one variant (a study whose model is an arm's).
 ArmModel make_variant_arm(const Study& study, const Variant& v);
 // Every variant of an arm study has the nominal model's metric columns (joints, links): "" when a does,

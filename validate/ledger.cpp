@@ -48,7 +48,7 @@ struct Ledger {
     sqlite3_bind_text(st, 2, record.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(st, 3, mode.c_str(), -1, SQLITE_TRANSIENT);
     long v = 0;
-    if (db.next_row(st) && sqlite3_column_type(st, 0) != SQLITE_NULL) v = sqlite3_column_int64(st, 0);
+    if (db.next_row(st)) v = sqlite_int(st, 0);  // MAX of no rows is NULL: 0
     return v;
   }
   long add(const std::string& model, long parent, const std::string& effect, const std::string& params,
@@ -76,11 +76,6 @@ struct Ledger {
   }
 };
 
-// A text cell; NULL (a ledger edited by hand) reads as "".
-std::string text_column(sqlite3_stmt* st, int col) {
-  const unsigned char* text = sqlite3_column_text(st, col);
-  return text ? reinterpret_cast<const char*>(text) : "";
-}
 
 }  // namespace
 
@@ -126,9 +121,9 @@ std::string report_ledger(const std::string& ledger_path, const std::string& rec
   std::vector<std::string> version_labels;  // "2 +coulomb_friction": the effect each version added
   std::map<std::string, Series> lines;
   while (led.db.next_row(st)) {
-    const long v = sqlite3_column_int64(st, 0);
-    const std::string model = text_column(st, 1), effect = text_column(st, 2), channel = text_column(st, 3);
-    const double pct = sqlite3_column_double(st, 4), rmse = sqlite3_column_double(st, 5);
+    const long v = sqlite_int(st, 0);
+    const std::string model = sqlite_text(st, 1), effect = sqlite_text(st, 2), channel = sqlite_text(st, 3);
+    const double pct = sqlite_real(st, 4), rmse = sqlite_real(st, 5);
     char buf[512];
     std::snprintf(buf, sizeof buf, "  %7ld  %-26s %-14s %7.2f  %10.4g  %s\n", v, effect.c_str(), channel.c_str(), pct, rmse,
                   model.c_str());

@@ -70,7 +70,10 @@ function shapeGeometry(s) {
   }
   throw new Error(`shape '${s.name}': unknown type '${s.type}'`);
 }
-const bounds = new THREE.Box3();
+// The camera frames the arm's swept volume (every capsule end over every sample, deflected and rigid,
+// the tool paths and the worst pair's points), not the world: a tank's wall or waste plane would make the
+// arm a speck. The world's shapes frame the view only when no point of the arm is finite.
+const worldBounds = new THREE.Box3();
 const shapeMeshes = data.shapes.map((s) => {
   const pose = new THREE.Matrix4().set(...s.pose);
   const opacity = s.type === 'bore' ? 0.25 : s.type === 'plane' ? 0.3 : 0.75;
@@ -78,27 +81,28 @@ const shapeMeshes = data.shapes.map((s) => {
   mesh.matrixAutoUpdate = false;
   mesh.matrix.copy(pose);
   mesh.updateMatrixWorld(true);
-  if (s.type !== 'plane') bounds.expandByObject(mesh);
+  if (s.type !== 'plane') worldBounds.expandByObject(mesh);
   scene.add(mesh);
   return mesh;
 });
-
-// The arm's reach over every sample (true deflection) and the tool paths.
+const bounds = new THREE.Box3();
 const point = new THREE.Vector3();
-for (const v of variants) {
-  for (const a of [v.ends, v.rigid, v.tool]) {
-    if (!a) continue;
-    for (let i = 0; i + 2 < a.length; i += 3) {
-      point.set(a[i], a[i + 1], a[i + 2]);
-      if (Number.isFinite(point.x + point.y + point.z)) bounds.expandByPoint(point);
-    }
+const expandBy = (a) => {
+  for (let i = 0; i + 2 < a.length; i += 3) {
+    point.set(a[i], a[i + 1], a[i + 2]);
+    if (Number.isFinite(point.x + point.y + point.z)) bounds.expandByPoint(point);
   }
-}
+};
+for (const v of variants) for (const a of [v.ends, v.rigid, v.tool]) if (a) expandBy(a);
+if (variants[0].worst_capsule >= 0 && variants[0].worst_a !== null && variants[0].worst_b !== null)
+  expandBy([...variants[0].worst_a, ...variants[0].worst_b]);
+if (bounds.isEmpty()) bounds.copy(worldBounds);
 const maxRadius = Math.max(0, ...capsules.map((c) => c.radius));
 if (bounds.isEmpty()) bounds.setFromCenterAndSize(new THREE.Vector3(), new THREE.Vector3(1, 1, 1));
 bounds.expandByScalar(maxRadius);
 const centre = bounds.getCenter(new THREE.Vector3());
 const diagonal = Math.max(bounds.getSize(new THREE.Vector3()).length(), 1e-3);
+document.documentElement.setAttribute('data-view-frame', diagonal.toPrecision(4));  // m: the framed diagonal
 
 // Planes: a translucent square of 3 diagonals with its outline, under the scene's centre.
 data.shapes.forEach((s, i) => {
@@ -114,8 +118,9 @@ const niceStep = (x) => {
   const p = 10 ** Math.floor(Math.log10(x)), m = x / p;
   return (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10) * p;
 };
+const gridStep = niceStep(diagonal / 5);  // m
 {
-  const step = niceStep(diagonal / 5), half = Math.ceil(0.9 * diagonal / step) * step;
+  const step = gridStep, half = Math.ceil(0.9 * diagonal / step) * step;
   const grid = new THREE.GridHelper(2 * half, Math.round(2 * half / step), 0x8a94a0, 0xc4cad2);
   grid.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), up);
   let lowest = Infinity;
@@ -124,6 +129,11 @@ const niceStep = (x) => {
   grid.position.copy(centre).addScaledVector(up, lowest - up.dot(centre));
   scene.add(grid);
 }
+// The base frame's axes at its origin (x red, y green, z blue), one grid step long.
+scene.add(new THREE.AxesHelper(gridStep));
+// A length as the scale bar writes it: mm below 1 cm, cm below 1 m.
+const lengthText = (x) => (x < 0.01 ? `${+(x * 1000).toPrecision(3)} mm` : x < 1 ? `${+(x * 100).toPrecision(3)} cm` : `${+x.toPrecision(3)} m`);
+$('legend').textContent = `grid ${lengthText(gridStep)}; axes at the base: x red, y green, z blue, ${lengthText(gridStep)} long`;
 
 // Camera: from azimuth -55 deg (about up, from base x laid on the ground), 25 deg above the ground,
 // the scene's bounding sphere filling the view.
@@ -319,6 +329,11 @@ function draw(now) {
   if (worstShape) worstShape.material.emissive.setHex(nearWorst ? 0x900000 : 0x000000);
   $('status').textContent = [`t = ${t.toFixed(3)} s`, v0.label, clearanceText, ghostText].filter((x) => x).join(' | ');
   controls.update();
+  // The scale bar: a 1-2-5 length of about 100 px at the orbit centre's distance.
+  const pxPerMetre = window.innerHeight / (2 * camera.position.distanceTo(controls.target) * Math.tan(camera.fov * Math.PI / 360));
+  const barLength = niceStep(100 / pxPerMetre);
+  $('scale-bar').style.width = `${Math.round(barLength * pxPerMetre)}px`;
+  $('scale-text').textContent = lengthText(barLength);
   renderer.render(scene, camera);
   // A test's screenshot waits for this: the first frame at the requested time is drawn.
   if (!window.flexfarmViewReady) {

@@ -81,7 +81,9 @@ TEST_F(NightlyCli, TheScriptFlagsTheNightTheModelGotWorseAndNotTheNightsAround) 
   EXPECT_NE(diff.find("| p95(m1_peak_torque_Nm) <= 1100 | undecided | fail (worse) |"), std::string::npos) << diff;
   EXPECT_EQ(fs::read_symlink(work / "nightly/latest"), "n2");
   const std::string report = read_text(work / "nightly/n2/report.html");
-  EXPECT_NE(report.find("regressions since the last run"), std::string::npos);
+  // The badge names the regressions (issue 32, item 24).
+  EXPECT_TRUE(std::regex_search(report, std::regex(R"(>regressions since the last run \(\d\): [^<]*m1_peak_torque_Nm; [^<]*requirement p95\(m1_peak_torque_Nm\) &lt;= 1100</span>)")))
+      << report.substr(report.find("<div class=\"summary\">"), 800);
   EXPECT_NE(report.find("<tr class=\"fail\"><td><code>p95(m1_peak_torque_Nm) &lt;= 1100</code>"), std::string::npos);
 
   // Unchanged the next night: no worse than the night before.

@@ -91,7 +91,7 @@ ReportPage sample_page(const std::string& dir) {
                 verdict("p95(m1_peak_torque_Nm) <= 900", "fail", 0.12, 0.08, 0.17, 0, "P(<= 900) = 0.12"),
                 verdict("mean(m1_tip_overshoot_pct) <= 3", "undecided", 2.98, 2.8, 3.2, 1400, "interval straddles 3")};
   page.description = "A proposal's <evaluation> & its requirements.";
-  page.table_md = "# fbtb_proposal\n\n200 variants.\n\n| run | value |\n|---|---|\n| <img src=x onerror=alert(1)> | 1 |\n";
+  page.results_md = "200 variants.\n\n| run | value |\n|---|---|\n| <img src=x onerror=alert(1)> | 1 |\n";
   page.diff_md = "# What changed\n\n## Result\n\nNothing got worse.\n";
   return page;
 }
@@ -160,6 +160,62 @@ TEST(ReportHtml, AStudyNamedLikeThePlaceholdersIsOnlyItsTitle) {
   EXPECT_EQ(count("<h2 id=\"provenance\">"), 1);
   EXPECT_EQ(count("<h1>"), 1);
   EXPECT_EQ(count("</html>"), 1);
+}
+
+// The title, the description and the requirements once each (issue 32, item 24): the results are table.md's
+// without them (StudyReport::results).
+TEST(ReportHtml, TheTitleDescriptionAndRequirementsAppearOnce) {
+  const test::TempDir dir("ff_report_html");
+  write_report_html(dir.path.string(), sample_page(dir.path.string()));
+  const std::string html = read_file((dir.path / "report.html").string());
+  const auto count = [&](const std::string& s) {
+    int n = 0;
+    for (std::size_t at = html.find(s); at != std::string::npos; at = html.find(s, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("<h1>fbtb_proposal</h1>"), 1);
+  EXPECT_EQ(count(">fbtb_proposal</h"), 1);
+  EXPECT_EQ(count("A proposal's &lt;evaluation&gt; &amp; its requirements."), 1);
+  EXPECT_EQ(count(">Requirements</h"), 1);
+  EXPECT_EQ(count("<code>P(m1_tip_settling_s &lt;= 3) &gt;= 0.9</code>"), 1);  // the verdict table; the study text apart
+}
+
+// The regression badge names what got worse, each regression whole in its tooltip; none: "nothing worse".
+TEST(ReportHtml, TheRegressionBadgeNamesEachRegression) {
+  const test::TempDir dir("ff_report_html");
+  ReportPage page = sample_page(dir.path.string());
+  page.diff_md = "# What changed\n\n## Result\n\n2 regression(s):\n\n- ...\n";
+  page.regressions = {"m1_peak_torque_Nm: mean rose from 950.2 to 1021 (tolerance: increase 3%)",
+                      "requirement p95(m1_peak_torque_Nm) <= 1100: undecided before, fail now"};
+  write_report_html(dir.path.string(), page);
+  const std::string html = read_file((dir.path / "report.html").string());
+  EXPECT_NE(html.find("<span class=\"badge fail\" title=\"m1_peak_torque_Nm: mean rose from 950.2 to 1021 (tolerance: "
+                      "increase 3%)\nrequirement p95(m1_peak_torque_Nm) &lt;= 1100: undecided before, fail now\">regressions "
+                      "since the last run (2): m1_peak_torque_Nm; requirement p95(m1_peak_torque_Nm) &lt;= 1100</span>"),
+            std::string::npos)
+      << html.substr(html.find("<div class=\"summary\">"), 800);
+  EXPECT_EQ(html.find("nothing worse than the last run"), std::string::npos);
+}
+
+// Every column of a wide table is on the page at 800 px (issue 32, item 24: "Every metric" lost its
+// P(miss) and interval columns, cut off at the right): no table is cut off or scrolls.
+TEST(ReportHtml, AWideTableFitsThePageInHeadlessChromium) {
+  const test::TempDir dir("ff_report_html");
+  ReportPage page = sample_page(dir.path.string());
+  std::string md = "## Every metric\n\n| metric | count | not settled | missing | horizon | mean | min | p5 | p50 | p95 | max | "
+                   "P(miss spec) | 95% CI |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const char* m : {"upper_arm_peak_deflection_m", "forearm_peak_deflection_m", "tool_settling_s"})
+    md += std::string("| ") + m + " | 1000 | 17 | 0 | 2.5 | 0.0821345 | 0.0154321 | 0.0201532 | 0.0722745 | 0.172345 | "
+          "0.181745 | 0.944123 | [0.742512, 0.990123] |\n";
+  page.results_md = md;
+  write_report_html(dir.path.string(), page);
+  const std::vector<std::string> doms =
+      test::load_in_chromium({{"file://" + (dir.path / "report.html").string(), "report_wide.png"}}, dir.path, 800, 900);
+  const std::string& dom = doms[0];
+  if (dom.empty()) return;  // the harness has failed the test
+  const std::string html_tag = dom.substr(0, dom.find('>', dom.find("<html")));
+  EXPECT_NE(html_tag.find("data-report-ready="), std::string::npos) << html_tag;
+  EXPECT_EQ(html_tag.find("data-report-overflow"), std::string::npos) << html_tag;
 }
 
 }  // namespace

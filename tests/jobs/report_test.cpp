@@ -42,7 +42,7 @@ TEST(Report, AFineGridsTableBinsEachParameterIntoTenGroups) {
   study.name = "fine";
   study.design.kind = DesignKind::kGrid;
   const ResultTable t = fine_grid();
-  const std::string md = write_study_report(study, t, dir.path.string(), make_run_record(study, t, dir.path.string(), {}));
+  const std::string md = write_study_report(study, t, dir.path.string(), make_run_record(study, t, dir.path.string(), {})).md();
   EXPECT_EQ(read_text((dir.path / "table.md").string()), md);
   // The settling table: 10 x 10 bins, two metrics each, not 4096 x 2 lines.
   const auto a = md.find("## Tip settling time by payload.mass and joints.stiffness");
@@ -67,6 +67,31 @@ TEST(Report, AFineGridsTableBinsEachParameterIntoTenGroups) {
   // The plots keep every level.
   EXPECT_TRUE(std::filesystem::exists(dir.path / "heatmap_settling.png"));
   EXPECT_TRUE(std::filesystem::exists(dir.path / "settling_vs_payload_mass.png"));
+}
+
+// table.md in three parts (issue 32, item 24: report.html showed the title, description and requirements
+// twice): the head holds the title and description, the results neither, the requirements their section;
+// table.md is the three together.
+TEST(Report, TableMdSplitsIntoTheHeadTheResultsAndTheRequirements) {
+  const test::TempDir dir("ff_report");
+  Study study;
+  study.name = "fine";
+  study.description = "A fine grid of payloads and stiffnesses.";
+  study.design.kind = DesignKind::kGrid;
+  study.requirements.statements.push_back(parse_requirement("P(m1_tip_settling_s <= 5) >= 0.5"));
+  const ResultTable t = fine_grid();
+  RunRecord record = make_run_record(study, t, dir.path.string(), {});
+  record.verdicts = {Verdict{.requirement = "P(m1_tip_settling_s <= 5) >= 0.5", .verdict = "pass", .estimate = 0.9,
+                             .lower = 0.88, .upper = 0.92, .n = 4096, .more = 0, .evidence = "3700 of 4096 within"}};
+  const StudyReport report = write_study_report(study, t, dir.path.string(), record);
+  EXPECT_EQ(report.head, "# fine\n\nA fine grid of payloads and stiffnesses.\n\n");
+  EXPECT_EQ(report.results.rfind("4096 variants: ", 0), 0u) << report.results.substr(0, 200);
+  EXPECT_EQ(report.results.find("A fine grid"), std::string::npos);
+  EXPECT_EQ(report.results.find("## Requirements"), std::string::npos);
+  EXPECT_NE(report.results.find("## Every metric"), std::string::npos);
+  EXPECT_EQ(report.requirements.rfind("\n## Requirements\n\n", 0), 0u) << report.requirements;
+  EXPECT_NE(report.requirements.find("| `P(m1_tip_settling_s <= 5) >= 0.5` | pass |"), std::string::npos) << report.requirements;
+  EXPECT_EQ(read_text((dir.path / "table.md").string()), report.md());
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -330,6 +331,40 @@ TEST(ViewHtml, TheExaggerationBendsTheDeflectedCapsuleInHeadlessChromium) {
   EXPECT_NE(b.dom.find("<span id=\"exaggeration-value\">10.0</span>"), std::string::npos);
   EXPECT_NE(b.dom.find("t = 0.500 s | variant 0: nominal | min clearance 0.1200 m at t = 1.000 s: forearm to box | "
                        "1 ghost, lowest 0.08000 m: variant 1: ghost</div>"),
+            std::string::npos);
+}
+
+// A large world (a tank's wall 20 m across, a 40 m box far off, a waste plane) around the same 1.1 m arm:
+// the camera frames the arm's swept volume, not the world, so the arm is as large as without it; a scale
+// bar (a 1-2-5 length with its unit) and the grid's step and the axes are said at the top right.
+TEST(ViewHtml, TheCameraFramesTheArmNotALargeWorldAndAScaleBarSaysItsLength) {
+  TempDir dir("ff_view_test");
+  ff::ViewScene s = swinging_scene();
+  ff::ViewShape tank, far, waste;
+  tank.name = "tank", tank.type = "bore", tank.radius = 10, tank.length = 15;
+  far.name = "far", far.type = "box", far.size << 40, 40, 40;
+  far.pose.topRightCorner<3, 1>() << 60, -60, 0;
+  waste.name = "waste", waste.type = "plane";
+  waste.pose(2, 3) = -8;
+  s.shapes.insert(s.shapes.end(), {tank, far, waste});
+  const fs::path page = dir.path / "view.html";
+  ff::write_view_html(s, page.string());
+  fs::copy_file(page, ff::test::artefact("view_large_world.html"), fs::copy_options::overwrite_existing);
+  const std::vector<Shot> shots = open_in_chromium(page, {"t=0"}, {"view_large_world.png"}, dir);
+  if (shots.size() != 1 || shots[0].image.empty()) return;
+  const Shot& a = shots[0];
+  const int arm = cv::countNonZero(arm_pixels(a.image));
+  std::cout << "arm pixels in a large world: " << arm << "\n";
+  EXPECT_GT(arm, 1000);  // the world framed instead: about 20
+  // Framed: the arms' swept box, the 0.05 m radius around it: x from 1.1 cos(pi/2 + 0.15) (the ghost) to 1.1,
+  // y from 0 to 1.1, z from 0.27 (the droop) to 0.3; its diagonal sqrt(1.364^2 + 1.2^2 + 0.13^2) = 1.822 m.
+  const std::size_t frame = a.dom.find("data-view-frame=\"");
+  ASSERT_NE(frame, std::string::npos);
+  EXPECT_NEAR(std::stod(a.dom.substr(frame + 17)), 1.822, 0.002);
+  // The scale bar: a 1-2-5 length with its unit (20 cm at 309 px/m, the orbit centre 2.66 m away).
+  EXPECT_TRUE(std::regex_search(a.dom, std::regex(R"(<span id="scale-bar" style="width: \d+px;"></span> <span id="scale-text">[125]0? (mm|cm|m)</span>)")))
+      << a.dom.substr(a.dom.find("<div id=\"scale\">"), 300);
+  EXPECT_NE(a.dom.find("<div id=\"legend\">grid 50 cm; axes at the base: x red, y green, z blue, 50 cm long</div>"),
             std::string::npos);
 }
 

@@ -593,4 +593,25 @@ TEST(ArmStudies, EachVariantHasItsOwnSensorNoiseAndTheSameVariantRepeatsIt) {
   EXPECT_NE(st.variants[0].seed, st.variants[1].seed);
 }
 
+// A parameter's plot axis carries its unit from the field tables (issue 32, item 23: axes named
+// `bodies[forearm].flexible.payload.mass` alone), a joint's by its type.
+TEST(ParameterUnits, ComeFromTheFieldTablesAndTheJointsType) {
+  const ff::Study arm = ff::load_study(kSource + "/configs/studies/two_link_tradeoff.yaml");
+  EXPECT_EQ(ff::parameter_axis_label(arm, "bodies[forearm].flexible.payload.mass"), "bodies[forearm].flexible.payload.mass (kg)");
+  EXPECT_EQ(ff::parameter_axis_label(arm, "trajectory.waypoints[0].time"), "trajectory.waypoints[0].time (s)");
+  EXPECT_EQ(ff::parameter_unit(arm, "joints.shoulder.controller.kp"), "N·m/rad");
+  EXPECT_EQ(ff::parameter_unit(arm, "trajectory.waypoints[0].joints.elbow"), "rad");
+  EXPECT_EQ(ff::parameter_unit(arm, "world.floor.position[2]"), "m");
+  EXPECT_EQ(ff::parameter_axis_label(arm, "case"), "case");
+  EXPECT_EQ(ff::parameter_unit(arm, "bodies[forearm].flexible.segments"), "");
+  // The mobile base's prismatic joint: metres, and its gain per metre.
+  const ff::Study sers = ff::load_study(kSource + "/configs/studies/sers_tradeoff.yaml");
+  EXPECT_EQ(ff::parameter_unit(sers, "trajectory.waypoints[0].joints.base_x"), "m");
+  EXPECT_EQ(ff::parameter_unit(sers, "joints.base_x.controller.kp"), "N/m");
+  // The reference rig's own table.
+  const ff::Study rig = ff::load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  EXPECT_EQ(ff::parameter_axis_label(rig, "payload.mass"), "payload.mass (kg)");
+  EXPECT_EQ(ff::parameter_unit(rig, "trajectory.moves[0].target"), "rad");
+}
+
 }  // namespace

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "results/sqlite.hpp"
 #include "tests/cli_support.hpp"
 
 namespace ff {
@@ -59,8 +60,8 @@ TEST(CalibrateLoop, TwoHiddenEffectsAreFoundOneAfterTheOtherAndTheErrorFallsTwic
   std::vector<std::string> effects;
   std::vector<double> error;
   while (sqlite3_step(st) == SQLITE_ROW) {
-    effects.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st, 0)));
-    error.push_back(sqlite3_column_double(st, 1));
+    effects.push_back(sqlite_text(st, 0));
+    error.push_back(sqlite_real(st, 1));
   }
   sqlite3_finalize(st);
   sqlite3_close(db);

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "kernel/model_io.hpp"
+#include "results/sqlite.hpp"
 #include "tests/cli_support.hpp"
 #include "validate/compare.hpp"
 #include "validate/diagnose.hpp"
@@ -99,9 +100,9 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
   std::vector<std::string> effects;
   std::vector<double> fit, relative;
   while (sqlite3_step(st) == SQLITE_ROW) {
-    effects.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(st, 1)));
-    fit.push_back(sqlite3_column_double(st, 2));
-    relative.push_back(100.0 * sqlite3_column_double(st, 3) / kForceRms);
+    effects.push_back(sqlite_text(st, 1));
+    fit.push_back(sqlite_real(st, 2));
+    relative.push_back(100.0 * sqlite_real(st, 3) / kForceRms);
   }
   sqlite3_finalize(st);
   sqlite3_close(db);
