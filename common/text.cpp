@@ -1,5 +1,8 @@
 #include "common/text.hpp"
 
+#include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/exceptions.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -10,6 +13,12 @@
 #include "common/errors.hpp"
 
 namespace ff {
+
+std::string yaml_error_message(const YAML::Exception& e) {
+  if (const auto* deep = dynamic_cast<const YAML::DeepRecursion*>(&e))
+    return "lists and maps nested more than " + std::to_string(deep->depth() - 1) + " deep (yaml-cpp's limit)";
+  return e.msg;
+}
 
 std::optional<long long> parse_integer(std::string_view text, long long lo, long long hi) {
   const auto x = parse_integer(text);

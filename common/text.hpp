@@ -12,7 +12,15 @@
 #include <utility>
 #include <vector>
 
+namespace YAML {
+class Exception;
+}
+
 namespace ff {
+
+// What a YAML parse error says, for one line: yaml-cpp's own message, except for its depth limit, which
+// it reports as "bad file" (lists and maps nested more than 500 deep).
+std::string yaml_error_message(const YAML::Exception& e);
 
 // A decimal integer, the whole text ("12", "-3"; not "", "1x", "1e3", " 1"), nullopt when it is not
 // one or lies outside T's range.

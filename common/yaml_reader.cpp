@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/errors.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -209,7 +210,7 @@ YAML::Node load_yaml_text(const std::string& text, const std::string& source) {
   try {
     doc = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw ConfigError(source, e.mark.is_null() ? 0 : e.mark.line + 1, "", e.msg);
+    throw ConfigError(source, e.mark.is_null() ? 0 : e.mark.line + 1, "", yaml_error_message(e));
   }
   check_unique_keys(doc, source);
   return doc;

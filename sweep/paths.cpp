@@ -133,7 +133,7 @@ Assignment parse_assignment(const std::string& text) {
   try {
     a.value = YAML::Load(text.substr(eq + 1));
   } catch (const YAML::Exception& e) {
-    throw ConfigError("--set", 0, a.path, "value is not valid YAML: " + e.msg);
+    throw ConfigError("--set", 0, a.path, "value is not valid YAML: " + yaml_error_message(e));
   }
   check_unique_keys(a.value, "--set", a.path);
   split_path(a.path, "--set");  // reject a malformed path now

@@ -224,6 +224,54 @@ TEST_F(Cli, BadSetPathsAreRejected) {
   }
 }
 
+// issue 32, item 17: an index or shard past int's range was "flexfarm: error: stoi", exit 1.
+TEST_F(Cli, AnIndexOrAShardPastIntsRangeIsAUsageErrorNamingTheKey) {
+  const auto set = run("simulate configs/fbtb.yaml --out out --set 'trajectory.moves[99999999999].target=1'");
+  EXPECT_EQ(set.exit_code, 2) << set.output;
+  expect_one_error_line(set, "--set: trajectory.moves[99999999999].target: index [99999999999] is not in the list");
+  write("study.yaml", "model: configs/fbtb.yaml\nruns:\n  - set: {payload.mass: 300}\n");
+  for (const std::string shard : {"99999999999/1", "0/99999999999", "3/2"}) {
+    const auto r = run("run study.yaml --out out --shard " + shard);
+    EXPECT_EQ(r.exit_code, 2) << shard << ": " << r.output;
+    EXPECT_NE(r.output.find("--shard: needs 0 <= I < N <= 2147483647, got '" + shard + "'"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("stoi"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+// issue 32, items 3, 6, 7: a URDF nested 50,000 deep, a range of 2e8 levels, a tree of 10,000 links, a
+// flexible link of a million segments: each one line, exit 2, at once, nothing written.
+TEST_F(Cli, HostileSizesAreRefusedAtOnceWithOneLine) {
+  std::string deep = "<robot name=\"deep\">\n";
+  for (int i = 0; i < 50000; ++i) deep += "<link>";
+  write("deep.urdf", deep);
+  auto r = run("modes deep.urdf");
+  EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 500);
+  expect_one_error_line(r, "deep.urdf:2: <link>: elements nested more than 100 deep");
+
+  std::string chain = "<robot name=\"chain\">\n<link name=\"l0\"/>\n";
+  for (int i = 1; i <= 10000; ++i)
+    chain += "<link name=\"l" + std::to_string(i) + "\"/><joint name=\"j" + std::to_string(i) +
+             "\" type=\"fixed\"><parent link=\"l" + std::to_string(i - 1) + "\"/><child link=\"l" + std::to_string(i) +
+             "\"/></joint>\n";
+  write("chain.urdf", chain + "</robot>\n");
+  r = run("modes chain.urdf");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  expect_one_error_line(r, "chain.urdf:1003: link \"l1001\": the tree has 10000 bodies");
+
+  write("study.yaml", "model: configs/fbtb.yaml\nvariables:\n  - path: payload.mass\n"
+                      "    range: {lower: 100, upper: 400, count: 200000000}\ndesign: {type: grid}\n");
+  r = run("run study.yaml --out out");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  expect_one_error_line(r, "study.yaml:4: variables[0].range.count: 200000000 levels take the study's ranges over 1000000 variants");
+
+  fs::copy_file(kSource + "/configs/two_link_flexible.yaml", work / "configs/two_link_flexible.yaml");
+  r = run("modes configs/two_link_flexible.yaml --set bodies[upper_arm].flexible.segments=1000000");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  expect_one_error_line(r, "--set: bodies[upper_arm].flexible.segments: must be <= 256 (a flexible link's limit), got 1000000");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
 // A range error in a `--set` value names --set, not the line of the file that holds the old value.
 TEST_F(Cli, NegativeMassSetSaysItCameFromSet) {
   const auto r = run("modes configs/fbtb.yaml --set payload.mass=-3");

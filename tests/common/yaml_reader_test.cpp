@@ -73,6 +73,17 @@ TEST(YamlReader, AListAsAKeyIsAnError) {
   EXPECT_NE(e.message().find("plain name"), std::string::npos) << e.what();
 }
 
+// yaml-cpp stops at 500 levels (no stack overflow) but says only "bad file".
+TEST(YamlReader, ListsNestedPastYamlCppsLimitAreOneClearError) {
+  EXPECT_NO_THROW(ff::load_yaml_text("x: " + std::string(400, '[') + std::string(400, ']') + "\n", "t.yaml"));
+  for (const int depth : {600, 50000}) {
+    const auto n = static_cast<std::size_t>(depth);
+    const auto e = load_error("segments: 6\nx: " + std::string(n, '[') + std::string(n, ']') + "\ny: 1\n");
+    EXPECT_EQ(e.line(), 2) << depth;
+    EXPECT_EQ(e.message(), "lists and maps nested more than 499 deep (yaml-cpp's limit)") << depth;
+  }
+}
+
 TEST(YamlReader, AMapAsAKeyIsAnError) {
   const auto e = load_error("{a: 1}: 2\n");
   EXPECT_NE(e.message().find("plain name"), std::string::npos) << e.what();

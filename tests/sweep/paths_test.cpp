@@ -288,6 +288,16 @@ TEST(ApplyAssignment, InvalidYamlValueNamesThePath) {
   }
 }
 
+TEST(ApplyAssignment, AValueNestedPastYamlCppsLimitNamesThePath) {
+  try {
+    (void)ff::parse_assignment("notch.alpha=" + std::string(50000, '['));
+    FAIL() << "accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "--set: notch.alpha: value is not valid YAML: lists and maps nested more than 499 deep "
+                           "(yaml-cpp's limit)");
+  }
+}
+
 TEST(ApplyAssignment, BadPathIsRejected) {
   auto d = doc();
   EXPECT_THROW(assign(d, "trajectory.moves[9].target=1"), ff::ConfigError);
