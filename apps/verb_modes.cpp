@@ -8,6 +8,7 @@
 
 #include "apps/verbs.hpp"
 #include "description/load.hpp"
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "common/files.hpp"
 #include "kernel/modes.hpp"
@@ -36,9 +37,10 @@ void print_modes(const char* title, const std::vector<Mode>& modes, int count) {
 int dof_of(const TreeDescription& d, const std::string& name, const std::string& option) {
   const auto it = d.dof_index.find(name);
   if (it != d.dof_index.end()) return it->second;
+  const std::vector<std::string> names = list_joint_names(d);
   std::string known;
-  for (const auto& [n, j] : d.dof_index) known += (known.empty() ? "" : ", ") + n;
-  throw ConfigError(option, 0, name, "no moving joint of that name (joints: " + known + ")");
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+  throw ConfigError(option, 0, name, "no moving joint of that name" + format_did_you_mean(name, names) + " (joints: " + known + ")");
 }
 
 // The pose --at JOINT=VALUE sets (on top of `q0`).
