@@ -165,6 +165,10 @@ TEST_F(Cli, ModesOfATreeDescriptionAtItsPoseWithItsShapes) {
   // A locked joint leaves nothing to move.
   EXPECT_EQ(run("modes pendulum.yaml --lock swing").exit_code, 0);
   expect_one_error_line(run("modes pendulum.yaml --lock elbow"), "--lock: elbow: no moving joint of that name");
+  // A pose in degrees (item 32.10), and a typo of the joint's name (32.15).
+  expect_one_error_line(run("modes pendulum.yaml --at swing=90"),
+                        "--at: swing: 90 rad is more than a turn (2 pi): looks like degrees (90 deg = 1.571 rad)");
+  expect_one_error_line(run("modes pendulum.yaml --at swnig=0.5"), "--at: swnig: no moving joint of that name (did you mean `swing`?)");
   // A tree YAML is an arm model: --set paths work on it, and a wrong one is named.
   expect_one_error_line(run("modes pendulum.yaml --set swing=1"), "--set: swing: unknown key");
 }
