@@ -1,13 +1,17 @@
 // flexfarm: simulate flexible robot arms, one at a time or by the thousand.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <iostream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "apps/verbs.hpp"
 #include "jobs/mpi.hpp"
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "common/text.hpp"
 #include "common/isa.hpp"
@@ -36,6 +40,15 @@ int main(int argc, char** argv) {
   ff::add_compare_verb(app);
   try {
     ff::active_isa();  // a bad FLEXFARM_ISA stops here, before any kernel runs
+    // A first word that is neither a verb nor an option: the closest verb (CLI11 says "A subcommand is required").
+    if (argc > 1 && argv[1][0] != '-') {
+      std::vector<std::string> verbs;
+      for (const CLI::App* v : app.get_subcommands([](CLI::App*) { return true; })) verbs.push_back(v->get_name());
+      if (std::find(verbs.begin(), verbs.end(), argv[1]) == verbs.end())
+        throw ff::ExitError(std::string("unknown verb '") + argv[1] + "'" + ff::format_did_you_mean(argv[1], verbs) +
+                                " (flexfarm --help lists the verbs)",
+                            2);
+    }
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     std::ostringstream err;  // a bad option's value is shown as text, escape sequences and all

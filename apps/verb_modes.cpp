@@ -8,6 +8,8 @@
 
 #include "apps/verbs.hpp"
 #include "description/load.hpp"
+#include "common/closest.hpp"
+#include "common/units_check.hpp"
 #include "common/errors.hpp"
 #include "common/files.hpp"
 #include "kernel/modes.hpp"
@@ -36,17 +38,21 @@ void print_modes(const char* title, const std::vector<Mode>& modes, int count) {
 int dof_of(const TreeDescription& d, const std::string& name, const std::string& option) {
   const auto it = d.dof_index.find(name);
   if (it != d.dof_index.end()) return it->second;
+  const std::vector<std::string> names = list_joint_names(d);
   std::string known;
-  for (const auto& [n, j] : d.dof_index) known += (known.empty() ? "" : ", ") + n;
-  throw ConfigError(option, 0, name, "no moving joint of that name (joints: " + known + ")");
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+  throw ConfigError(option, 0, name, "no moving joint of that name" + format_did_you_mean(name, names) + " (joints: " + known + ")");
 }
 
-// The pose --at JOINT=VALUE sets (on top of `q0`).
-Eigen::VectorXd parse_pose(const TreeDescription& d, Eigen::VectorXd q0, const std::vector<std::string>& at) {
+// The pose --at JOINT=VALUE sets (on top of `q0`); with `check_units` (the arm model's `units_check`) a
+// revolute joint's value beyond a turn is refused as degrees.
+Eigen::VectorXd parse_pose(const TreeDescription& d, Eigen::VectorXd q0, const std::vector<std::string>& at,
+                           bool check_units) {
   for (const std::string& a : at) {
     const auto eq = a.find('=');
     if (eq == std::string::npos) throw ConfigError("--at", 0, a, "expected JOINT=VALUE");
-    const int j = dof_of(d, a.substr(0, eq), "--at");
+    const std::string name = a.substr(0, eq);
+    const int j = dof_of(d, name, "--at");
     try {
       std::size_t used = 0;
       q0[j] = std::stod(a.substr(eq + 1), &used);
@@ -54,6 +60,9 @@ Eigen::VectorXd parse_pose(const TreeDescription& d, Eigen::VectorXd q0, const s
     } catch (const std::exception&) {
       throw ConfigError("--at", 0, a, "expected a finite number after '=' (rad or m)");
     }
+    for (std::size_t i = 0; i < d.joints.size() && check_units; ++i)
+      if (d.joints[i].name == name && d.spec.bodies[i].joint == JointType::kRevolute && !explain_angle_unit(q0[j]).empty())
+        throw ConfigError("--at", 0, name, explain_angle_unit(q0[j]));
   }
   return q0;
 }
@@ -127,7 +136,7 @@ void print_tree_header(const std::string& path, const Tree& tree, std::size_t lo
 void urdf_modes(const std::string& path, const std::string& sidecar, const ModesOptions& o) {
   const TreeDescription d = load_tree_description(path, sidecar);
   const Tree tree = make_tree(d.spec);
-  const Eigen::VectorXd q0 = parse_pose(d, Eigen::VectorXd::Zero(tree.nv()), o.at);
+  const Eigen::VectorXd q0 = parse_pose(d, Eigen::VectorXd::Zero(tree.nv()), o.at, false);  // a URDF's values unchecked
   TreeModeOptions options;
   for (const std::string& name : o.lock) options.locked_dofs.push_back(dof_of(d, name, "--lock"));
   const std::vector<TreeMode> modes = calc_tree_modes(tree, q0, options);
@@ -147,7 +156,7 @@ void arm_modes(const std::string& path, const std::vector<std::string>& sets, co
   const int nv = tree.nv();
   Eigen::VectorXd start = arm.q0;
   for (int j : arm.compliant_dofs) start[j] = 0.0;
-  const StaticEquilibriumResult sag = calc_arm_sag(arm, parse_pose(d, start, o.at));
+  const StaticEquilibriumResult sag = calc_arm_sag(arm, parse_pose(d, start, o.at, arm.spec.units_check));
   if (!sag.converged()) print_safe(stdout, "static sag not found (%s): linearised at the straight links\n", sag.message.c_str());
   const Eigen::VectorXd& q0 = sag.q;
   TreeModeOptions options;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "arm/arm_model.hpp"
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 
 namespace ff {
@@ -59,7 +60,8 @@ ArmCollision make_arm_collision(const ArmModel& m, World world, const std::vecto
       std::string known;
       for (const std::string& p : c.parts) known += (known.empty() ? "" : ", ") + p;
       throw ConfigError(m.spec.source, o.line, "collision." + o.name,
-                        "no part of that name: a rigid body with mass or a flexible link (" + known + ")");
+                        "no part of that name" + format_did_you_mean(o.name, c.parts) +
+                            ": a rigid body with mass or a flexible link (" + known + ")");
     }
     given[static_cast<std::size_t>(it - c.parts.begin())] = &o;
   }

@@ -8,12 +8,14 @@
 #include <stdexcept>
 
 #include "kernel/batch.hpp"  // calc_sensor_hold
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "common/field_table.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/friction.hpp"
 #include "kernel/modes.hpp"
 #include "common/random.hpp"
+#include "common/units_check.hpp"
 #include "multibody/algorithms.hpp"
 #include "multibody/inverse_kinematics.hpp"
 #include "multibody/modes.hpp"
@@ -46,7 +48,8 @@ ArmTool resolve_tool(const ArmModel& m, const ArmSpec& spec, const ToolSpec& t, 
     } else {
       const auto it = spec.tree.body_index.find(t.body);
       if (it == spec.tree.body_index.end())
-        throw ConfigError(spec.source, t.line, key + "body", "no body named '" + t.body + "'");
+        throw ConfigError(spec.source, t.line, key + "body",
+                          "no body named '" + t.body + "'" + format_did_you_mean(t.body, list_body_names(spec.tree)));
       out.body = it->second;
     }
   }
@@ -60,6 +63,12 @@ std::string tool_names(const ArmModel& m) {
   std::string s;
   for (const ArmTool& t : m.tools) s += (s.empty() ? "" : ", ") + t.name;
   return s;
+}
+
+std::string did_you_mean_tool(const ArmModel& m, const std::string& wrong) {
+  std::vector<std::string> names;
+  for (const ArmTool& t : m.tools) names.push_back(t.name);
+  return format_did_you_mean(wrong, names);
 }
 
 // The safety monitors (`monitors:`): each one's type, action, watched joint, link or tool by index, its
@@ -82,21 +91,24 @@ void make_monitors(ArmModel& m) {
       for (std::size_t j = 0; j < m.actuated.size(); ++j)
         if (m.actuated[j].name == s.joint) o.joint = static_cast<int>(j);
       if (o.joint < 0) {
-        std::string names;
-        for (const ActuatedJoint& a : m.actuated) names += (names.empty() ? "" : ", ") + a.name;
-        fail("joint", "no actuated joint named '" + s.joint + "' (actuated: " + names + ")");
+        std::vector<std::string> names;
+        std::string known;
+        for (const ActuatedJoint& a : m.actuated) names.push_back(a.name), known += (known.empty() ? "" : ", ") + a.name;
+        fail("joint", "no actuated joint named '" + s.joint + "'" + format_did_you_mean(s.joint, names) + " (actuated: " + known + ")");
       }
     }
     if (o.type == MonitorType::kDeflection) {
       for (std::size_t i = 0; i < m.links.size(); ++i)
         if (m.links[i].name == s.link) o.link = static_cast<int>(i);
-      if (o.link < 0) fail("link", "no flexible link named '" + s.link + "'");
+      std::vector<std::string> names;
+      for (const LinkTip& l : m.links) names.push_back(l.name);
+      if (o.link < 0) fail("link", "no flexible link named '" + s.link + "'" + format_did_you_mean(s.link, names));
     }
     if (!s.tool.empty()) {
       o.tool = -1;
       for (std::size_t t = 0; t < m.tools.size(); ++t)
         if (m.tools[t].name == s.tool) o.tool = static_cast<int>(t);
-      if (o.tool < 0) fail("tool", "no tool named '" + s.tool + "' (tools: " + tool_names(m) + ")");
+      if (o.tool < 0) fail("tool", "no tool named '" + s.tool + "'" + did_you_mean_tool(m, s.tool) + " (tools: " + tool_names(m) + ")");
     }
     if (o.type == MonitorType::kClearance && !m.collision.active())
       fail("type", "a clearance monitor needs a world (`world:`) or another arm to measure the clearance to");
@@ -357,7 +369,9 @@ ArmModel make_arm(const ArmSpec& spec) {
   std::map<int, const JointControlSpec*> by_dof;
   for (const JointControlSpec& c : spec.joints) {
     const auto it = spec.tree.dof_index.find(c.joint);
-    if (it == spec.tree.dof_index.end()) throw ConfigError(src, 0, "joints." + c.joint, "no moving joint of that name");
+    if (it == spec.tree.dof_index.end())
+      throw ConfigError(src, 0, "joints." + c.joint,
+                        "no moving joint of that name" + format_did_you_mean(c.joint, list_joint_names(spec.tree)));
     check_joint_blocks(spec, c);
     if (!by_dof.emplace(it->second, &c).second)
       throw ConfigError(src, 0, "joints." + c.joint, "this joint has a controller already");
@@ -425,9 +439,17 @@ ArmModel make_arm(const ArmSpec& spec) {
   // The trajectory: joint waypoints as written, tool waypoints by IK on the rigid arm (flexible links
   // straight), each from the pose before it.
   m.trajectory.shape = spec.shape;
+  // A revolute joint's angle beyond a turn: degrees, unless the file allows it (`units_check: false`).
+  auto check_angle = [&](const std::string& joint, double value, int line, const std::string& key) {
+    const int dof = spec.tree.dof_index.at(joint);
+    for (int i = 0; i < m.tree.num_bodies() && spec.units_check; ++i)
+      if (m.tree.body(i).dof == dof && m.tree.body(i).joint == JointType::kRevolute && !explain_angle_unit(value).empty())
+        throw ConfigError(src, line, key, explain_angle_unit(value));
+  };
   Eigen::VectorXd pose = Eigen::VectorXd::Zero(nv);
   for (const auto& [name, value] : spec.start) {
     if (!std::isfinite(value)) throw ConfigError(src, spec.start_line, "trajectory.start." + name, "must be finite");
+    check_angle(name, value, spec.start_line, "trajectory.start." + name);
     pose[spec.tree.dof_index.at(name)] = value;
   }
   for (const ActuatedJoint& a : m.actuated) m.trajectory.start.push_back(pose[a.dof]);
@@ -454,8 +476,9 @@ ArmModel make_arm(const ArmSpec& spec) {
       if (it == act_index.end())
         throw ConfigError(src, wp.line, key + ".joints." + name,
                           spec.tree.dof_index.count(name) ? "a passive joint cannot be commanded (give it a controller under `joints`)"
-                                                          : "no moving joint of that name");
+                                                          : "no moving joint of that name" + format_did_you_mean(name, list_joint_names(spec.tree)));
       if (!std::isfinite(value)) throw ConfigError(src, wp.line, key + ".joints." + name, "must be finite");
+      check_angle(name, value, wp.line, key + ".joints." + name);
       pose[m.actuated[static_cast<std::size_t>(it->second)].dof] = value;
     }
     if (wp.cartesian) {
@@ -479,7 +502,8 @@ ArmModel make_arm(const ArmSpec& spec) {
         const auto& position = tool_target.second;
         const auto t = std::find_if(m.tools.begin(), m.tools.end(), [&](const ArmTool& x) { return x.name == name; });
         if (t == m.tools.end())
-          throw ConfigError(src, wp.line, key + ".tools." + name, "no tool of that name (tools: " + tool_names(m) + ")");
+          throw ConfigError(src, wp.line, key + ".tools." + name,
+                            "no tool of that name" + did_you_mean_tool(m, name) + " (tools: " + tool_names(m) + ")");
         if (!position.allFinite()) throw ConfigError(src, wp.line, key + ".tools." + name, "must be finite");
         targets.push_back({.body = t->body, .point = t->point, .position = position, .name = name});
       }
@@ -503,7 +527,8 @@ ArmModel make_arm(const ArmSpec& spec) {
       const JointInfo& info = joint_info(spec, m.tree, m.actuated[static_cast<std::size_t>(k)].dof);
       if (jw.q[static_cast<std::size_t>(k)] < info.lower || jw.q[static_cast<std::size_t>(k)] > info.upper)
         throw ConfigError(src, wp.line, key, "joint " + m.actuated[static_cast<std::size_t>(k)].name + " at " +
-                                                 std::to_string(jw.q[static_cast<std::size_t>(k)]) + " is beyond its limits");
+                                                 format_key_number(jw.q[static_cast<std::size_t>(k)]) + " is beyond its limits [" +
+                                                 format_key_number(info.lower) + ", " + format_key_number(info.upper) + "] (rad or m)");
     }
     m.trajectory.waypoints.push_back(std::move(jw));
   }
@@ -617,6 +642,17 @@ StaticEquilibriumResult calc_arm_sag(const ArmModel& m, const Eigen::VectorXd& p
     if (!elastic[static_cast<std::size_t>(j)]) held.locked_dofs.push_back(j);
   StaticEquilibriumResult r = solve_static_equilibrium(m.tree, pose, Eigen::VectorXd::Zero(m.tree.nv()), held);
   if (!r.converged()) r.q = pose;  // a link that buckles under its weight: it starts straight
+  // A true sag lowers the mass centre (the springs' energy comes from gravity's): one that rose is a
+  // spurious equilibrium of links far too soft for their load.
+  TreeWorkspace ws(m.tree);
+  double mass = 0.0;
+  for (int i = 0; i < m.tree.num_bodies(); ++i) mass += m.tree.body(i).mass;
+  const double rise = (calc_potential_energy(m.tree, r.q, ws) - calc_potential_energy(m.tree, pose, ws)) /
+                      (mass * m.tree.gravity().norm());  // m
+  if (rise > 1e-6)
+    throw ConfigError(m.spec.source, 0, "", "the static sag under gravity moved the arm's mass centre up by " +
+                                                format_key_number(1e3 * rise) + " mm, against gravity: links far too soft "
+                                                "for their load; check the flexible links' E and G (Pa, not GPa) and density (kg/m³)");
   return r;
 }
 

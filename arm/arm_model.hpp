@@ -108,6 +108,7 @@ struct MonitorSpec {
 struct ArmSpec {
   std::string source;                // the file, for errors
   std::string description;
+  bool units_check = true;           // `units_check`: revolute angles beyond a turn refused (degrees?)
   TreeDescription tree;
   std::string tool_body;             // the end effector's body ("" = the last body; a flexible link's tip)
   Vec3 tool_point = Vec3::Zero();    // in that body's frame (a flexible link: from its tip point), m

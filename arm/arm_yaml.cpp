@@ -10,6 +10,7 @@
 
 #include "description/tree_yaml.hpp"
 #include "description/urdf.hpp"
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/model_io.hpp"
@@ -213,7 +214,7 @@ std::vector<MonitorSpec> read_monitors(YamlReader& top) {
     s.name = name;
     s.line = one.line();
     only_keys(one, kMonitorFields);
-    if (!one.has("type")) one.fail("type", std::string("missing required value (") + kMonitorTypes + ")");
+    if (!one.has("type")) one.fail_missing("type", std::string("missing required value (") + kMonitorTypes + ")");
     read_present(one, kMonitorFields, s);
     MonitorType type;
     MonitorAction action;
@@ -246,6 +247,14 @@ std::vector<T> read_named_blocks(YamlReader& top, const std::string& key, const 
     out.push_back(std::move(t));
   }
   return out;
+}
+
+// `name` under `r` names no moving joint of `tree`: the error lists them and the closest.
+[[noreturn]] void fail_no_joint(const YamlReader& r, const std::string& name, const TreeDescription& tree) {
+  const std::vector<std::string> names = list_joint_names(tree);
+  std::string known;
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+  r.fail(name, "no moving joint of that name" + format_did_you_mean(name, names) + " (joints: " + known + ")");
 }
 
 std::string resolve(const std::string& source, const std::string& path) {
@@ -290,6 +299,7 @@ TreeDescription read_tree(YamlReader& top, const YAML::Node& doc, const TopBlock
   top.raw("bodies");
   YAML::Node tree;
   if (doc["gravity"]) tree["gravity"] = doc["gravity"];
+  if (doc["units_check"]) tree["units_check"] = doc["units_check"];
   tree["bodies"] = doc["bodies"];
   return parse_tree_yaml(tree, source);
 }
@@ -304,6 +314,8 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   if (!doc || !doc.IsMap()) top.fail("bodies", "expected a map with `bodies` or `urdf`");
   ArmSpec s;
   s.source = source;
+  top.read_units_check();
+  s.units_check = top.units_check();
   TopBlock tb;
   read_present(top, kTopFields, tb);
   s.description = tb.description;
@@ -378,12 +390,7 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       }
       hydraulics.finish();
       one.finish();
-      if (!s.tree.dof_index.count(name)) {
-        std::string known;
-        for (const auto& [n, j] : s.tree.dof_index)
-          if (n.find(".cell") == std::string::npos) known += (known.empty() ? "" : ", ") + n;
-        jr.fail(name, "no moving joint of that name (joints: " + known + ")");
-      }
+      if (!s.tree.dof_index.count(name)) fail_no_joint(jr, name, s.tree);
       c.drive = one.has("drive");
       s.joints.push_back(c);
       // A compliant drive: the joint's rotor and the twist to its link (insert_drive_train).
@@ -410,7 +417,7 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       const std::string name = kv.first.as<std::string>();
       double value = 0.0;
       vr.optional(name, value);
-      if (!s.tree.dof_index.count(name)) vr.fail(name, "no moving joint of that name");
+      if (!s.tree.dof_index.count(name)) fail_no_joint(vr, name, s.tree);
       s.start.emplace_back(name, value);
     }
     vr.finish();
@@ -500,6 +507,7 @@ ArmModel parse_arm(const YAML::Node& doc, const std::string& source) { return ma
 std::vector<KeyDoc> arm_yaml_keys() {
   std::vector<KeyDoc> out;
   add_keys(out, "", kTopFields);
+  out.push_back(kUnitsCheckKey);
   add_keys(out, "tool.", kToolFields);
   add_keys(out, "tools.NAME.", kToolsFields);
   add_keys(out, "controller.", kControllerFields);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/files.hpp"  // is_blank_path
+#include "common/units_check.hpp"
 #include "common/yaml_reader.hpp"
 #include <Eigen/Core>
 
@@ -26,7 +27,12 @@ struct KeyDoc {
   std::string fallback;  // the default ("" when required)
 };
 
-enum class Bound { kAny, kNonNegative, kPositive, kNonZero };
+// The key that turns the unit checks off, at the top of a model file (YamlReader::read_units_check).
+inline const KeyDoc kUnitsCheckKey{"units_check", "", "no", "true"};
+
+// kModulus and kDensity: > 0 and, unless the file turns it off, within any engineering material's range
+// (common/units_check.hpp).
+enum class Bound { kAny, kNonNegative, kPositive, kNonZero, kModulus, kDensity };
 
 template <class T>
 struct Field {
@@ -71,8 +77,13 @@ template <class V>
 void check_bound(const YamlReader& r, const char* key, Bound bound, V value) {
   if (bound == Bound::kNonNegative && value < 0)
     r.fail(key, "must be >= 0, got " + format_key_number(static_cast<double>(value)));
-  if (bound == Bound::kPositive && !(value > 0))
-    r.fail(key, "must be > 0, got " + format_key_number(static_cast<double>(value)));
+  const bool positive = bound == Bound::kPositive || bound == Bound::kModulus || bound == Bound::kDensity;
+  if (positive && !(value > 0)) r.fail(key, "must be > 0, got " + format_key_number(static_cast<double>(value)));
+  const std::string why = !r.units_check()                ? ""
+                          : bound == Bound::kModulus ? explain_modulus_unit(static_cast<double>(value))
+                          : bound == Bound::kDensity ? explain_density_unit(static_cast<double>(value))
+                                                     : "";
+  if (!why.empty()) r.fail(key, why);
 }
 
 // Reads the fields present in `r` into `out`, checking their bounds; absent ones keep their defaults.
@@ -109,8 +120,9 @@ void read_present(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) 
 // absent is reported where it comes, before a later field's error.
 template <class T, std::size_t N>
 void read_unchecked(YamlReader& r, const std::array<Field<T>, N>& fields, T& out) {
+  for (const Field<T>& f : fields) r.has(f.key);  // every key of the table valid before one is missed
   for (const Field<T>& f : fields) {
-    if (f.required && !r.has(f.key)) r.fail(f.key, "missing required value");
+    if (f.required && !r.has(f.key)) r.fail_missing(f.key);
     std::visit(Overloaded{[&](Vec3 T::*m) {
                             if (r.has(f.key)) read_vec3(r, f.key, out.*m);
                           },
@@ -132,7 +144,7 @@ void only_keys(const YamlReader& r, const std::array<Field<T>, N>& fields) {
 template <class T, std::size_t N>
 void require(const YamlReader& r, const std::array<Field<T>, N>& fields) {
   for (const Field<T>& f : fields)
-    if (f.required && !r.has(f.key)) r.fail(f.key, "missing required value");
+    if (f.required && !r.has(f.key)) r.fail_missing(f.key);
 }
 
 // The table's keys for the docs, under `prefix`, defaults from a default-constructed block.

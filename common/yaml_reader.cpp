@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "common/text.hpp"
 
@@ -30,7 +31,10 @@ std::string YamlReader::full_key(const std::string& key) const { return path_.em
 
 int YamlReader::line() const { return line_of(node_); }
 
-bool YamlReader::has(const std::string& key) const { return node_ && node_.IsMap() && node_[key]; }
+bool YamlReader::has(const std::string& key) const {
+  asked_.insert(key);
+  return node_ && node_.IsMap() && node_[key];
+}
 
 void YamlReader::fail(const std::string& key, const std::string& message) const {
   const auto full = full_key(key);
@@ -41,9 +45,19 @@ void YamlReader::fail(const std::string& key, const std::string& message) const 
   throw ConfigError(file_, line, full, message);
 }
 
+void YamlReader::fail_missing(const std::string& key, const std::string& message) const {
+  if (node_ && node_.IsMap())
+    for (const auto& kv : node_) {
+      const std::string k = kv.first.as<std::string>();
+      if (!asked_.count(k) && closest_name(k, {key}) == key)
+        throw ConfigError(file_, line_of(kv.first), full_key(k), "unknown key (did you mean `" + key + "`?)");
+    }
+  fail(key, message);
+}
+
 YAML::Node YamlReader::value(const std::string& key, bool required) {
   if (!has(key)) {
-    if (required) fail(key, "missing required value");
+    if (required) fail_missing(key);
     return YAML::Node(YAML::NodeType::Undefined);
   }
   used_.insert(key);
@@ -117,7 +131,9 @@ void YamlReader::optional_array(const std::string& key, double* out, int count) 
 }
 
 YamlReader YamlReader::child(const std::string& key, bool required) {
-  return YamlReader(value(key, required), file_, full_key(key), lines_);
+  YamlReader r(value(key, required), file_, full_key(key), lines_);
+  r.units_check_ = units_check_;
+  return r;
 }
 
 std::vector<YamlReader> YamlReader::sequence(const std::string& key, bool required) {
@@ -126,7 +142,7 @@ std::vector<YamlReader> YamlReader::sequence(const std::string& key, bool requir
   if (!v) return out;
   if (!v.IsSequence()) fail(key, "expected a list");
   for (std::size_t i = 0; i < v.size(); ++i)
-    out.emplace_back(v[i], file_, full_key(key) + "[" + std::to_string(i) + "]", lines_);
+    out.emplace_back(v[i], file_, full_key(key) + "[" + std::to_string(i) + "]", lines_).units_check_ = units_check_;
   return out;
 }
 
@@ -138,6 +154,7 @@ std::vector<std::pair<std::string, YamlReader>> YamlReader::named_blocks(const s
   if (!v || v.IsNull()) return out;
   if (!v.IsMap() || v.size() == 0) fail(key, "expected " + expected);
   YamlReader map(v, file_, full_key(key), lines_);
+  map.units_check_ = units_check_;
   for (const auto& kv : v) {
     const std::string name = kv.first.as<std::string>();
     if (name_rule && (name.empty() || name.find_first_of(". ,\"") != std::string::npos)) map.fail(name, name_rule);
@@ -147,20 +164,22 @@ std::vector<std::pair<std::string, YamlReader>> YamlReader::named_blocks(const s
 }
 
 template <class Known>
-void YamlReader::reject_unknown(Known known) const {
+void YamlReader::reject_unknown(Known known, const std::vector<std::string>& valid) const {
   if (!node_ || !node_.IsMap()) return;
   for (const auto& kv : node_) {
     const auto key = kv.first.as<std::string>();
-    if (!known(key)) throw ConfigError(file_, line_of(kv.first), full_key(key), "unknown key");
+    if (!known(key))
+      throw ConfigError(file_, line_of(kv.first), full_key(key), "unknown key" + format_did_you_mean(key, valid));
   }
 }
 
 void YamlReader::finish() const {
-  reject_unknown([&](const std::string& key) { return used_.count(key) > 0; });
+  reject_unknown([&](const std::string& key) { return used_.count(key) > 0; }, {asked_.begin(), asked_.end()});
 }
 
 void YamlReader::only(std::initializer_list<std::string> known) const {
-  reject_unknown([&](const std::string& key) { return std::find(known.begin(), known.end(), key) != known.end(); });
+  reject_unknown([&](const std::string& key) { return std::find(known.begin(), known.end(), key) != known.end(); },
+                 known);
 }
 
 namespace {

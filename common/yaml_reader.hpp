@@ -42,13 +42,21 @@ class YamlReader {
   // With `name_rule`, a name that heads columns: empty or with a dot, space, comma or quote is that error.
   std::vector<std::pair<std::string, YamlReader>> named_blocks(const std::string& key, const std::string& expected,
                                                                const char* name_rule = nullptr);
-  // Throws for any key that was not read.
+  // Throws for any key that was not read, naming the closest key asked for ("did you mean").
   void finish() const;
   // Throws for any key not in `known`, before they are read: a misspelt required key is then reported
   // as the unknown key it is rather than as a missing one.
   void only(std::initializer_list<std::string> known) const;
 
+  // Whether values whose unit is easily mistaken are checked (common/units_check.hpp); the readers of
+  // its children inherit it. read_units_check: the map's own `units_check: false` turns it off.
+  bool units_check() const { return units_check_; }
+  void read_units_check() { optional("units_check", units_check_); }
+
   [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+  // A required `key` is absent: an unknown key of the map within a typo of it is reported as that
+  // unknown key ("did you mean `key`?"), else `message` for `key`.
+  [[noreturn]] void fail_missing(const std::string& key, const std::string& message = "missing required value") const;
   const std::string& file() const { return file_; }
   std::string full_key(const std::string& key) const;
   int line() const;
@@ -58,12 +66,14 @@ class YamlReader {
   YAML::Node value(const std::string& key, bool required);
   // Throws "unknown key" for the first key of the map that `known` rejects.
   template <class Known>
-  void reject_unknown(Known known) const;
+  void reject_unknown(Known known, const std::vector<std::string>& valid) const;
   YAML::Node node_;
   std::string file_;
   std::string path_;
   LineMap* lines_;
   std::set<std::string> used_;
+  mutable std::set<std::string> asked_;
+  bool units_check_ = true;  // every key has() was asked about: the valid names for "did you mean"
 };
 
 // The most values (scalars, lists and maps, aliases counted again) a document may hold.

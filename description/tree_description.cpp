@@ -120,6 +120,19 @@ std::string make_flexible(TreeDescription& d, int body, FlexibleLinkSpec link) {
   return "";
 }
 
+std::vector<std::string> list_joint_names(const TreeDescription& d) {
+  std::vector<std::string> out;
+  for (const auto& [name, dof] : d.dof_index)
+    if (name.find(".cell") == std::string::npos && name.find(".twist") == std::string::npos) out.push_back(name);
+  return out;
+}
+
+std::vector<std::string> list_body_names(const TreeDescription& d) {
+  std::vector<std::string> out;
+  for (const auto& [name, body] : d.body_index) out.push_back(name);
+  return out;
+}
+
 std::string insert_drive_train(TreeDescription& d, const std::string& joint, const DriveTrain& drive) {
   const auto dof = d.dof_index.find(joint);
   if (dof == d.dof_index.end()) return "no moving joint named '" + joint + "'";

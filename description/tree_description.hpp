@@ -103,4 +103,10 @@ std::string make_flexible(TreeDescription& d, int body, FlexibleLinkSpec link);
 // every body has passed inertia_fault and joint_fault alone before).
 std::string finish_description(TreeDescription& d);
 
+// The moving joints a file may name (not the generated ones of flexible links' cells and drive trains),
+// in name order: for "did you mean" and the list an error shows.
+std::vector<std::string> list_joint_names(const TreeDescription& d);
+// Every body (URDF: link) by name, in name order.
+std::vector<std::string> list_body_names(const TreeDescription& d);
+
 }  // namespace ff

@@ -5,12 +5,15 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
 #include <variant>
 
+#include "common/closest.hpp"
+#include "common/units_check.hpp"
 #include "common/field_table.hpp"
 #include "common/errors.hpp"
 #include "multibody/flexible_link.hpp"
@@ -118,10 +121,10 @@ const std::array<Field<FlexibleBlock>, 6> kFlexibleFields{{
 
 constexpr const char* kTorsionOnly = "required with torsion";
 const std::array<Field<BeamSection>, 7> kSectionFields{{
-    {.key = "E", .member = &BeamSection::youngs_modulus, .unit = "Pa", .required = true, .bound = Bound::kPositive},
-    {.key = "G", .member = &BeamSection::shear_modulus, .unit = "Pa", .bound = Bound::kPositive,
+    {.key = "E", .member = &BeamSection::youngs_modulus, .unit = "Pa", .required = true, .bound = Bound::kModulus},
+    {.key = "G", .member = &BeamSection::shear_modulus, .unit = "Pa", .bound = Bound::kModulus,
      .fallback = kTorsionOnly},
-    {.key = "density", .member = &BeamSection::density, .unit = "kg/m³", .required = true, .bound = Bound::kPositive},
+    {.key = "density", .member = &BeamSection::density, .unit = "kg/m³", .required = true, .bound = Bound::kDensity},
     {.key = "area", .member = &BeamSection::area, .unit = "m²", .required = true, .bound = Bound::kPositive},
     {.key = "I_y", .member = &BeamSection::second_moment_y, .unit = "m⁴", .required = true, .bound = Bound::kPositive},
     {.key = "I_z", .member = &BeamSection::second_moment_z, .unit = "m⁴", .required = true, .bound = Bound::kPositive},
@@ -175,7 +178,7 @@ FlexibleLinkSpec read_flexible_block(YamlReader& r) {
   sr.finish();
   r.finish();
   require(r, kFlexibleFields);
-  if (!r.has("section")) r.fail("section", "missing required value");
+  if (!r.has("section")) r.fail_missing("section");
   require(sr, kSectionFields);
   if (fb.torsion && !fb.planar)
     for (const char* key : {"G", "J"})
@@ -222,6 +225,7 @@ std::vector<KeyDoc> joint_spring_keys(const std::string& prefix) {
 std::vector<KeyDoc> tree_yaml_keys() {
   std::vector<KeyDoc> out;
   add_keys(out, "", kTopFields);
+  out.push_back(kUnitsCheckKey);
   out.push_back({"bodies", "", "yes", ""});
   add_keys(out, "bodies[i].", kBodyFields);
   add_keys(out, "bodies[i].", kRigidFields);
@@ -241,11 +245,12 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
   if (!doc || doc.IsNull()) top.fail("bodies", "the file is empty");
   TreeDescription d;
   d.base = "base";
+  top.read_units_check();
   read_present(top, kTopFields, d.spec);
   const YAML::Node list = top.raw("bodies");
   std::vector<YamlReader> bodies = top.sequence("bodies");
   top.finish();
-  if (!top.has("bodies")) top.fail("bodies", "missing required value");
+  if (!top.has("bodies")) top.fail_missing("bodies");
   if (bodies.empty()) top.fail("bodies", "expected a list of at least one body");
   if (const std::string fault = tree_size_fault(bodies.size()); !fault.empty()) top.fail("bodies", fault);
 
@@ -283,7 +288,7 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
     } else {
       require(r, kRigidFields);
     }
-    if (!r.has("joint")) r.fail("joint", "missing required value");
+    if (!r.has("joint")) r.fail_missing("joint");
     require(jr, kJointFields);
     if (r.has("inertia")) require(ir, kInertiaFields);
     if (r.has("flexible")) flexible.emplace_back(i, read_flexible_block(fr));
@@ -303,7 +308,11 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
       r.fail("parent", "'" + bb.parent + "' is defined later (bodies[" + std::to_string(later->second.index) +
                            "], line " + std::to_string(later->second.line) + "): list a parent before its children");
     } else {
-      r.fail("parent", "no body named '" + bb.parent + "' (a parent is `base` or the name of an earlier body)");
+      std::vector<std::string> earlier{"base"};
+      for (const auto& [name, at] : body_names)
+        if (at.index < i) earlier.push_back(name);
+      r.fail("parent", "no body named '" + bb.parent + "'" + format_did_you_mean(bb.parent, earlier) +
+                           " (a parent is `base` or the name of an earlier body)");
     }
 
     b.joint = parse_joint_type(jr, jb.type);
@@ -313,6 +322,11 @@ TreeDescription parse_tree_yaml(const YAML::Node& doc, const std::string& source
     }
     if (jb.lower > jb.upper)
       jr.fail("upper", "is below lower (" + format_key_number(jb.upper) + " < " + format_key_number(jb.lower) + ")");
+    // A revolute joint's angles in radians (a limit of none is infinite: not written).
+    const std::pair<const char*, double> angles[] = {{"lower", jb.lower}, {"upper", jb.upper}, {"spring_reference", b.spring_reference}};
+    if (b.joint == JointType::kRevolute && jr.units_check())
+      for (const auto& [key, x] : angles)
+        if (std::isfinite(x) && !explain_angle_unit(x).empty()) jr.fail(key, explain_angle_unit(x));
     JointInfo info{.name = jb.name.empty() ? b.name : jb.name,
                    .lower = jb.lower, .upper = jb.upper, .effort = jb.effort, .velocity = jb.velocity,
                    .friction = jb.friction};

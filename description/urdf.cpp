@@ -28,6 +28,7 @@
 
 #include <strings.h>  // strncasecmp
 
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "multibody/limits.hpp"
 
@@ -297,9 +298,11 @@ void read_gazebo_springs(const std::string& source, XmlIndex& x) {
     const char* ref = g->Attribute("reference");
     if (!ref || !*ref) fail(source, g, "gazebo", "a spring needs reference=\"JOINT\"");
     const std::string what = std::string("gazebo reference=\"") + ref + "\"";
+    std::vector<std::string> joint_names;
+    for (const auto& [name, j] : x.joints) joint_names.push_back(name);
     if (!x.joints.count(ref))
       fail(source, g, what, x.links.count(ref) ? std::string("names a link: springs belong to joints")
-                                                : std::string("no joint named \"") + ref + "\"");
+                                                : std::string("no joint named \"") + ref + "\"" + format_did_you_mean(ref, joint_names));
     std::map<std::string, Written>* into[] = {&x.spring_stiffness, &x.spring_reference};
     for (int k = 0; k < 2; ++k) {
       const TiXmlElement* e = tags[k];
@@ -636,6 +639,7 @@ void apply_urdf_sidecar(TreeDescription& d, const YAML::Node& doc, const std::st
   LineMap lines;
   YamlReader top(doc, source, "", &lines);
   if (!doc || doc.IsNull()) top.fail("joints", "the file is empty");
+  top.read_units_check();
   const YAML::Node map = top.raw("joints"), link_map = top.raw("links");
   YamlReader joints = top.child("joints");
   YamlReader links = top.child("links");
@@ -645,7 +649,8 @@ void apply_urdf_sidecar(TreeDescription& d, const YAML::Node& doc, const std::st
     for (const auto& kv : map) {
       const std::string name = kv.first.Scalar();
       const auto it = std::find_if(d.joints.begin(), d.joints.end(), [&](const JointInfo& j) { return j.name == name; });
-      if (it == d.joints.end()) joints.fail(name, "no joint named '" + name + "' in the URDF");
+      if (it == d.joints.end())
+        joints.fail(name, "no joint named '" + name + "' in the URDF" + format_did_you_mean(name, list_joint_names(d)));
       BodySpec& body = d.spec.bodies.at(static_cast<std::size_t>(it - d.joints.begin()));
       if (body.joint == JointType::kFixed)
         joints.fail(name, "joint '" + name + "' is fixed: it has no degree of freedom for these values");
@@ -668,7 +673,8 @@ void apply_urdf_sidecar(TreeDescription& d, const YAML::Node& doc, const std::st
       const std::string name = kv.first.Scalar();
       if (name == d.base) links.fail(name, "link '" + name + "' is the root link, the fixed base: it cannot be flexible");
       const auto it = d.body_index.find(name);
-      if (it == d.body_index.end()) links.fail(name, "no link named '" + name + "' in the URDF");
+      if (it == d.body_index.end())
+        links.fail(name, "no link named '" + name + "' in the URDF" + format_did_you_mean(name, list_body_names(d)));
       YamlReader link = links.child(name);
       link.only({"flexible"});
       YamlReader block = link.child("flexible", true);
@@ -692,7 +698,7 @@ void apply_urdf_sidecar(TreeDescription& d, const YAML::Node& doc, const std::st
 }
 
 std::vector<KeyDoc> urdf_sidecar_keys() {
-  std::vector<KeyDoc> out{{"joints", "", "no", "none"}};
+  std::vector<KeyDoc> out{{"joints", "", "no", "none"}};  // and `units_check`, in the tree's table
   for (KeyDoc& k : joint_spring_keys("joints.NAME.")) out.push_back(std::move(k));
   out.push_back({"links", "", "no", "none"});
   out.push_back({"links.NAME.flexible", "", "yes", ""});

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "common/errors.hpp"
+#include "common/units_check.hpp"
 #include "kernel/batch.hpp"
 #include "kernel/drive.hpp"
 #include "kernel/modes.hpp"
@@ -44,6 +45,12 @@ void validate(const ModelSpec& s, const std::string& src) {
   positive(s.beam.thickness, "beam.thickness");
   non_negative(s.beam.density, "beam.density");
   positive(s.beam.youngs_modulus, "beam.youngs_modulus");
+  // A unit mistake (GPa for Pa, g/cm³ for kg/m³, degrees for radians) unless the file allows it.
+  auto plausible = [&](const std::string& why, const std::string& key) {
+    if (s.units_check && !why.empty()) throw ConfigError(src, 0, key, why);
+  };
+  plausible(explain_modulus_unit(s.beam.youngs_modulus), "beam.youngs_modulus");
+  plausible(explain_density_unit(s.beam.density), "beam.density");
   if (s.segments < 1) throw ConfigError(src, 0, "segments", "must be >= 1 (1 = a rigid arm), got " + std::to_string(s.segments));
   if (s.segments > 4096) throw ConfigError(src, 0, "segments", "must be <= 4096, got " + std::to_string(s.segments));
   positive(s.joints.stiffness, "joints.stiffness");
@@ -97,6 +104,7 @@ void validate(const ModelSpec& s, const std::string& src) {
     const auto& m = s.trajectory.moves[j];
     const std::string key = "trajectory.moves[" + std::to_string(j) + "]";
     if (!std::isfinite(m.target)) throw ConfigError(src, 0, key + ".target", "must be finite");
+    plausible(explain_angle_unit(m.target), key + ".target");
     if (m.target == previous) throw ConfigError(src, 0, key + ".target", "a move must change the target (zero amplitude)");
     if (!(m.hold >= 0)) throw ConfigError(src, 0, key + ".hold", "must be >= 0");
     previous = m.target;

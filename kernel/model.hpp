@@ -194,6 +194,7 @@ struct SimulationSpec {
 struct ModelSpec {
   BeamSpec beam;
   int segments = 6;               // N >= 2
+  bool units_check = true;        // `units_check`: targets beyond a turn, implausible E or density refused
   JointSpec joints;
   double hub_inertia = 50.0;      // kg·m^2, actuator + pinion + base frame
   // A constant load torque on the hub, signed (the drive must supply it to hold still): cable drag, an

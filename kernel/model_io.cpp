@@ -217,6 +217,8 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   ModelSpec s;
   YamlReader top(doc, src, "", &lines);
   if (!doc || doc.IsNull()) top.fail("beam", "the file is empty");
+  top.read_units_check();
+  s.units_check = top.units_check();
 
   read_block(top, "beam", kBeamFields, s.beam, true).finish();
   read_unchecked(top, kTopFields, s);
@@ -289,6 +291,7 @@ std::vector<KeyDoc> rig_model_keys() {
   std::vector<KeyDoc> out;
   add_keys(out, "beam.", kBeamFields);
   add_keys(out, "", kTopFields);
+  out.push_back(kUnitsCheckKey);
   add_keys(out, "joints.", kJointFields);
   add_keys(out, "hub.", kHubFields);
   add_keys(out, "payload.", kPayloadFields);

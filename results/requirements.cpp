@@ -188,7 +188,7 @@ RequirementSet read_requirements(YamlReader& top) {
   if (node.IsMap()) {
     YamlReader r = top.child("requirements");
     r.only({"statements", "confidence", "stop_when_decided", "check_every"});
-    if (!r.has("statements")) r.fail("statements", "missing required value (a list of statements)");
+    if (!r.has("statements")) r.fail_missing("statements", "missing required value (a list of statements)");
     list.reset(r.raw("statements"));  // reset: a Node's operator= would write into `requirements:` itself
     list_key = r.full_key("statements");
     read_present(r, kRequirementFields, set);

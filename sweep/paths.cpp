@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "arm/arm_yaml.hpp"
+#include "common/closest.hpp"
 #include "common/errors.hpp"
 #include "common/text.hpp"
 #include "common/yaml_reader.hpp"
@@ -29,6 +30,15 @@ int find_named(const YAML::Node& seq, const std::string& name) {
     if (seq[i].IsMap() && seq[i]["name"] && seq[i]["name"].IsScalar() && seq[i]["name"].Scalar() == name)
       return static_cast<int>(i);
   return -1;
+}
+
+// The `name`s of a sequence's elements.
+std::vector<std::string> list_names(const YAML::Node& seq) {
+  std::vector<std::string> out;
+  if (seq.IsSequence())
+    for (const auto& e : seq)
+      if (e.IsMap() && e["name"] && e["name"].IsScalar()) out.push_back(e["name"].Scalar());
+  return out;
 }
 
 std::vector<Step> split_path(const std::string& path, const std::string& source) {
@@ -78,7 +88,8 @@ std::string set_path(YAML::Node& doc, const std::string& path, const YAML::Node&
     Step st = steps[s];
     if (!st.name.empty()) {
       st.index = find_named(node, st.name);
-      if (st.index < 0) throw ConfigError(source, 0, path, "no element of the list is named '" + st.name + "'");
+      if (st.index < 0)
+        throw ConfigError(source, 0, path, "no element of the list is named '" + st.name + "'" + format_did_you_mean(st.name, list_names(node)));
     }
     if (st.index >= 0) {
       if (!node.IsSequence() || st.index >= static_cast<int>(node.size()))
@@ -194,24 +205,59 @@ std::vector<Assignment> parse_assignments(const std::vector<std::string>& sets) 
 }
 }  // namespace
 
+namespace {
+// The line of a top-level key itself (a block's value starts on the next).
+int line_of_key(const YAML::Node& doc, const char* key) {
+  for (const auto& kv : doc)
+    if (kv.first.IsScalar() && kv.first.Scalar() == key && !kv.first.Mark().is_null()) return kv.first.Mark().line + 1;
+  return 0;
+}
+}  // namespace
+
+YAML::Node load_model_file(const std::string& path) {
+  YAML::Node doc = load_yaml_file(path);
+  if (doc.IsMap() && doc["model"] && !doc["beam"] && !is_arm_document(doc))
+    throw ConfigError(path, line_of_key(doc, "model"), "model",
+                      "this is a study file (it names a `model:`), not a model: run it with `flexfarm run " + path +
+                          " --out DIR`; this verb takes a model file (the rig's `beam:` or an arm's `bodies:`/`urdf:`)");
+  // A URDF sidecar: `joints` or `links` by name and none of a rig's other blocks.
+  const bool sidecar = doc.IsMap() && (doc["links"] || doc["joints"]) && !doc["beam"] && !doc["segments"] &&
+                       !doc["payload"] && !doc["hub"] && !is_arm_document(doc);
+  if (sidecar)
+    throw ConfigError(path, line_of_key(doc, doc["links"] ? "links" : "joints"), "",
+                      "this is a URDF sidecar, not a model: give it with its URDF (`flexfarm modes ROBOT.urdf --sidecar " +
+                          path + "`) or as an arm model's `sidecar:`");
+  return doc;
+}
+
+void check_not_model(const YAML::Node& doc, const std::string& path) {
+  if (!doc.IsMap() || doc["model"]) return;
+  const char* key = doc["beam"] ? "beam" : doc["bodies"] ? "bodies" : doc["urdf"] ? "urdf" : nullptr;
+  if (key)
+    throw ConfigError(path, line_of_key(doc, key), "",
+                      std::string("this is a model file (it has `") + key + ":`), not a study: simulate it with " +
+                          "`flexfarm simulate " + path + " --out DIR` (or `flexfarm modes " + path +
+                          "`); `flexfarm run` takes a study file, whose `model:` names a model file");
+}
+
 // Not build_model: YAML::Clone drops the line marks an error in the file is reported at.
 Model load_model_with(const std::string& path, const std::vector<std::string>& sets) {
-  return make_model_with(load_yaml_file(path), path, parse_assignments(sets));
+  return make_model_with(load_model_file(path), path, parse_assignments(sets));
 }
 
 ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets) {
-  YAML::Node doc = load_yaml_file(path);
+  YAML::Node doc = load_model_file(path);
   ModelSource src{YAML::Clone(doc), path, parse_assignments(sets)};
   make_model_with(doc, path, src.set);  // on the document as read, so that an error names its line
   return src;
 }
 
 ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets) {
-  return make_arm_with(load_yaml_file(path), path, parse_assignments(sets));
+  return make_arm_with(load_model_file(path), path, parse_assignments(sets));
 }
 
 ModelSource load_arm_source(const std::string& path, const std::vector<std::string>& sets) {
-  YAML::Node doc = load_yaml_file(path);
+  YAML::Node doc = load_model_file(path);
   ModelSource src{YAML::Clone(doc), path, parse_assignments(sets)};
   make_arm_with(doc, path, src.set);  // on the document as read, so that an error names its line
   return src;
@@ -225,7 +271,7 @@ ArmModel build_arm(const ModelSource& src, const std::vector<Assignment>& extra)
 
 bool is_arm_model_file(const std::string& path) {
   try {
-    return is_arm_document(load_yaml_file(path));
+    return is_arm_document(load_model_file(path));
   } catch (const std::exception&) {
     return false;
   }

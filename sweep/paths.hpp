@@ -67,4 +67,10 @@ ArmModel build_arm(const ModelSource& src, const std::vector<Assignment>& extra 
 // reference rig's; false for a file that cannot be read or parsed (the loader then says why).
 bool is_arm_model_file(const std::string& path);
 
+// A model file's document (load_yaml_file), refusing a study file ("a study file, not a model: `flexfarm
+// run` takes it"). Every loader above reads through it.
+YAML::Node load_model_file(const std::string& path);
+// Refuses a model file `doc` given where a study is wanted (as `flexfarm run`'s STUDY.yaml).
+void check_not_model(const YAML::Node& doc, const std::string& path);
+
 }  // namespace ff

@@ -88,7 +88,7 @@ DesignKind parse_design_kind(YamlReader& r, const std::string& name) {
 Distribution parse_distribution(YamlReader r) {
   Distribution d;
   std::string type;
-  if (!r.has("type")) r.fail("type", "missing required value (uniform, normal, truncated_normal, lognormal, choice)");
+  if (!r.has("type")) r.fail_missing("type", "missing required value (uniform, normal, truncated_normal, lognormal, choice)");
   r.optional("type", type);
   if (type == "uniform") {
     d.kind = DistributionKind::kUniform;
@@ -145,7 +145,7 @@ Distribution parse_distribution(YamlReader r) {
 // it down from max_variants - 1), which refuses no design the limit would let through.
 Variable parse_variable(YamlReader& r, bool& integer, int max_variants, long long& levels_left) {
   Variable v;
-  if (!r.has("path")) r.fail("path", "missing required value (the model parameter, e.g. payload.mass)");
+  if (!r.has("path")) r.fail_missing("path", "missing required value (the model parameter, e.g. payload.mass)");
   r.optional("path", v.path);
   if (const YAML::Node lv = r.raw("levels")) {
     if (!lv.IsSequence() || lv.size() == 0) r.fail("levels", "expected a non-empty list of numbers");
@@ -253,7 +253,7 @@ void parse_design(Study& st, YamlReader& top, int max_variants) {
   auto design = top.child("design", true);
   DesignSpec spec;
   std::string type;
-  if (!design.has("type")) design.fail("type", "missing required value");
+  if (!design.has("type")) design.fail_missing("type");
   design.optional("type", type);
   spec.kind = parse_design_kind(design, type);
   design.optional("samples", spec.samples);
@@ -380,18 +380,19 @@ Study read_study(const std::string& path, int max_variants) {
   st.text = read_text(path);
   YamlReader top(doc, path, "", nullptr);
   if (!doc || doc.IsNull()) top.fail("model", "the file is empty");
+  check_not_model(doc, path);
   st.name = std::filesystem::path(path).stem().string();
   top.optional("name", st.name);
   top.optional("description", st.description);
   st.seed = read_seed(top);
 
   std::string model;
-  if (!top.has("model")) top.fail("model", "missing required value (path of the model YAML, relative to this file)");
+  if (!top.has("model")) top.fail_missing("model", "missing required value (path of the model YAML, relative to this file)");
   top.optional("model", model);
   if (is_blank_path(model)) top.fail("model", "must not be empty or blank (the path of the model YAML)");  // not this directory
   st.model_path = (std::filesystem::path(path).parent_path() / model).lexically_normal().string();
   if (!std::filesystem::exists(st.model_path)) top.fail("model", "model file '" + st.model_path + "' does not exist");
-  load_yaml_file(st.model_path);  // syntax errors name the model file and line
+  load_model_file(st.model_path);  // syntax errors name the model file and line
   st.model_text = read_text(st.model_path);
   st.set = read_assignments(top, "set");
 

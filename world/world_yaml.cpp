@@ -74,7 +74,7 @@ World read_world(YamlReader& top, const std::string& source) {
                                             "commas or quotes")) {
     Obstacle o;
     o.name = name;
-    if (!one.has("type")) one.fail("type", "missing required value (box, sphere, cylinder, capsule, bore, plane, mesh)");
+    if (!one.has("type")) one.fail_missing("type", "missing required value (box, sphere, cylinder, capsule, bore, plane, mesh)");
     ObstacleBlock b;
     read_present(one, kObstacleFields, b);
     if (!parse_shape_type(b.type, o.type))

@@ -69,6 +69,38 @@ TEST_F(Cli, NoVerbOrUnknownVerbFails) {
   EXPECT_NE(run("modes").exit_code, 0);  // the model is required
 }
 
+TEST_F(Cli, AMisspeltVerbIsNamedWithTheClosestVerb) {
+  // Not CLI11's "A subcommand is required": the word given, and the verb meant. A usage error: exit 2.
+  const auto r = run("simulat configs/fbtb.yaml --out out");
+  expect_one_error_line(r, "unknown verb 'simulat' (did you mean `simulate`?) (flexfarm --help lists the verbs)");
+  EXPECT_EQ(r.exit_code, 2);
+  expect_one_error_line(run("mdoes configs/fbtb.yaml"), "unknown verb 'mdoes' (did you mean `modes`?)");
+  expect_one_error_line(run("launch configs/fbtb.yaml"), "unknown verb 'launch' (flexfarm --help lists the verbs)");
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, AStudyGivenToSimulateAndAModelGivenToRunAreNamedWithTheVerbThatTakesEach) {
+  std::ofstream(work / "study.yaml") << "model: configs/fbtb.yaml\nruns:\n  - label: a\n";
+  const auto sim = run("simulate study.yaml --out out");
+  expect_one_error_line(sim, "study.yaml:1: model: this is a study file (it names a `model:`), not a model: run it with "
+                             "`flexfarm run study.yaml --out DIR`");
+  EXPECT_EQ(sim.exit_code, 2);
+  const auto rn = run("run configs/fbtb.yaml --out out");
+  expect_one_error_line(rn, "configs/fbtb.yaml:4: this is a model file (it has `beam:`), not a study: simulate it with "
+                            "`flexfarm simulate configs/fbtb.yaml --out DIR`");
+  EXPECT_EQ(rn.exit_code, 2);
+  EXPECT_FALSE(fs::exists(work / "out"));
+}
+
+TEST_F(Cli, ATargetInDegreesSetOnTheCommandLineIsRefused) {
+  const auto r = run("simulate configs/fbtb.yaml --out out --set trajectory.moves[0].target=30");
+  expect_one_error_line(r, "--set: trajectory.moves[0].target: 30 rad is more than a turn (2 pi): looks like degrees (30 deg = 0.5236 rad)");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_FALSE(fs::exists(work / "out"));
+  expect_one_error_line(run("modes configs/fbtb.yaml --set beam.youngs_modulus=207"), "--set: beam.youngs_modulus: 207 Pa is far below");
+  expect_one_error_line(run("modes configs/fbtb.yaml --set notch.ordre=2"), "--set: notch.ordre: unknown key (did you mean `order`?)");
+}
+
 // ---- modes -------------------------------------------------------------------------------
 
 TEST_F(Cli, ModesOfTheReferenceRig) {
@@ -133,6 +165,10 @@ TEST_F(Cli, ModesOfATreeDescriptionAtItsPoseWithItsShapes) {
   // A locked joint leaves nothing to move.
   EXPECT_EQ(run("modes pendulum.yaml --lock swing").exit_code, 0);
   expect_one_error_line(run("modes pendulum.yaml --lock elbow"), "--lock: elbow: no moving joint of that name");
+  // A pose in degrees (item 32.10), and a typo of the joint's name (32.15).
+  expect_one_error_line(run("modes pendulum.yaml --at swing=90"),
+                        "--at: swing: 90 rad is more than a turn (2 pi): looks like degrees (90 deg = 1.571 rad)");
+  expect_one_error_line(run("modes pendulum.yaml --at swnig=0.5"), "--at: swnig: no moving joint of that name (did you mean `swing`?)");
   // A tree YAML is an arm model: --set paths work on it, and a wrong one is named.
   expect_one_error_line(run("modes pendulum.yaml --set swing=1"), "--set: swing: unknown key");
 }
@@ -694,7 +730,7 @@ TEST_F(Cli, ABadArmModelIsOneLineAndWritesNothing) {
   std::string text = kPendulumArm;
   text.replace(text.find("kp: 400"), 7, "kq: 400");
   write("arm.yaml", text);
-  expect_one_error_line(run("simulate arm.yaml --out out/arm"), "arm.yaml:13: joints.arm.controller.kq: unknown key");
+  expect_one_error_line(run("simulate arm.yaml --out out/arm"), "arm.yaml:13: joints.arm.controller.kq: unknown key (did you mean `kd`?)");
   EXPECT_FALSE(fs::exists(work / "out"));
   write("arm.yaml", kPendulumArm);
   expect_one_error_line(run("simulate arm.yaml --out out/arm --set trajectory.waypoints[0].joints.elbow=1"),

@@ -297,7 +297,7 @@ TEST(ArmHydraulics, ABadKeyOrValueIsNamedAtItsLineAndKey) {
   EXPECT_EQ(arm_error(hydraulic_rotor(10.0, "{kp: 1}", "{supply_pressure: -1}", sim)),
             "arm.yaml:12: joints.hub.hydraulics.supply_pressure: must be > 0, got -1");
   EXPECT_EQ(arm_error(hydraulic_rotor(10.0, "{kp: 1}", "{bulk_modulus: 1.4e9, suply_pressure: 2e7}", sim)),
-            "arm.yaml:12: joints.hub.hydraulics.suply_pressure: unknown key");
+            "arm.yaml:12: joints.hub.hydraulics.suply_pressure: unknown key (did you mean `supply_pressure`?)");
   EXPECT_EQ(arm_error(hydraulic_rotor(10.0, "{kp: 1}", "{tank_pressure: 3.0e7}", sim)),
             "arm.yaml:12: joints.hub.hydraulics.tank_pressure: must be below hydraulics.supply_pressure");
   const std::string forms = arm_error(hydraulic_rotor(10.0, "{kp: 1}", "{piston_area: 0.01, displacement: 2e-3}", sim));

@@ -215,7 +215,7 @@ TEST(ArmSimulate, TheFixedStepIntegratorsFollowCvodeOnTheTwoLinkFlexibleArm) {
 }
 
 TEST(ArmYaml, AnUnknownJointAPassiveWaypointAndABadBlockAreNamedAtTheirLines) {
-  EXPECT_EQ(arm_error(pendulum("{kp: 400, kq: 1}")), "arm.yaml:13: joints.arm.controller.kq: unknown key");
+  EXPECT_EQ(arm_error(pendulum("{kp: 400, kq: 1}")), "arm.yaml:13: joints.arm.controller.kq: unknown key (did you mean `kd`?)");
   std::string text = pendulum("{kp: 400}");
   text.replace(text.find("  arm:\n    controller"), 6, "  elbow:");
   EXPECT_NE(arm_error(text).find("arm.yaml:12: joints.elbow: no moving joint of that name"), std::string::npos)
@@ -228,6 +228,64 @@ TEST(ArmYaml, AnUnknownJointAPassiveWaypointAndABadBlockAreNamedAtTheirLines) {
   EXPECT_NE(arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 2.0, joints: {arm: 1}}\n    - {time: 1.0, joints: {arm: 0}}\n"))
                 .find("trajectory.waypoints[1].time: waypoints must be in time order"),
             std::string::npos);
+}
+
+TEST(ArmYaml, AMisspeltKeyJointOrBodyIsNamedWithTheClosestValidName) {
+  EXPECT_EQ(arm_error(pendulum("{kp: 400, kdd: 1}")), "arm.yaml:13: joints.arm.controller.kdd: unknown key (did you mean `kd`?)");
+  std::string text = pendulum("{kp: 400}");
+  text.replace(text.find("  arm:\n    controller"), 6, "  amr:");
+  EXPECT_EQ(arm_error(text), "arm.yaml:12: joints.amr: no moving joint of that name (did you mean `arm`?) (joints: arm)");
+  EXPECT_EQ(arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {amr: 1}}\n")),
+            "arm.yaml:16: trajectory.waypoints[0].joints.amr: no moving joint of that name (did you mean `arm`?)");
+  EXPECT_EQ(arm_error(pendulum("{kp: 1}", "trajectory:\n  start: {Arm: 0.1}\n  waypoints:\n    - {time: 1.0, joints: {arm: 1}}\n")),
+            "arm.yaml:15: trajectory.start.Arm: no moving joint of that name (did you mean `arm`?) (joints: arm)");
+  text = pendulum("{kp: 1}");
+  text.replace(text.find("body: arm"), 9, "body: amr");
+  EXPECT_EQ(arm_error(text), "arm.yaml: tool.body: no body named 'amr' (did you mean `arm`?)");
+  text = pendulum("{kp: 1}", "trajectroy:\n  waypoints:\n    - {time: 1.0, joints: {arm: 1}}\n");
+  EXPECT_EQ(arm_error(text), "arm.yaml:14: trajectroy: unknown key (did you mean `trajectory`?)");
+}
+
+TEST(ArmModel, ARevoluteWaypointOrStartBeyondATurnLooksLikeDegrees) {
+  // {arm: 57}: 57 degrees meant; as radians 9 turns. Refused at the waypoint's line, naming the unit.
+  const std::string degrees = "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 57}}\n";
+  EXPECT_EQ(arm_error(pendulum("{kp: 1}", degrees)),
+            "arm.yaml:16: trajectory.waypoints[0].joints.arm: 57 rad is more than a turn (2 pi): looks like degrees "
+            "(57 deg = 0.9948 rad); angles are in radians (if it is meant, set `units_check: false` at the top of the file)");
+  EXPECT_NE(arm_error(pendulum("{kp: 1}", "trajectory:\n  start: {arm: -17}\n  waypoints:\n    - {time: 1.0, joints: {arm: 0}}\n"))
+                .find("arm.yaml:15: trajectory.start.arm: -17 rad is more than a turn (2 pi): looks like degrees (-17 deg = -0.2967 rad)"),
+            std::string::npos);
+  // A turn exactly, and the file's own allowance, pass.
+  EXPECT_EQ(arm_error(pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 6.283185307179586}}\n")), "no error");
+  const ArmModel m = test::arm_from("units_check: false\n" + pendulum("{kp: 1}", degrees));
+  EXPECT_EQ(m.trajectory.waypoints.at(0).q.at(0), 57.0);
+}
+
+TEST(ArmModel, ALimitBeyondItsJointsMessageShowsTheLimits) {
+  std::string text = pendulum("{kp: 1}", "trajectory:\n  waypoints:\n    - {time: 1.0, joints: {arm: 3}}\n");
+  text.replace(text.find("armature: 0.05}"), 15, "armature: 0.05, lower: -1.5, upper: 1.5}");
+  EXPECT_EQ(arm_error(text), "arm.yaml:16: trajectory.waypoints[0]: joint arm at 3 is beyond its limits [-1.5, 1.5] (rad or m)");
+}
+
+TEST(ArmModel, ASagThatRaisesTheMassCentreIsRefusedNamingTheUnits) {
+  // configs/flex100.yaml's left arm with E = 70 Pa (70 GPa meant) and the unit check off: the lumped
+  // link folds back on itself, its tip 298 mm up; that "equilibrium" is no sag, and is refused.
+  const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/flex100.yaml";
+  YAML::Node doc = load_yaml_file(path);
+  doc["units_check"] = false;
+  for (YAML::Node b : doc["bodies"])
+    if (b["name"].as<std::string>() == "left_arm") b["flexible"]["section"]["E"] = 70.0;
+  try {
+    parse_arm(doc, path);
+    ADD_FAILURE() << "accepted";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path + ": the static sag under gravity moved the arm's mass centre up by ", 0), 0u) << what;
+    EXPECT_NE(what.find("mm, against gravity: links far too soft for their load; check the flexible links' E and G (Pa, "
+                        "not GPa) and density (kg/m³)"),
+              std::string::npos)
+        << what;
+  }
 }
 
 TEST(ArmYaml, DocsListEveryKeyWithTheReadersUnitRequirementAndDefault) {

@@ -57,20 +57,32 @@ std::vector<BeamMode> continuous_modes(const FlexibleLinkSpec& link) {
   return out;
 }
 
-TEST(LongFlexibleArm, LockedArmsFirstThreeModesAreTheContinuousBeamsWithinOnePercent) {
+// configs/flex100.yaml with gravity and the dampers off and its six drives locked: the spec and the
+// lumped arms' modes.
+struct LockedArms {
+  ArmSpec spec;
+  std::vector<TreeMode> lumped;
+};
+LockedArms lock_flex100() {
   const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/configs/flex100.yaml";
   YAML::Node doc = load_yaml_file(path);
   doc["gravity"] = std::vector<double>{0.0, 0.0, 0.0};
   for (YAML::Node b : doc["bodies"])
     if (b["flexible"]) b["flexible"]["damping_time"] = 0.0;
-  const ArmSpec spec = parse_arm_spec(doc, path);
-  const Tree tree = make_tree(spec.tree.spec);
-  ASSERT_EQ(spec.tree.flexible_links.size(), 2u);
-  ASSERT_EQ(tree.nv(), 198);  // two arms of 3 drives + 32 cells x 3 elastic joints
+  LockedArms out{parse_arm_spec(doc, path), {}};
+  const Tree tree = make_tree(out.spec.tree.spec);
+  EXPECT_EQ(out.spec.tree.flexible_links.size(), 2u);
+  EXPECT_EQ(tree.nv(), 198);  // two arms of 3 drives + 32 cells x 3 elastic joints
   TreeModeOptions options;
-  for (const JointControlSpec& j : spec.joints) options.locked_dofs.push_back(spec.tree.dof_index.at(j.joint));
-  ASSERT_EQ(options.locked_dofs.size(), 6u);
-  const std::vector<TreeMode> lumped = calc_tree_modes(tree, Eigen::VectorXd::Zero(tree.nv()), options);
+  for (const JointControlSpec& j : out.spec.joints) options.locked_dofs.push_back(out.spec.tree.dof_index.at(j.joint));
+  EXPECT_EQ(options.locked_dofs.size(), 6u);
+  out.lumped = calc_tree_modes(tree, Eigen::VectorXd::Zero(tree.nv()), options);
+  return out;
+}
+
+TEST(LongFlexibleArm, LockedArmsFirstThreeModesAreTheContinuousBeamsWithinOnePercent) {
+  const auto [spec, lumped] = lock_flex100();
+  ASSERT_EQ(spec.tree.flexible_links.size(), 2u);
 
   // Both arms are the same link: each continuous frequency is two of the lumped arm's (one per arm).
   const FlexibleLinkSpec& link = spec.tree.flexible_links[0].link;
@@ -89,6 +101,18 @@ TEST(LongFlexibleArm, LockedArmsFirstThreeModesAreTheContinuousBeamsWithinOnePer
   }
   // The seventh is above the third pair (no mode of the continuous beam is missed in between).
   EXPECT_GT(lumped[6].omega_n, 1.01 * beam[2].omega);
+}
+
+TEST(LongFlexibleArm, TheFirstTorsionModeIs951RadPerSecondByTheShaftEquationAndLumped) {
+  // docs/flex100.md: beta tan beta = rho I_p L / J_t gives 951.1 rad/s; the lumped arm (N = 33) 951.09.
+  const auto [spec, lumped] = lock_flex100();
+  double torsion = 0.0;
+  for (const BeamMode& m : continuous_modes(spec.tree.flexible_links.at(0).link))
+    if (m.kind == "torsion" && torsion == 0.0) torsion = m.omega;
+  EXPECT_NEAR(torsion, 951.13, 0.01);
+  ASSERT_GE(lumped.size(), 10u);
+  EXPECT_NEAR(lumped[8].omega_n, 951.09, 0.01);  // the fifth pair: after bending z, y, z and y
+  EXPECT_NEAR(lumped[9].omega_n, 951.09, 0.01);
 }
 
 }  // namespace

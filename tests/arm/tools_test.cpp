@@ -145,7 +145,7 @@ TEST(ArmTools, BadToolsInputIsNamedAtItsFileLineAndKey) {
   bad_body.replace(bad_body.find("right_fore"), 10, "right_hnd");
   EXPECT_EQ(arm_error(two_arms(bad_body, wp)), "arm.yaml:12: tools.right.body: no body named 'right_hnd'");
   EXPECT_EQ(arm_error(two_arms("tools:\n  left: {body: left_fore, pont: [0, 0, 0]}\n", wp)),
-            "arm.yaml:11: tools.left.pont: unknown key");
+            "arm.yaml:11: tools.left.pont: unknown key (did you mean `point`?)");
   EXPECT_EQ(arm_error(two_arms("tools:\n  left_elbow: {body: left_fore}\n", wp)),
             "arm.yaml:11: tools.left_elbow: an actuated joint has that name: its columns and metrics would clash");
   EXPECT_EQ(arm_error(two_arms("tools:\n  left.tip: {body: left_fore}\n", wp)),

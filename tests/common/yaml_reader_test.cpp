@@ -120,3 +120,54 @@ TEST(YamlReader, AFlagReadsTrueFalseAndTheSweepsOneAndZero) {
     }
   }
 }
+
+// Unknown keys name the closest key the reader asked for; a required key missing next to a near miss
+// is that near miss's error, not "missing required value" (issue 32, item 15).
+TEST(YamlReader, AnUnknownKeyNamesTheClosestKeyTheReaderAskedFor) {
+  const YAML::Node doc = ff::load_yaml_text("stiffness: 1\ndampnig: 2\n", "t.yaml");
+  ff::YamlReader r(doc, "t.yaml", "joints", nullptr);
+  double k = 0, c = 0;
+  r.optional("stiffness", k);
+  r.optional("damping", c);
+  try {
+    r.finish();
+    ADD_FAILURE() << "accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "t.yaml:2: joints.dampnig: unknown key (did you mean `damping`?)");
+  }
+  try {
+    r.only({"stiffness", "damping"});
+    ADD_FAILURE() << "accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "t.yaml:2: joints.dampnig: unknown key (did you mean `damping`?)");
+  }
+}
+
+TEST(YamlReader, AMissingRequiredKeyBesideItsMisspellingIsTheMisspelling) {
+  const YAML::Node doc = ff::load_yaml_text("stifness: 1\nreference_cell: 2\n", "t.yaml");
+  ff::YamlReader r(doc, "t.yaml", "joints", nullptr);
+  double k = 0;
+  try {
+    r.required("stiffness", k);
+    ADD_FAILURE() << "accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "t.yaml:1: joints.stifness: unknown key (did you mean `stiffness`?)");
+  }
+  // Nothing near it: missing, as before.
+  ff::YamlReader far(doc, "t.yaml", "joints", nullptr);
+  try {
+    far.required("damping", k);
+    ADD_FAILURE() << "accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.message(), "missing required value");
+  }
+}
+
+TEST(YamlReader, TheUnitsCheckIsInheritedAndTurnedOffByTheFilesKey) {
+  const YAML::Node doc = ff::load_yaml_text("units_check: false\nsection: {E: 70}\n", "t.yaml");
+  ff::YamlReader top(doc, "t.yaml", "", nullptr);
+  EXPECT_TRUE(top.units_check());
+  top.read_units_check();
+  EXPECT_FALSE(top.units_check());
+  EXPECT_FALSE(top.child("section").units_check());
+}

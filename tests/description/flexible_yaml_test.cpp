@@ -298,7 +298,17 @@ TEST(FlexibleYaml, AMissingLengthANegativeIzAndAnUnknownSectionKeyAreNamedAtThei
   EXPECT_EQ(yaml_error(with_line(kFlexArm, 23, "        I_z: -1.35e-8")),
             "arm.yaml:23: bodies[1].flexible.section.I_z: must be > 0, got -1.35e-08");
   EXPECT_EQ(yaml_error(with_line(kFlexArm, 22, "        I_x: 5.4e-10")),
-            "arm.yaml:22: bodies[1].flexible.section.I_x: unknown key");
+            "arm.yaml:22: bodies[1].flexible.section.I_x: unknown key (did you mean `I_y`?)");
+}
+
+TEST(FlexibleYaml, AModulusInGpaOrADensityInGramsPerCubicCentimetreIsAUnitMistake) {
+  EXPECT_EQ(yaml_error(with_line(kFlexArm, 18, "        E: 70.0")),
+            "arm.yaml:18: bodies[1].flexible.section.E: 70 Pa is far below any engineering material (1e6 to 2e12 Pa): looks "
+            "like GPa (70 GPa = 7e+10 Pa); moduli are in Pa (if it is meant, set `units_check: false` at the top of the file)");
+  EXPECT_NE(yaml_error(with_line(kFlexArm, 19, "        G: 26.0")).find("arm.yaml:19: bodies[1].flexible.section.G: 26 Pa is far below"),
+            std::string::npos);
+  EXPECT_NE(yaml_error(with_line(kFlexArm, 20, "        density: 2.7")).find("looks like g/cm³ (2.7 g/cm³ = 2700 kg/m³)"),
+            std::string::npos);
 }
 
 TEST(FlexibleYaml, OtherBadValuesAreNamedAtTheirKeys) {
@@ -316,7 +326,7 @@ TEST(FlexibleYaml, OtherBadValuesAreNamedAtTheirKeys) {
   EXPECT_NO_THROW(parse(with_line(with_line(kFlexArm, 19, ""), 16, "      torsion: false")));
   EXPECT_EQ(yaml_error(with_line(kFlexArm, 28, "        inertia: {ixx: 1.0e-4, iyy: -2.0e-4, izz: 2.0e-4}")),
             "arm.yaml:28: bodies[1].flexible.payload.inertia: is not positive semi-definite");
-  EXPECT_EQ(yaml_error(with_line(kFlexArm, 26, "        mas: 0.2")), "arm.yaml:26: bodies[1].flexible.payload.mas: unknown key");
+  EXPECT_EQ(yaml_error(with_line(kFlexArm, 26, "        mas: 0.2")), "arm.yaml:26: bodies[1].flexible.payload.mas: unknown key (did you mean `mass`?)");
   std::string scalar_section = with_line(kFlexArm, 17, "      section: 3");
   for (int n = 18; n <= 24; ++n) scalar_section = with_line(scalar_section, n, "");
   EXPECT_EQ(yaml_error(scalar_section),
@@ -385,13 +395,13 @@ TEST(FlexibleUrdf, TheSidecarRejectsAnUnknownLinkTheRootABadKeyAndAMissingBlock)
   const std::string section = "section: {E: 7.0e10, G: 2.6e10, density: 2700, area: 1.8e-4, I_y: 5.4e-10, "
                               "I_z: 1.35e-8, J: 1.9e-9}";
   EXPECT_EQ(sidecar_error("links:\n  forarm:\n    flexible: {length: 0.6, " + section + "}\n"),
-            "arm.yaml:2: links.forarm: no link named 'forarm' in the URDF");
+            "arm.yaml:2: links.forarm: no link named 'forarm' in the URDF (did you mean `forearm`?)");
   EXPECT_EQ(sidecar_error("links:\n  base_link:\n    flexible: {length: 0.6, " + section + "}\n"),
             "arm.yaml:2: links.base_link: link 'base_link' is the root link, the fixed base: it cannot be flexible");
   EXPECT_EQ(sidecar_error("links:\n  forearm:\n    flexible: {length: 0.6, lenght: 1, " + section + "}\n"),
-            "arm.yaml:3: links.forearm.flexible.lenght: unknown key");
+            "arm.yaml:3: links.forearm.flexible.lenght: unknown key (did you mean `length`?)");
   EXPECT_EQ(sidecar_error("links:\n  forearm:\n    flexibel: {length: 0.6}\n"),
-            "arm.yaml:3: links.forearm.flexibel: unknown key");
+            "arm.yaml:3: links.forearm.flexibel: unknown key (did you mean `flexible`?)");
   EXPECT_EQ(sidecar_error("links:\n  forearm:\n    flexible:\n      length: -0.6\n      " + section + "\n"),
             "arm.yaml:4: links.forearm.flexible.length: must be > 0, got -0.6");
   EXPECT_EQ(sidecar_error("links:\n  forearm: {}\n"), "arm.yaml:2: links.forearm.flexible: missing required value");

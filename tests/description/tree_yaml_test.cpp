@@ -124,12 +124,33 @@ TEST(TreeYaml, LimitsAndFrictionAreKeptBesideTheTree) {
 // --- errors: one line each, at the key ------------------------------------------------------------
 
 TEST(TreeYaml, AnUnknownKeyIsNamedEvenWhenItIsAMisspeltRequiredOne) {
-  EXPECT_EQ(yaml_error(with_line(kArm, 13, "    cog: [0.2, 0, 0]")), "arm.yaml:13: bodies[0].cog: unknown key");
-  EXPECT_EQ(yaml_error(with_line(kArm, 12, "    mas: 2.0")), "arm.yaml:12: bodies[0].mas: unknown key");
-  EXPECT_EQ(yaml_error(with_line(kArm, 11, "      armatur: 0.1")), "arm.yaml:11: bodies[0].joint.armatur: unknown key");
+  EXPECT_EQ(yaml_error(with_line(kArm, 13, "    cog: [0.2, 0, 0]")), "arm.yaml:13: bodies[0].cog: unknown key (did you mean `com`?)");
+  EXPECT_EQ(yaml_error(with_line(kArm, 12, "    mas: 2.0")), "arm.yaml:12: bodies[0].mas: unknown key (did you mean `mass`?)");
+  EXPECT_EQ(yaml_error(with_line(kArm, 11, "      armatur: 0.1")), "arm.yaml:11: bodies[0].joint.armatur: unknown key (did you mean `armature`?)");
   EXPECT_EQ(yaml_error(with_line(kArm, 20, "    inertia: {ixx: 0.004, iyy: 0.02, izz: 0.02, ixz: 0, iyx: 0}")),
-            "arm.yaml:20: bodies[1].inertia.iyx: unknown key");
+            "arm.yaml:20: bodies[1].inertia.iyx: unknown key (did you mean `ixx`?)");
   EXPECT_EQ(yaml_error(with_line(kArm, 1, "gravity: [0, 0, -9.81]\nunits: SI")), "arm.yaml:2: units: unknown key");
+}
+
+TEST(TreeYaml, AMisspeltParentNamesTheClosestEarlierBody) {
+  EXPECT_EQ(yaml_error(with_line(kArm, 16, "    parent: uper_arm")),
+            "arm.yaml:16: bodies[1].parent: no body named 'uper_arm' (did you mean `upper_arm`?) (a parent is `base` or "
+            "the name of an earlier body)");
+  EXPECT_EQ(yaml_error(with_line(kArm, 4, "    parent: bsae")),
+            "arm.yaml:4: bodies[0].parent: no body named 'bsae' (did you mean `base`?) (a parent is `base` or the name of "
+            "an earlier body)");
+}
+
+TEST(TreeYaml, ARevoluteLimitOrSpringReferenceBeyondATurnLooksLikeDegrees) {
+  EXPECT_EQ(yaml_error(with_line(kArm, 11, "      armature: 0.1\n      lower: -170")),
+            "arm.yaml:12: bodies[0].joint.lower: -170 rad is more than a turn (2 pi): looks like degrees (-170 deg = -2.967 rad); "
+            "angles are in radians (if it is meant, set `units_check: false` at the top of the file)");
+  EXPECT_NE(yaml_error(with_line(kArm, 17, "    joint: {name: elbow, axis: [0, 0, 2], position: [0.4, 0, 0], spring_reference: 45}"))
+                .find("arm.yaml:17: bodies[1].joint.spring_reference: 45 rad is more than a turn"),
+            std::string::npos);
+  // A prismatic joint's limits are metres; a file may allow the unusual case.
+  EXPECT_NO_THROW(parse(with_line(kArm, 11, "      armature: 0.1\n      lower: -170").replace(0, 0, "units_check: false\n")));
+  EXPECT_NO_THROW(parse(with_line(with_line(kArm, 7, "      type: prismatic"), 11, "      armature: 0.1\n      upper: 8")));
 }
 
 TEST(TreeYaml, AValueOfTheWrongTypeOrAMissingOneIsNamed) {
@@ -181,8 +202,6 @@ TEST(TreeYaml, AParentDefinedLaterOrNotAtAllIsNamed) {
   EXPECT_EQ(yaml_error(with_line(kArm, 16, "    parent: forearm")),
             "arm.yaml:16: bodies[1].parent: 'forearm' is defined later (bodies[1], line 15): list a parent before its "
             "children");
-  EXPECT_EQ(yaml_error(with_line(kArm, 16, "    parent: uper_arm")),
-            "arm.yaml:16: bodies[1].parent: no body named 'uper_arm' (a parent is `base` or the name of an earlier body)");
 }
 
 TEST(TreeYaml, AFixedJointTakesNoDegreeOfFreedomKeys) {

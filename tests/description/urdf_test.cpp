@@ -254,14 +254,16 @@ TEST(Urdf, TheSidecarRejectsAnUnknownJointAFixedOneAnUnknownKeyAndANegativeValue
   };
   EXPECT_STREQ(sidecar_error(kTwoLink, "joints:\n  wrist: {armature: 1}\n").what(),
                "arm.yaml:2: joints.wrist: no joint named 'wrist' in the URDF");
+  EXPECT_STREQ(sidecar_error(kTwoLink, "joints:\n  elbwo: {armature: 1}\n").what(),
+               "arm.yaml:2: joints.elbwo: no joint named 'elbwo' in the URDF (did you mean `elbow`?)");
   EXPECT_STREQ(sidecar_error(with_line(kTwoLink, 18, R"(  <joint name="elbow" type="fixed">)"),
                              "joints:\n  shoulder: {armature: 1}\n  elbow: {armature: 1}\n").what(),
                "arm.yaml:3: joints.elbow: joint 'elbow' is fixed: it has no degree of freedom for these values");
   EXPECT_STREQ(sidecar_error(kTwoLink, "joints:\n  elbow:\n    armature: 1\n    stifness: 3\n").what(),
-               "arm.yaml:4: joints.elbow.stifness: unknown key");
+               "arm.yaml:4: joints.elbow.stifness: unknown key (did you mean `stiffness`?)");
   EXPECT_STREQ(sidecar_error(kTwoLink, "joints:\n  elbow:\n    damping: -3\n").what(),
                "arm.yaml:3: joints.elbow.damping: must be >= 0, got -3");
-  EXPECT_STREQ(sidecar_error(kTwoLink, "joint:\n  elbow: {damping: 3}\n").what(), "arm.yaml:1: joint: unknown key");
+  EXPECT_STREQ(sidecar_error(kTwoLink, "joint:\n  elbow: {damping: 3}\n").what(), "arm.yaml:1: joint: unknown key (did you mean `joints`?)");
 }
 
 // --- errors: one line each -----------------------------------------------------------------------

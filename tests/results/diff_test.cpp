@@ -230,7 +230,7 @@ TEST(Tolerances, AreReadWithTheirDirectionAndStatisticAndBadOnesNameTheLine) {
       {"tolerances:\n  m: {increase: fast}\n", "study.yaml:2: tolerances.m.increase: expected an amount"},
       {"tolerances:\n  m: {statistic: p99, increase: 1}\n", "study.yaml:2: tolerances.m.statistic: expected mean, p5, p50, p95, p_miss or not_settled"},
       {"tolerances:\n  m: {}\n", "tolerances.m"},
-      {"tolerances:\n  m: {increse: 1}\n", "study.yaml:2: tolerances.m.increse: unknown key"},
+      {"tolerances:\n  m: {increse: 1}\n", "study.yaml:2: tolerances.m.increse: unknown key (did you mean `increase`?)"},
       {"tolerances:\n  m: {increase: -1}\n", "tolerances.m.increase: expected an amount >= 0"},
   };
   for (const auto& [yaml, message] : bad) {

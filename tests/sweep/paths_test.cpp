@@ -169,6 +169,51 @@ TEST(SetPath, AListElementIsFoundByItsName) {
     EXPECT_EQ(e.key(), "bodies[elbow].mass");
     EXPECT_NE(e.message().find("no element of the list is named 'elbow'"), std::string::npos) << e.what();
   }
+  try {
+    ff::set_path(d, "bodies[foer].mass", YAML::Node(5.0), "--set");
+    ADD_FAILURE() << "no error";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.message(), "no element of the list is named 'foer' (did you mean `fore`?)");
+  }
+}
+
+TEST(LoadModel, AMisspeltParameterPathNamesTheClosestKey) {
+  const std::string model = std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml";
+  try {
+    ff::load_model_with(model, {"notch.ordre=2"});
+    ADD_FAILURE() << "no error";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "--set: notch.ordre: unknown key (did you mean `order`?)");
+  }
+}
+
+TEST(LoadModel, AStudyFileGivenAsAModelIsNamedWithTheVerbThatTakesIt) {
+  // `flexfarm simulate configs/studies/fbtb_paper.yaml`: not "beam: missing required value".
+  const std::string study = std::string(FLEXFARM_SOURCE_DIR) + "/configs/studies/fbtb_paper.yaml";
+  for (const auto& load : {+[](const std::string& p) { ff::load_model_with(p, {}); },
+                           +[](const std::string& p) { ff::load_arm_with(p, {}); },
+                           +[](const std::string& p) { ff::load_model_source(p, {}); }}) {
+    try {
+      load(study);
+      ADD_FAILURE() << "no error";
+    } catch (const ff::ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()), study + ":8: model: this is a study file (it names a `model:`), not a model: run it with "
+                                       "`flexfarm run " + study + " --out DIR`; this verb takes a model file (the rig's `beam:` "
+                                       "or an arm's `bodies:`/`urdf:`)");
+    }
+  }
+  EXPECT_FALSE(ff::is_arm_model_file(study));
+  // A URDF sidecar: not "beam: missing required value" either.
+  const std::string sidecar = std::string(FLEXFARM_SOURCE_DIR) + "/configs/urdf/arm6_sidecar.yaml";
+  try {
+    ff::load_model_with(sidecar, {});
+    ADD_FAILURE() << "no error";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("this is a URDF sidecar, not a model: give it with its URDF (`flexfarm modes "
+                                         "ROBOT.urdf --sidecar " + sidecar + "`) or as an arm model's `sidecar:`"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // ---- get_path ----------------------------------------------------------------------------

@@ -81,6 +81,19 @@ TEST(PaperStudy, LoadsFourVariantsWithLabelsAndIds) {
   EXPECT_EQ(ff::make_variant_set(st, st.variants[1])[st.set.size() + 1].line, 21);
 }
 
+TEST(PaperStudy, TheDescriptionGivesTheModelsMovesAndHolds) {
+  // The description says what every variant runs: 3 s moves, 7 s out, then back to 0 and a 45 s hold.
+  const ff::Study st = ff::load_study(kSource + "/configs/studies/fbtb_paper.yaml");
+  const ff::Model m = ff::make_variant_model(st, st.variants[0]);
+  ASSERT_EQ(m.spec.trajectory.moves.size(), 2u);
+  EXPECT_EQ(m.spec.trajectory.move_time, 3.0);
+  EXPECT_EQ(m.spec.trajectory.moves[0].hold, 7.0);
+  EXPECT_EQ(m.spec.trajectory.moves[1].hold, 45.0);
+  EXPECT_NE(st.description.find("cubic moves (3 s) of 0.5 rad and 1.0 rad out, 7 s hold, back to 0 and 45 s hold"),
+            std::string::npos)
+      << st.description;
+}
+
 TEST(PaperStudy, VariantOneHasTheNotchAtTheClosedLoopResonances) {
   const ff::Study st = ff::load_study(kSource + "/configs/studies/fbtb_paper.yaml");
   const ff::Model m = ff::make_variant_model(st, st.variants[1]);
@@ -191,6 +204,27 @@ TEST_F(StudyFiles, UnknownTopLevelKeyIsRejected) {
   EXPECT_EQ(e.line(), 2);
   EXPECT_EQ(e.key(), "rusn");
   EXPECT_NE(e.message().find("unknown key"), std::string::npos) << e.what();
+}
+
+TEST_F(StudyFiles, AMisspeltKeyNamesTheClosestValidKey) {
+  const auto path = write("s.yaml", "model: " + kModel + "\nrusn:\n  - label: a\nruns:\n  - label: a\n");
+  EXPECT_EQ(std::string(load_error(path).what()), path + ":2: rusn: unknown key (did you mean `runs`?)");
+  const auto nested = write("t.yaml", "model: " + kModel + "\nruns:\n  - lable: a\n");
+  EXPECT_EQ(std::string(load_error(nested).what()), nested + ":3: runs[0].lable: unknown key (did you mean `label`?)");
+}
+
+TEST_F(StudyFiles, AModelFileGivenAsAStudyIsNamedWithTheVerbThatTakesIt) {
+  // `flexfarm run configs/fbtb.yaml`: not "model: missing required value".
+  EXPECT_EQ(std::string(load_error(kModel).what()),
+            kModel + ":4: this is a model file (it has `beam:`), not a study: simulate it with `flexfarm simulate " + kModel +
+                " --out DIR` (or `flexfarm modes " + kModel + "`); `flexfarm run` takes a study file, whose `model:` names a model file");
+  const std::string arm = kSource + "/configs/two_link_flexible.yaml";
+  EXPECT_NE(std::string(load_error(arm).what()).find("this is a model file (it has `bodies:`), not a study"), std::string::npos);
+  // A study whose model is a study.
+  const auto inner = write("inner.yaml", "model: " + kModel + "\nruns:\n  - label: a\n");
+  const auto outer = write("outer.yaml", "model: inner.yaml\nruns:\n  - label: a\n");
+  EXPECT_NE(std::string(load_error(outer).what()).find(inner + ":1: model: this is a study file"), std::string::npos)
+      << load_error(outer).what();
 }
 
 TEST_F(StudyFiles, NegativeMassInARunNamesTheStudyLineAndKey) {
