@@ -53,10 +53,11 @@ std::string format_run_md(const RunRecord& r) {
   for (const auto& [k, v] : rows) md += std::string("| ") + k + " | " + md_cell(v) + " |\n";
   md += "\n| metric | count | not settled | missing | mean [95 %] | p5 | p50 | p95 | spec | P(miss) [95 %] |\n"
         "|---|---|---|---|---|---|---|---|---|---|\n";
+  // Not settled somewhere: the mean is the restricted mean (they count at their horizon), a lower bound.
   auto bounded = [](double x) { return std::isinf(x) ? std::string("> horizon") : num(x); };
   for (const MetricSummary& m : r.summaries)
     md += "| " + md_cell(m.metric) + " | " + std::to_string(m.count) + " | " + std::to_string(m.censored) + " | " +
-          std::to_string(m.missing) + " | " + num(m.mean) + " [" + num(m.mean_lower) + ", " + num(m.mean_upper) + "] | " +
+          std::to_string(m.missing) + " | " + (m.censored > 0 ? "> " : "") + num(m.mean) + " [" + num(m.mean_lower) + ", " + num(m.mean_upper) + "] | " +
           bounded(m.p5) + " | " + bounded(m.p50) + " | " + bounded(m.p95) + " | " + num(m.spec) + " | " +
           (std::isnan(m.p_miss) ? "-" : num(m.p_miss, "%.3f") + " [" + num(m.p_miss_lower, "%.3f") + ", " + num(m.p_miss_upper, "%.3f") + "]") +
           " |\n";
@@ -164,6 +165,7 @@ void add_diff_verb(CLI::App& app) {
       // The later run's specs, tolerances and requirements, read from its study as it ran.
       const StudyCriteria c =
           b.record.study_text.empty() ? StudyCriteria{} : read_study_criteria(b.record.study_text, b.record.study_path);
+      check_criteria_columns(c, b.table.columns);  // a misspelled tolerance would guard nothing
       if (first.empty()) d = diff_runs(a, b, c.tolerances, c.requirements, c.specs);
     } catch (const std::exception& e) {
       throw ExitError(e.what(), 2);  // exit 1 means a regression

@@ -28,6 +28,8 @@ void print_modes(const char* title, const std::vector<Mode>& modes, int count) {
     if (shown++ == count) break;
     if (m.oscillatory)
       print_safe(stdout, "  %-4d %12.4f %12.4f %10.4f\n", shown, m.frequency_hz(), m.omega_n, m.zeta);
+    else if (m.omega_n == 0.0)
+      print_safe(stdout, "  %-4d %12s %12s %10s   free: nothing resists this motion\n", shown, "-", "0", "-");
     else
       print_safe(stdout, "  %-4d %12s %12.4f %10s   real pole, time constant %.4g s\n", shown, "-", m.omega_n, "-",
                   1.0 / m.omega_n);
@@ -69,13 +71,11 @@ Eigen::VectorXd parse_pose(const TreeDescription& d, Eigen::VectorXd q0, const s
 
 // One table of linearised modes.
 void print_tree_modes(const char* title, const std::vector<TreeMode>& modes, int count) {
-  // A mode whose omega is round-off of zero (below 1e-9 of the largest) is motion nothing resists.
-  double wmax = 0.0;
-  for (const TreeMode& m : modes) wmax = std::max(wmax, m.omega_n);
+  // A mode of omega 0 (round-off of zero, multibody/modes.hpp) is motion nothing resists.
   print_safe(stdout, "%s\n  %-4s %12s %12s %10s\n", title, "mode", "f (Hz)", "omega (rad/s)", "zeta");
   // A mode that moves no joint and that nothing restores (a hydraulic actuator's mean chamber pressure)
   // is counted below the table, not listed.
-  const auto still = [&](const TreeMode& m) { return !m.moves && m.omega_n <= 1e-9 * wmax; };
+  const auto still = [&](const TreeMode& m) { return !m.moves && m.omega_n == 0.0; };
   int listed = 0, neutral = 0;
   for (std::size_t k = 0; k < modes.size(); ++k) {
     const TreeMode& m = modes[k];
@@ -86,7 +86,7 @@ void print_tree_modes(const char* title, const std::vector<TreeMode>& modes, int
     if (++listed > count) continue;
     if (m.oscillatory)
       print_safe(stdout, "  %-4zu %12.4f %12.4f %10.4f\n", static_cast<std::size_t>(listed), m.frequency_hz(), m.omega_n, m.zeta);
-    else if (m.omega_n <= 1e-9 * wmax)
+    else if (m.omega_n == 0.0)
       print_safe(stdout, "  %-4zu %12s %12s %10s   free: nothing resists this motion\n", static_cast<std::size_t>(listed), "-", "0", "-");
     else if (m.zeta < 0.0)
       print_safe(stdout, "  %-4zu %12s %12.4f %10s   unstable: grows e-fold in %.4g s\n", static_cast<std::size_t>(listed), "-", m.omega_n, "-",

@@ -20,6 +20,7 @@
 #include "common/text.hpp"
 #include "results/diff.hpp"
 #include "results/history.hpp"
+#include "results/run_metrics.hpp"
 
 namespace ff {
 
@@ -40,7 +41,7 @@ Partition parse_shard(const std::string& text) {
 std::string describe_failures(const Study& study, const ResultTable& t) {
   int failed = 0, invalid = 0, first_invalid = -1;
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
-    failed += t.rows[i].status == "nonfinite" || t.rows[i].status == "solver_fail";
+    failed += is_failed_status(t.rows[i].status);
     if (t.rows[i].status != "invalid") continue;
     if (!invalid++) first_invalid = static_cast<int>(i);
   }

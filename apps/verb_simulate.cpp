@@ -18,6 +18,13 @@ namespace ff {
 
 namespace {
 
+// A run that failed numerically (status nonfinite or solver_fail) has no metrics: exit 3, as `run` does,
+// once its outputs (the trace up to the failure) are written.
+void check_run_status(const std::string& status, const std::string& out) {
+  if (is_failed_status(status))
+    throw ExitError("the run failed numerically (status " + status + "): it has no metrics; its trace is in " + out + "/trace.csv", 3);
+}
+
 // An arm model (arm/): trace.csv, metrics.csv, table.md (metric | value) and the arm plots.
 void simulate_arm(const std::string& path, const std::vector<std::string>& sets, const std::string& out) {
   const ArmModel m = load_arm_with(path, sets);
@@ -33,13 +40,10 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
   row.status = calc_arm_status(m, run.status[0], table.columns, row.values);
   table.rows.push_back(row);
   std::string md = "| metric | value |\n|---|---|\n";
-  for (std::size_t i = 0; i < table.columns.size(); ++i) {
-    char v[64];
-    std::snprintf(v, sizeof v, "%.6g", row.values[i]);
-    // No number: a settling time the run could not confirm, or (first contact, a trip) an event that did not happen.
-    const std::string none = table.columns[i].ends_with("_settling_s") ? "not settled" : "-";
-    md += "| " + md_cell(table.columns[i]) + " | " + (std::isnan(row.values[i]) ? none : std::string(v)) + " |\n";
-  }
+  // No number: a settling time the run could not confirm (censored), or none at all (a failed run, an event
+  // that did not happen).
+  for (std::size_t i = 0; i < table.columns.size(); ++i)
+    md += "| " + md_cell(table.columns[i]) + " | " + format_metric_cell(row.values[i], find_row_horizon(table, row, table.columns[i]), "%.6g") + " |\n";
   make_directories(out);
   write_arm_trace_csv(run.traces[0], out + "/trace.csv");
   write_file_atomic(out + "/metrics.csv", format_results_csv(table));
@@ -49,6 +53,7 @@ void simulate_arm(const std::string& path, const std::vector<std::string>& sets,
   std::string files = "trace.csv, metrics.csv, table.md";
   for (const std::string& p : plots) files += ", " + p;
   print_safe(stdout, "%s\nstatus: %s\nwrote %s/{%s}\n", md.c_str(), row.status.c_str(), out.c_str(), files.c_str());
+  check_run_status(row.status, out);
 }
 
 }  // namespace
@@ -91,6 +96,7 @@ void add_simulate_verb(CLI::App& app) {
     print_safe(stdout, "%s\nstatus: %s\nwrote %s/{trace.csv, metrics.csv, table.md, tip_angle.png, hub_angle.png, "
                 "tip_deflection.png, hub_torque.png}\n",
                 md.c_str(), row.status.c_str(), args->out.c_str());
+    check_run_status(row.status, args->out);
   });
 }
 

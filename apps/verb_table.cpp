@@ -2,6 +2,7 @@
 // parameters (count, missing, mean, min, p5, p50, p95, max, and the probability of missing a spec);
 // a parameter with more than --bins distinct values is grouped by its bins (results/statistics.hpp).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -67,16 +68,24 @@ void add_table_verb(CLI::App& app) {
         for (const char* s : {"_settling_s", "_overshoot_pct"}) metrics.push_back(tool + s);
       if (metrics.empty()) metrics = {"m1_tip_settling_s", "m1_tip_overshoot_pct"};
     }
+    // Every name given is a column of this table (--by: a parameter too), else the closest and the list.
+    auto check = [&](const char* option, const std::string& name, bool parameter) {
+      const std::string why = parameter ? explain_unknown_name(t, name) : explain_unknown_column(name, t.columns);
+      if (!why.empty()) throw CLI::ValidationError(option, why + " of " + path);
+    };
+    for (const std::string& m : split_list(args->metrics)) check("--metric", m, false);
     std::map<std::string, double> specs;
     for (const auto& s : split_list(args->specs)) {
       const auto eq = s.find('=');
       if (eq == std::string::npos) throw CLI::ValidationError("--spec", "expected METRIC=LIMIT, got '" + s + "'");
+      check("--spec", s.substr(0, eq), false);
       const auto limit = parse_finite(s.substr(eq + 1));
       if (!limit) throw CLI::ValidationError("--spec", "limit of '" + s + "' is not a finite number");
       specs[s.substr(0, eq)] = *limit;
     }
+    const auto by = split_list(args->by);
+    for (const std::string& b : by) check("--by", b, true);
     try {
-      const auto by = split_list(args->by);
       const Binning binning{args->bins, args->binning == "width" ? Binning::kWidth : Binning::kQuantile};
       print_safe(stdout, "%s", (args->format == "csv" ? format_groupby_csv(t, by, metrics, specs, binning)
                                                       : format_groupby_md(t, by, metrics, specs, binning)).c_str());

@@ -57,14 +57,26 @@ ArmSettleRule make_arm_settle_rule(const ArmModel& m) {
 }
 
 ArmJointMoves calc_arm_joint_moves(const ArmModel& m, std::size_t j) {
-  double largest = 0.0, start = m.trajectory.start[j], from = start, target = start;
+  double largest = 0.0, start = m.trajectory.start[j], from = start, target = start, t_from = 0.0, t_start = 0.0;
   for (const JointWaypoint& w : m.trajectory.waypoints) {
     const double step = w.q[j] - from;
-    largest = std::max(largest, std::abs(step));
-    if (step != 0.0) start = from, target = w.q[j];
+    if (std::abs(step) > kArmMoveTolerance) {
+      largest = std::max(largest, std::abs(step));
+      start = from, target = w.q[j], t_start = t_from;
+    }
     from = w.q[j];
+    t_from = w.time;
   }
-  return {largest, start, target, from};
+  return {largest, start, target, from, t_start};
+}
+
+double calc_arm_last_move_start(const ArmModel& m) {
+  double t = 0.0;
+  for (std::size_t j = 0; j < m.actuated.size(); ++j) {
+    const ArmJointMoves mv = calc_arm_joint_moves(m, j);
+    if (mv.target != mv.start) t = std::max(t, mv.t_start);
+  }
+  return t;
 }
 
 double calc_arm_exit_time(double t_out, double e_out, double t_next, double e_next, double band, double t0,
@@ -112,31 +124,31 @@ std::vector<double> calc_arm_metrics(const ArmModel& m, const ArmTrace& tr, Lane
     std::vector<double> e(q.size());
     for (std::size_t k = 0; k < q.size(); ++k) e[k] = std::abs(q[k] - mv.final_target);
     v[c++] = mv.largest > 0.0 ? last_exit(t, e, t0, rule.band * mv.largest, rule.dwell) : 0.0;
-    double over = 0.0;
-    if (mv.target != mv.start) {
-      const double dir = mv.target > mv.start ? 1.0 : -1.0;
-      for (std::size_t k = 0; k < q.size(); ++k) over = std::max(over, dir * (q[k] - mv.target));
-      over = 100.0 * over / std::abs(mv.target - mv.start);
-    }
-    v[c++] = over;
+    // Over the last move's samples (none when the run ends before it starts: no number, as OnlineOvershoot).
+    v[c++] = mv.target == mv.start ? 0.0
+             : mv.t_start <= t.back() ? calc_overshoot(t, q, mv.t_start, MoveWindow{t0, t.back(), mv.start, mv.target})
+                                      : std::nan("");
     v[c++] = peak_abs(tr.column(a.name + ".torque"));
     v[c++] = peak_abs(tr.column(a.name + ".qd"));
   }
-  // Each tool: its final target, its largest and last moves in the rigid reference.
+  // Each tool: its final target, its largest and last moves in the rigid reference (the last from the
+  // first sample at or after the arm's last move's start).
   const std::size_t n = t.size();
+  const std::size_t last = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), calc_arm_last_move_start(m)) - t.begin());
   for (const ArmTool& tool : m.tools) {
     const std::string& p = tool.name;
     const std::vector<double>*x[3] = {&tr.column(p + ".x"), &tr.column(p + ".y"), &tr.column(p + ".z")};
     const std::vector<double>*xr[3] = {&tr.column(p + ".ref_x"), &tr.column(p + ".ref_y"), &tr.column(p + ".ref_z")};
     const Vec3 target((*xr[0])[n - 1], (*xr[1])[n - 1], (*xr[2])[n - 1]);
     const Vec3 begin((*xr[0])[0], (*xr[1])[0], (*xr[2])[0]);
+    const Vec3 last_begin = last < n ? Vec3((*xr[0])[last], (*xr[1])[last], (*xr[2])[last]) : target;
     double largest = 0.0;
     for (std::size_t k = 0; k < n; ++k)
       largest = std::max(largest, (Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k]) - begin).norm());
     std::vector<double> track(n);
     for (std::size_t k = 0; k < n; ++k)
       track[k] = (Vec3((*x[0])[k], (*x[1])[k], (*x[2])[k]) - Vec3((*xr[0])[k], (*xr[1])[k], (*xr[2])[k])).norm();
-    const ArmToolRest rest = calc_arm_tool_rest(rule, t, *x[0], *x[1], *x[2], begin, target, largest);
+    const ArmToolRest rest = calc_arm_tool_rest(rule, t, *x[0], *x[1], *x[2], last_begin, target, largest);
     v[c++] = rest.settling_s;
     v[c++] = rest.overshoot_pct;
     v[c++] = peak_abs(track);

@@ -3,7 +3,7 @@
 // link's tip. The settling window runs from the end of the last waypoint to the end of the run.
 //   <joint>_settling_s        last exit of the joint from its final target's band (band x the joint's
 //                             largest move), NaN = not settled
-//   <joint>_overshoot_pct     beyond the target of the joint's last move, % of that move
+//   <joint>_overshoot_pct     beyond the target of the joint's last move, % of that move, from its start on
 //   <joint>_peak_torque_Nm    largest |torque| (prismatic: N)
 //   <joint>_peak_speed        largest |rate|, rad/s (m/s)
 // Each tool point has the five tool_* metrics under its own name (<tool>_settling_s, ...; "tool" is the
@@ -11,8 +11,9 @@
 //   tool_settling_s           last exit of the tool point from a ball about where it comes to rest (its
 //                             last sample, as MATLAB's stepinfo takes yfinal) of radius band x the tool's
 //                             largest move in the rigid reference, NaN = not settled
-//   tool_overshoot_pct        largest excursion past its resting point along the reference's move
-//                             (start to final target), % of that move
+//   tool_overshoot_pct        largest excursion past its resting point along the reference's last move
+//                             (where the reference is when the arm's last move begins, to its final
+//                             target), % of that move
 //   tool_peak_error_m         largest |tool - where the rigid arm at the reference puts it|: tracking
 //   tool_final_error_m        that error at the end of the run (a flexible arm's static sag among it)
 //   tool_sag_m                that error at the start: the static sag under gravity at the start pose
@@ -76,11 +77,21 @@ struct ArmSettleRule {
 };
 ArmSettleRule make_arm_settle_rule(const ArmModel& m);
 
-// Joint j's moves on the trajectory: its largest, its last (start -> target) and where it ends.
+// Joint j's moves on the trajectory: its largest, its last (start -> target, beginning at t_start, s)
+// and where it ends. The overshoot is the last move's, over the samples from t_start on: the poses
+// before it (an earlier move's start or target) are not past its target.
+// A step of a joint's waypoints below kArmMoveTolerance (rad or m; the inverse kinematics' tolerance) is
+// round-off, not a move (a wrist the tool's targets do not need, moved by 1e-17 rad): no overshoot or
+// settling band relative to it.
+inline constexpr double kArmMoveTolerance = 1e-9;
 struct ArmJointMoves {
-  double largest, start, target, final_target;
+  double largest, start, target, final_target, t_start;
 };
 ArmJointMoves calc_arm_joint_moves(const ArmModel& m, std::size_t j);
+
+// When the arm's last move begins, s: the waypoint before the last one at which any joint moves (0 for
+// the first). A tool's overshoot is along that move (the rigid reference there to its final target).
+double calc_arm_last_move_start(const ArmModel& m);
 
 // The last exit of e >= 0 from [0, band], interpolated between the last sample outside it (t_out, e_out)
 // and its successor (t_next, e_next), less t0, >= 0; NaN (not settled) when it lies within dwell of the

@@ -40,13 +40,13 @@ double ArmLastExit::result(double t_end, double dwell) const {
 }
 
 OnlineArmRun::OnlineArmRun(const ArmModel& m)
-    : rule_(make_arm_settle_rule(m)), ncolumns_(arm_metric_columns(m).size()) {
+    : rule_(make_arm_settle_rule(m)), last_move_start_(calc_arm_last_move_start(m)), ncolumns_(arm_metric_columns(m).size()) {
   const std::vector<std::string> names = arm_trace_names(m);
   for (std::size_t j = 0; j < m.actuated.size(); ++j) {
     const std::string& a = m.actuated[j].name;
     const ArmJointMoves mv = calc_arm_joint_moves(m, j);
     std::optional<OnlineOvershoot> over;
-    if (mv.target != mv.start) over.emplace(-kInf, MoveWindow{rule_.t0, kInf, mv.start, mv.target});
+    if (mv.target != mv.start) over.emplace(mv.t_start, MoveWindow{rule_.t0, kInf, mv.start, mv.target});
     joints_.push_back({column_index(names, a + ".q"), column_index(names, a + ".qd"), column_index(names, a + ".torque"),
                        mv, ArmLastExit(rule_.t0, rule_.band * mv.largest), over});
   }
@@ -92,6 +92,7 @@ void OnlineArmRun::add(const double* row, std::size_t stride) {
     const Vec3 x(at(tool.x), at(tool.x + 1), at(tool.x + 2));
     const Vec3 xr(at(tool.ref_x), at(tool.ref_x + 1), at(tool.ref_x + 2));
     if (n_ == 0) tool.begin = xr;
+    if (!tool.last_started && t >= last_move_start_) tool.last_begin = xr, tool.last_started = true;
     tool.target = xr;
     tool.largest = std::max(tool.largest, (xr - tool.begin).norm());
     const double track = (x - xr).norm();
@@ -129,8 +130,8 @@ std::vector<double> OnlineArmRun::result(LaneStatus status) const {
     v[c++] = j.peak_speed.result();
   }
   for (const Tool& tool : tools_) {
-    const ArmToolRest rest = calc_arm_tool_rest(rule_, t_, tool.x_path, tool.y_path, tool.z_path, tool.begin,
-                                                tool.target, tool.largest);
+    const ArmToolRest rest = calc_arm_tool_rest(rule_, t_, tool.x_path, tool.y_path, tool.z_path,
+                                                tool.last_started ? tool.last_begin : tool.target, tool.target, tool.largest);
     v[c++] = rest.settling_s;
     v[c++] = rest.overshoot_pct;
     v[c++] = tool.peak_error.result();

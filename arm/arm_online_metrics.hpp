@@ -59,12 +59,14 @@ class OnlineArmRun {
     std::size_t q, qd, torque;  // their columns
     ArmJointMoves moves;
     ArmLastExit settling;
-    std::optional<OnlineOvershoot> overshoot;  // of its last move, over every sample; none without a move
+    std::optional<OnlineOvershoot> overshoot;  // of its last move, from its start on; none without a move
     OnlinePeakAbs peak_torque{-kInf, kInf}, peak_speed{-kInf, kInf};
   };
   struct Tool {
     std::size_t x = 0, ref_x = 0;     // the columns of x and ref_x (y, z follow each)
     Vec3 begin = Vec3::Zero(), target = Vec3::Zero();  // the reference's first and last sample
+    Vec3 last_begin = Vec3::Zero();   // its first sample from the arm's last move's start on
+    bool last_started = false;
     double largest = 0.0;             // the reference's largest distance from begin
     OnlinePeakAbs peak_error{-kInf, kInf};  // |tool - reference|
     double final_error = 0.0, sag = 0.0;
@@ -77,6 +79,7 @@ class OnlineArmRun {
     double sag = 0.0;
   };
   ArmSettleRule rule_;
+  double last_move_start_;  // calc_arm_last_move_start, s
   std::size_t ncolumns_;
   std::vector<Joint> joints_;
   std::vector<Tool> tools_;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 
 #include "arm/arm_metrics.hpp"
 #include "common/files.hpp"
@@ -217,9 +218,10 @@ std::string over_others(const std::vector<std::string>& params, std::size_t show
 }
 
 // A heat map over parameters x and y of the table, axes with their units: each cell's value from its rows
-// (NaN: none).
+// (NaN: none), and whether it is a lower bound (HeatMap::bounds) when `bound` is given.
 template <class Cell>
-HeatMap make_heat_map(const Study& study, const ResultTable& t, const std::string& x, const std::string& y, const Cell& cell) {
+HeatMap make_heat_map(const Study& study, const ResultTable& t, const std::string& x, const std::string& y, const Cell& cell,
+                      const std::function<bool(const std::vector<int>&)>& bound = {}) {
   HeatMap h;
   h.x_label = parameter_axis_label(study, x);
   h.y_label = parameter_axis_label(study, y);
@@ -231,10 +233,12 @@ HeatMap make_heat_map(const Study& study, const ResultTable& t, const std::strin
   std::sort(h.x.begin(), h.x.end());
   std::sort(h.y.begin(), h.y.end());
   h.values.assign(h.x.size() * h.y.size(), NAN);
+  if (bound) h.bounds.assign(h.values.size(), 0);
   for (const auto& g : groups) {
     const auto ix = std::find(h.x.begin(), h.x.end(), g.key[0]) - h.x.begin();
     const auto iy = std::find(h.y.begin(), h.y.end(), g.key[1]) - h.y.begin();
     h.values[iy * h.x.size() + ix] = cell(g.rows);
+    if (bound) h.bounds[iy * h.x.size() + ix] = bound(g.rows);
   }
   return h;
 }
@@ -288,14 +292,18 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
   bool censored = false;
   for (std::size_t r = 0; r < settle.size() && !horizon.empty(); ++r) censored |= std::isnan(settle[r]) && !std::isnan(horizon[r]);
   if (p.size() >= 2) {
-    // Heat map: mean settling over the other parameters (restricted mean where some did not settle).
-    HeatMap h = make_heat_map(study, t, p[0], p[1], [&](const std::vector<int>& rows) {
-      const Summary s = summary_of(rows);
-      return at_most_horizon(s.mean, s);
-    });
+    // Heat map: mean settling over the other parameters (restricted mean where some did not settle: a lower
+    // bound, marked).
+    HeatMap h = make_heat_map(
+        study, t, p[0], p[1],
+        [&](const std::vector<int>& rows) {
+          const Summary s = summary_of(rows);
+          return at_most_horizon(s.mean, s);
+        },
+        [&](const std::vector<int>& rows) { return summary_of(rows).censored > 0; });
     const std::string over = over_others(p, 2);
     h.title = censored ? km.what + " settling time (" + (over.empty() ? "" : "restricted mean" + over + "; ") +
-                             "not settled counted at the horizon)"
+                             "> v: not settled in some runs, counted at the horizon: a lower bound)"
           : over.empty() ? km.what + " settling time"
                          : km.what + " settling time (mean" + over + ")";
     h.value_label = km.what + " settling time (s)";
@@ -311,13 +319,15 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
     for (const std::string& q : p)
       if (q != name) rest.push_back(q);
     BandSeries series;
-    series.label = "p50, band p5-p95" + over_others(rest, 0) + (censored ? " (Kaplan-Meier; above the horizon: at it)" : "");
+    series.label = "p50, band p5-p95" + over_others(rest, 0) + (censored ? " (Kaplan-Meier)" : "");
+    series.bound_label = "above the horizon (not settled): drawn at it, a lower bound";
     for (const auto& g : make_groups({column_values(t, name)})) {
       const Summary s = summary_of(g.rows);
       series.x.push_back(g.key[0]);
-      series.mid.push_back(at_most_horizon(s.p50, s));
-      series.lo.push_back(at_most_horizon(s.p5, s));
-      series.hi.push_back(at_most_horizon(s.p95, s));
+      for (auto [line, x] : {std::pair{&series.mid, s.p50}, {&series.lo, s.p5}, {&series.hi, s.p95}}) {
+        line->push_back(at_most_horizon(x, s));
+        if (std::isinf(x)) series.bound_x.push_back(g.key[0]), series.bound_y.push_back(s.horizon);
+      }
     }
     b.series.push_back(series);
     render_band_plot(b, dir + "/settling_vs_" + make_file_stem(name) + ".png");
@@ -326,7 +336,8 @@ std::string report_grid(const Study& study, const ResultTable& t, const std::str
 }
 
 // Studies with `cases:`: each case's metric against the first design variable, one table row and
-// one plotted line per case (mean over any further variables; "-" / a gap where nothing settled).
+// one plotted line per case (mean over any further variables; where some did not settle the restricted mean,
+// marked as a lower bound; "-" / a gap where a run has no value).
 std::string report_cases(const Study& study, const ResultTable& t, const std::string& dir) {
   const std::string x_name = t.params.size() > 1 ? t.params[1] : "case";
   const auto groups = make_groups({column_values(t, "case"), column_values(t, x_name)});
@@ -343,13 +354,22 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
   for (const auto& [metric, title] : shown) {
     if (metric.empty()) continue;
     const auto values = column_values(t, metric);
-    // cell[case][x]: the mean over the group, NaN when any variant of it did not settle
+    const auto horizons = horizon_values(t, metric);
+    // cell[case][x]: the mean over the group; where some did not settle the restricted mean (counted at
+    // their horizon), a lower bound (bound[case][x]); NaN when a run of it has no value (diverged).
     std::vector<std::vector<double>> cell(study.case_labels.size(), std::vector<double>(xs.size(), NAN));
+    std::vector<std::vector<char>> bound(study.case_labels.size(), std::vector<char>(xs.size(), 0));
     for (const auto& g : groups) {
-      double sum = 0.0;
-      for (int r : g.rows) sum += values[r];
+      std::vector<double> v, h;
+      for (int r : g.rows) {
+        v.push_back(values[r]);
+        if (!horizons.empty()) h.push_back(horizons[r]);
+      }
+      const Summary s = calc_summary(v, h);
       const auto ix = std::find(xs.begin(), xs.end(), g.key[1]) - xs.begin();
-      cell[static_cast<std::size_t>(g.key[0])][ix] = sum / g.rows.size();
+      const auto c = static_cast<std::size_t>(g.key[0]);
+      cell[c][ix] = s.missing > 0 ? NAN : s.mean;
+      bound[c][ix] = s.missing == 0 && s.censored > 0;
     }
     md += "## " + title + " by case and " + x_name + "\n\n| case |";
     for (double x : xs) {
@@ -364,46 +384,37 @@ std::string report_cases(const Study& study, const ResultTable& t, const std::st
     plot.title = std::string(title) + " against " + x_name + (t.params.size() > 2 ? ", mean" + over_others(t.params, 2) : "");
     plot.x_label = parameter_axis_label(study, x_name);
     plot.y_label = title;
-    // Cells where nothing settled are crosses above a dashed line over the highest value, one row per case.
-    double top = 0.0;
-    for (const auto& row : cell)
-      for (double y : row)
-        if (std::isfinite(y)) top = std::max(top, y);
-    if (!(top > 0.0)) top = 1.0;
-    const double unsettled_line = 1.05 * top;
-    bool any_unsettled = false;
+    bool any_bound = false;
     for (std::size_t c = 0; c < cell.size(); ++c) {
       md += "| " + md_cell(study.case_labels[c]) + " |";
-      Series line, unsettled;
+      Series line, bounds;
       line.label = study.case_labels[c];
-      line.colour = unsettled.colour = static_cast<int>(c);
+      line.colour = bounds.colour = static_cast<int>(c);
       line.dashed = static_cast<int>(c) >= palette_size();  // the palette repeats
       line.marker = Series::Marker::kDot;
-      unsettled.line = false;
-      unsettled.marker = Series::Marker::kCross;
+      bounds.line = false;
+      bounds.marker = Series::Marker::kBound;
       for (std::size_t i = 0; i < xs.size(); ++i) {
-        if (std::isnan(cell[c][i])) {
-          unsettled.x.push_back(xs[i]);
-          unsettled.y.push_back(unsettled_line + (0.03 + 0.035 * static_cast<double>(c)) * top);
-          any_unsettled = true;
-        }
         char buf[32];
         const double a = std::abs(cell[c][i]);
-        std::snprintf(buf, sizeof buf, a >= 100 ? " %.0f |" : (a < 0.1 && a > 0 ? " %.3g |" : " %.2f |"), cell[c][i]);
-        md += std::isnan(cell[c][i]) ? std::string(" - |") : std::string(buf);
+        std::snprintf(buf, sizeof buf, a >= 100 ? "%.0f" : (a < 0.1 && a > 0 ? "%.3g" : "%.2f"), cell[c][i]);
+        md += std::isnan(cell[c][i]) ? std::string(" - |") : std::string(bound[c][i] ? " > " : " ") + buf + " |";
         line.x.push_back(xs[i]);
         line.y.push_back(cell[c][i]);
+        if (bound[c][i]) bounds.x.push_back(xs[i]), bounds.y.push_back(cell[c][i]);
       }
+      if (!bounds.x.empty() && !any_bound) bounds.label = "not settled in some runs: a lower bound";
+      any_bound = any_bound || !bounds.x.empty();
       md += "\n";
       plot.series.push_back(line);
-      plot.series.push_back(unsettled);
+      plot.series.push_back(bounds);
     }
-    if (any_unsettled) plot.hlines.push_back({unsettled_line, "x above: not settled", true});
     md += "\n";
     std::string file = metric;
     render_line_plot(plot, dir + "/cases_" + make_file_stem(file) + ".png");
   }
-  md += "\"-\": not settled within the run. Plots: cases_<metric>.png.\n";
+  md += "\"> v\": some runs did not settle; the restricted mean (counting them at their horizon), a lower bound. "
+        "\"-\": no value (a run diverged). Plots: cases_<metric>.png.\n";
   return md;
 }
 
@@ -566,9 +577,7 @@ StudyReport write_study_report(const Study& study, const ResultTable& table, con
       md += "| " + md_cell(r.label) + " | " + r.status + " |";
       for (const std::string& c : shown) {
         const double v = r.values[static_cast<std::size_t>(std::find(table.columns.begin(), table.columns.end(), c) - table.columns.begin())];
-        char buf[32];
-        std::snprintf(buf, sizeof buf, " %.4g |", v);
-        md += std::isnan(v) ? std::string(" not settled |") : std::string(buf);
+        md += " " + format_metric_cell(v, find_row_horizon(table, r, c)) + " |";
       }
       md += "\n";
     }

@@ -61,6 +61,14 @@ void validate(const ModelSpec& s, const std::string& src) {
   if (!std::isfinite(s.hub_torque_offset)) throw ConfigError(src, 0, "hub.torque_offset", "must be finite");
   non_negative(s.payload_mass, "payload.mass");
   non_negative(s.payload_inertia, "payload.inertia");
+  // Every dof needs inertia: a massless beam (beam.density 0) is one rigid segment (its joints would have
+  // none), and the hub turns something (a singular mass matrix has modes of 0 Hz and no dynamics).
+  if (s.beam.density == 0.0 && s.segments > 1)
+    throw ConfigError(src, 0, "beam.density", "0 (a massless beam) needs segments: 1, a rigid axis: the joints of its " +
+                                                  std::to_string(s.segments) + " segments would carry no inertia");
+  if (s.beam.density == 0.0 && s.hub_inertia == 0.0 && s.payload_mass == 0.0 && s.payload_inertia == 0.0)
+    throw ConfigError(src, 0, "beam.density", "the rig has no inertia: beam.density, hub.inertia, payload.mass and "
+                                              "payload.inertia are all 0 (give one of them a value > 0)");
   double last = 0.0;
   for (std::size_t j = 0; j < s.payload_events.size(); ++j) {
     const auto& e = s.payload_events[j];

@@ -1,5 +1,7 @@
 #include "kernel/modes.hpp"
 
+#include <limits>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -10,6 +12,14 @@
 namespace ff {
 
 double Mode::frequency_hz() const { return omega_n / (2.0 * std::numbers::pi); }
+
+double calc_stiffness_scale(const Eigen::Ref<const Eigen::MatrixXd>& minv_k) {
+  return minv_k.size() == 0 ? 0.0 : std::sqrt(minv_k.cwiseAbs().rowwise().sum().maxCoeff());
+}
+
+bool is_zero_eigenvalue(double omega, double scale) {
+  return omega <= 100.0 * std::sqrt(std::numeric_limits<double>::epsilon()) * scale;
+}
 
 Eigen::MatrixXd calc_mass_matrix(const Model& m, const Eigen::VectorXd& q) {
   const int n = m.nseg;
@@ -41,13 +51,16 @@ Eigen::MatrixXd calc_mass_matrix(const Model& m, const Eigen::VectorXd& q) {
 namespace {
 
 // Eigenvalues of a state matrix as modes, ascending in omega_n; complex pairs once.
-std::vector<Mode> eigen_modes(const Eigen::MatrixXd& a) {
+// `n` coordinates: a's block (n, 0, n, n) is -M^-1 K.
+std::vector<Mode> eigen_modes(const Eigen::MatrixXd& a, int n) {
   const Eigen::VectorXcd ev = Eigen::EigenSolver<Eigen::MatrixXd>(a, false).eigenvalues();
+  const double scale = calc_stiffness_scale(a.block(n, 0, n, n));
   std::vector<Mode> out;
   for (const auto& l : ev) {
     const double mag = std::abs(l);
     if (l.imag() < 0) continue;
-    out.push_back({mag, mag > 0 ? -l.real() / mag : 1.0, l.imag() > 1e-9 * std::max(1.0, mag)});
+    if (is_zero_eigenvalue(mag, scale)) out.push_back({0.0, 1.0, false});  // free: round-off of zero
+    else out.push_back({mag, mag > 0 ? -l.real() / mag : 1.0, l.imag() > 1e-9 * std::max(1.0, mag)});
   }
   std::sort(out.begin(), out.end(), [](const Mode& p, const Mode& q) { return p.omega_n < q.omega_n; });
   return out;
@@ -84,7 +97,7 @@ std::vector<Mode> calc_clamped_modes(const Model& m) {
   if (n == 0) return {};  // a rigid arm: nothing to clamp
   const Eigen::MatrixXd mass = calc_mass_matrix(m, Eigen::VectorXd::Zero(m.nseg));
   return eigen_modes(state_matrix(mass.bottomRightCorner(n, n), joint_diag(m.joint_k).bottomRightCorner(n, n),
-                                  joint_diag(m.joint_c).bottomRightCorner(n, n)));
+                                  joint_diag(m.joint_c).bottomRightCorner(n, n)), n);
 }
 
 std::vector<Mode> calc_closed_loop_modes(const Model& m) {
@@ -103,7 +116,7 @@ std::vector<Mode> calc_closed_loop_modes(const Model& m) {
   // a damper: tau = tau_cmd - b_h w, b_h = D^2 p_s / (K K_q) (kernel/drive.hpp).
   const auto& h = m.spec.hydraulics;
   if (h.enabled && h.pressure_gain > 0) damp(0, 0) += calc_hydraulic_damping(h);
-  return eigen_modes(state_matrix(mass, stiff, damp, c.ki));
+  return eigen_modes(state_matrix(mass, stiff, damp, c.ki), n);
 }
 
 std::vector<double> calc_resonances(const std::vector<Mode>& closed_loop) {

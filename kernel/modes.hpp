@@ -12,11 +12,23 @@
 namespace ff {
 
 struct Mode {
-  double omega_n;     // natural frequency, rad/s
+  double omega_n;     // natural frequency, rad/s; 0: a free motion (is_zero_eigenvalue)
   double zeta;        // damping ratio (1 for a real pole)
   bool oscillatory;   // a complex pair (reported once)
   double frequency_hz() const;
 };
+
+// The problem's stiffness scale, rad/s: sqrt of the infinity norm of M^-1 K (the block -M^-1 K of the
+// state matrix, its sign aside), about its stiffest undamped mode's frequency.
+double calc_stiffness_scale(const Eigen::Ref<const Eigen::MatrixXd>& minv_k);
+
+// Whether an eigenvalue of magnitude `omega` (rad/s) is zero to the eigen-solve's resolution, relative to
+// the problem's stiffness scale: a free motion (a joint with neither gain nor spring), not a slow or
+// unstable mode. An undamped free motion is a double zero eigenvalue, a Jordan block, which round-off
+// eps |M^-1 K| in A splits into +-sqrt(eps) x scale (a "grows e-fold in 237 s" pole); 100 times that is
+// the threshold, 1.5e-6 x scale. (The largest |lambda| is no scale: the joint dampers' real poles reach
+// 1e7 rad/s at N = 96, where 1.5e-6 of them would swallow the beam's first modes.)
+bool is_zero_eigenvalue(double omega, double scale);
 
 // Joint-space mass matrix M(q) (N x N), kg·m^2.
 Eigen::MatrixXd calc_mass_matrix(const Model& m, const Eigen::VectorXd& q);

@@ -1,5 +1,7 @@
 #include "multibody/modes.hpp"
 
+#include "kernel/modes.hpp"  // is_zero_eigenvalue
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -132,6 +134,10 @@ std::vector<TreeMode> calc_tree_modes(const Tree& tree, const Eigen::Ref<const E
       modes.push_back(m);
     }
   }
+  // Round-off of a zero eigenvalue (a free motion) is 0, neither slow nor unstable nor oscillatory.
+  const double scale = calc_stiffness_scale(M.llt().solve(K));
+  for (TreeMode& m : modes)
+    if (is_zero_eigenvalue(m.omega_n, scale)) m.omega_n = 0.0, m.zeta = 1.0, m.oscillatory = false;
   std::stable_sort(modes.begin(), modes.end(), [](const TreeMode& a, const TreeMode& b) { return a.omega_n < b.omega_n; });
   return modes;
 }

@@ -32,7 +32,8 @@ struct TreeModeOptions {
 };
 
 struct TreeMode {
-  double omega_n = 0.0;    // rad/s (for a real pole: |lambda|; for an unstable static mode: sqrt(-w^2))
+  double omega_n = 0.0;    // rad/s (for a real pole: |lambda|; for an unstable static mode: sqrt(-w^2)); 0: a
+                           // free motion, zero to the solve's resolution (kernel/modes.hpp is_zero_eigenvalue)
   double zeta = 0.0;       // damping ratio; 1 for a stable real pole, -1 for an unstable one
   bool oscillatory = true; // a complex pair (reported once), or an undamped mode with w^2 > 0
   Eigen::VectorXd shape;   // (nv) joint coordinates, zero at the locked dofs, largest |entry| = 1 and positive

@@ -509,6 +509,13 @@ cv::Size legend_size(const std::vector<LegendEntry>& entries, const Style& st) {
   return {2 * st.gap + m.sample + st.gap + text_w, 2 * st.gap + m.row * int(entries.size())};
 }
 
+void draw_bound_marker(cv::Mat& img, cv::Point2d c, double r, const cv::Scalar& colour, int thickness) {
+  const double h = r * std::sqrt(3.0) / 2.0;  // half the side
+  const std::vector<cv::Point> tri{fixed_point(c + cv::Point2d(0, -r)), fixed_point(c + cv::Point2d(h, r / 2)),
+                                   fixed_point(c + cv::Point2d(-h, r / 2))};
+  cv::polylines(img, tri, true, colour, thickness, cv::LINE_AA, kShift);
+}
+
 void draw_legend_at(cv::Mat& img, cv::Point tl, const std::vector<LegendEntry>& entries, const Style& st) {
   if (entries.empty()) return;
   const LegendMetrics m = legend_metrics(st);
@@ -519,6 +526,11 @@ void draw_legend_at(cv::Mat& img, cv::Point tl, const std::vector<LegendEntry>& 
     const LegendEntry& e = entries[i];
     const double cy = rect.y + st.gap + m.row * (i + 0.5);
     const double x0 = rect.x + st.gap, x1 = x0 + m.sample;
+    if (e.swatch == Swatch::bound) {
+      draw_bound_marker(img, {(x0 + x1) / 2, cy}, m.row * 0.32, e.stroke.colour, std::max(2, e.stroke.thickness));
+      put_text(img, e.label, {int(x1) + st.gap, int(std::lround(cy))}, HAlign::left, VAlign::middle, st.legend, kTextColour);
+      continue;
+    }
     if (e.swatch != Swatch::line) {  // box from 20 % to 80 % of the row
       const double h = m.row * 0.6;
       const cv::Rect box(cv::Point(int(x0), int(std::lround(cy - h / 2))),

@@ -199,15 +199,20 @@ void draw_stroke(cv::Mat& img, const Polyline& pl, const Stroke& k, const Style&
 void draw_series(cv::Mat& roi, const Axes& a, const std::vector<double>& x, const std::vector<double>& y,
                  const Stroke& k, const Style& st);
 
+// A value known only as a lower bound (a settling time of runs that did not settle, drawn at their
+// horizon): an upward-pointing open triangle of circumradius r px centred at c, the same in every chart.
+void draw_bound_marker(cv::Mat& img, cv::Point2d c, double r, const cv::Scalar& colour, int thickness);
+
 // Fills polygons (pixel coordinates of `img`) blended over the image: alpha·colour + (1 − alpha)·below.
 void fill_translucent(cv::Mat& img, const std::vector<Polyline>& polygons, const cv::Scalar& colour, double alpha);
 
 // ---------------------------------------------------------------- legend
 
 enum class Swatch {
-  line,  // the stroke
-  box,   // a box filled with the stroke colour at `alpha` over white
-  band,  // a translucent box (alpha) with the stroke through its middle
+  line,   // the stroke
+  box,    // a box filled with the stroke colour at `alpha` over white
+  band,   // a translucent box (alpha) with the stroke through its middle
+  bound,  // the lower-bound marker (draw_bound_marker)
 };
 
 struct LegendEntry {

@@ -83,6 +83,9 @@ void validate(const HeatMap& m) {
   if (m.values.size() != m.x.size() * m.y.size())
     throw std::invalid_argument("HeatMap: " + std::to_string(m.values.size()) + " values for " +
                                 std::to_string(m.y.size()) + " x " + std::to_string(m.x.size()) + " cells");
+  if (!m.bounds.empty() && m.bounds.size() != m.values.size())
+    throw std::invalid_argument("HeatMap: " + std::to_string(m.bounds.size()) + " bound flags for " +
+                                std::to_string(m.values.size()) + " values");
 }
 
 // Fills `cell` grey with diagonal hatching (for NaN).
@@ -157,7 +160,7 @@ cv::Rect cell_rect(const Axes& a, size_t ix, size_t iy) {
 std::optional<Font> annotation_font(const HeatMap& m, const Axes& a, const Style& st) {
   const cv::Rect c = cell_rect(a, 0, 0);
   int widest = 0;
-  for (double v : m.values) widest = std::max(widest, measure(format_value(v), st.tick).width);
+  for (double v : m.values) widest = std::max(widest, measure((m.bounds.empty() ? "" : "> ") + format_value(v), st.tick).width);
   for (double f : {1.2, 1.0, 0.85, 0.7}) {
     const Font font{st.tick.scale * f, st.tick.thickness};
     if (widest * f <= c.width - 2 * st.px(5) && measure("0", font).ascent <= c.height * 0.45) return font;
@@ -218,8 +221,14 @@ cv::Mat heat_map_bgr(const HeatMap& m, ChartImage* info) {
       if (!std::isfinite(v)) { hatch(img, r, st); continue; }
       const cv::Scalar c = bgr(viridis_colour((v - L.values.lo) / (L.values.hi - L.values.lo)));
       cv::rectangle(img, r, c, cv::FILLED);
+      const bool bound = !m.bounds.empty() && m.bounds[iy * nx + ix];
       if (font)
-        put_text(img, format_value(v), (r.tl() + r.br()) / 2, HAlign::centre, VAlign::middle, *font, text_on(c));
+        put_text(img, (bound ? "> " : "") + format_value(v), (r.tl() + r.br()) / 2, HAlign::centre, VAlign::middle,
+                 *font, text_on(c));
+      if (bound) {  // in the top-right corner, so it shows when the cells are too small for text
+        const double rad = std::min(r.width, r.height) * 0.12;
+        draw_bound_marker(img, {r.x + r.width - 1.6 * rad, r.y + 1.6 * rad}, rad, text_on(c), std::max(1, st.px(2)));
+      }
     }
   if (separators) {  // thin white lines between cells
     for (size_t ix = 1; ix < nx; ++ix) {
@@ -303,7 +312,10 @@ cv::Mat band_plot_bgr(const BandPlot& p, ChartImage* info) {
     draw_series(roi, a, s.x, s.lo, edge, st);
     draw_series(roi, a, s.x, s.hi, edge, st);
     draw_series(roi, a, s.x, s.mid, line, st);
+    for (size_t k = 0; k < s.bound_x.size() && k < s.bound_y.size(); ++k)
+      draw_bound_marker(roi, {a.ax(s.bound_x[k]), a.ay(s.bound_y[k])}, st.px(9), c, st.px(2));
     if (!s.label.empty()) legend.push_back({hershey_text(s.label), line, Swatch::band, kBandAlpha});
+    if (!s.bound_label.empty() && !s.bound_x.empty()) legend.push_back({hershey_text(s.bound_label), {c, st.px(2), false}, Swatch::bound});
   }
   draw_frame_and_ticks(img, a, st);
   draw_axes_text(img, a, {hershey_text(p.title), hershey_text(p.x_label), hershey_text(p.y_label)}, st);

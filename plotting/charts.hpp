@@ -20,6 +20,8 @@ struct HeatMap {
   std::string title, x_label, y_label, value_label;  // value_label on the colour bar, with units
   std::vector<double> x, y;    // cell centres (ascending), sizes nx, ny; drawn as equal cells labelled by centre
   std::vector<double> values;  // ny × nx row-major (values[iy*nx + ix]); NaN = cell hatched grey, "n/a" in the bar
+  std::vector<char> bounds;    // empty, or as values: 1 = the value is a lower bound (runs not settled, counted at
+                               // their horizon): "> v" in the cell and the bound marker in its corner
   bool annotate = true;        // print each cell's value when the cells are large enough
   int width = 1200, height = 900;
 };
@@ -29,6 +31,9 @@ struct BandSeries {
   std::string label;
   std::vector<double> x, mid, lo, hi;  // same length; NaN breaks line and band
   int colour = -1;                     // palette index; -1 = next in order
+  std::vector<double> bound_x, bound_y;  // points of the lines that are lower bounds (a percentile above the
+                                         // horizon, drawn at it): the bound marker each
+  std::string bound_label;               // their legend entry ("" = none)
 };
 struct BandPlot {
   std::string title, x_label, y_label;

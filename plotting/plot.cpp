@@ -73,7 +73,7 @@ Stroke series_stroke(const Series& s, int colour, const Style& st) {
 
 Stroke hline_stroke(const HLine& h, const Style& st) { return {kRefLineColour, st.px(1.5), h.dashed}; }
 
-// A marker at every finite point of s inside the plot area: a dot, or a cross (e.g. "not settled").
+// A marker at every finite point of s inside the plot area: a dot, a cross, or a lower bound.
 void draw_markers(cv::Mat& roi, const Axes& a, const Series& s, const Stroke& k, const Style& st) {
   if (s.marker == Series::Marker::kNone) return;
   const double r = 4.5 * st.s + k.thickness;  // px
@@ -83,6 +83,8 @@ void draw_markers(cv::Mat& roi, const Axes& a, const Series& s, const Stroke& k,
     if (c.x < -r || c.y < -r || c.x > roi.cols + r || c.y > roi.rows + r) continue;
     if (s.marker == Series::Marker::kDot) {
       cv::circle(roi, fixed_point(c), int(std::lround(r * 16)), k.colour, cv::FILLED, cv::LINE_AA, kShift);
+    } else if (s.marker == Series::Marker::kBound) {
+      draw_bound_marker(roi, c, 1.6 * r, k.colour, std::max(2, k.thickness));
     } else {
       for (double sgn : {-1.0, 1.0})
         cv::line(roi, fixed_point(c + cv::Point2d(-r, -sgn * r)), fixed_point(c + cv::Point2d(r, sgn * r)), k.colour,
@@ -108,7 +110,8 @@ std::vector<LegendEntry> draw_line_data(cv::Mat& img, const Axes& a, const LineP
     const Stroke k = series_stroke(p.series[i], colours[i], st);
     if (p.series[i].line) draw_series(roi, a, p.series[i].x, p.series[i].y, k, st);
     draw_markers(roi, a, p.series[i], k, st);
-    if (!p.series[i].label.empty()) legend.push_back({hershey_text(p.series[i].label), k});
+    const bool bound = !p.series[i].line && p.series[i].marker == Series::Marker::kBound;
+    if (!p.series[i].label.empty()) legend.push_back({hershey_text(p.series[i].label), k, bound ? Swatch::bound : Swatch::line});
   }
   for (const auto& h : p.hlines)
     if (!h.label.empty()) legend.push_back({hershey_text(h.label), hline_stroke(h, st)});

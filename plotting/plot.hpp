@@ -38,7 +38,9 @@ struct Series {
   double width = 2.0;             // px at 1400 × 800; scales with the image like the text
   bool dashed = false;
   bool line = true;               // false: markers only
-  enum class Marker { kNone, kDot, kCross } marker = Marker::kNone;  // drawn at every finite point
+  // Drawn at every finite point; kBound: a lower bound (draw_bound_marker; e.g. a settling time of runs
+  // that did not settle, at their horizon), its legend swatch the marker when there is no line.
+  enum class Marker { kNone, kDot, kCross, kBound } marker = Marker::kNone;
 };
 
 // Horizontal reference line drawn dark grey across the plot, e.g. one edge of a ±2 % settling

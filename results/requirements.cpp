@@ -219,12 +219,8 @@ RequirementSet read_requirements(YamlReader& top) {
 }
 
 void check_requirement_columns(const RequirementSet& set, const std::vector<std::string>& columns) {
-  for (const Requirement& r : set.statements) {
-    if (std::find(columns.begin(), columns.end(), r.metric) != columns.end()) continue;
-    std::string list;
-    for (const auto& c : columns) list += (list.empty() ? "" : ", ") + c;
-    throw ConfigError(set.file, r.line, r.key, "'" + r.metric + "' is not a result column (the columns: " + list + ")");
-  }
+  for (const Requirement& r : set.statements)
+    if (const std::string why = explain_unknown_column(r.metric, columns); !why.empty()) throw ConfigError(set.file, r.line, r.key, why);
 }
 
 // ---- verdicts -----------------------------------------------------------------------------

@@ -113,4 +113,8 @@ std::string calc_run_status(LaneStatus lane, const std::vector<std::string>& col
   return "ok";
 }
 
+bool is_failed_status(const std::string& status) {
+  return status == lane_status_name(LaneStatus::kNonfinite) || status == lane_status_name(LaneStatus::kSolverFail);
+}
+
 }  // namespace ff

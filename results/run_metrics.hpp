@@ -45,4 +45,7 @@ std::vector<double> calc_run_metrics(const Model& model, const OnlineRun& run);
 // "ok", "not_settled" (a tip settling time is NaN), or the lane's failure.
 std::string calc_run_status(LaneStatus lane, const std::vector<std::string>& columns, const std::vector<double>& values);
 
+// Whether a run's status is a numerical failure ("nonfinite", "solver_fail"): no metrics, exit 3.
+bool is_failed_status(const std::string& status);
+
 }  // namespace ff

@@ -143,8 +143,10 @@ std::vector<GroupRows> group_rows(const ResultTable& t, const std::vector<std::s
 std::vector<std::string> summary_cells(const std::vector<double>& v, const std::vector<double>& h,
                                        const std::map<std::string, double>& specs, const std::string& metric, bool csv) {
   const Summary s = calc_summary(v, h);
+  // With runs not settled the mean is the restricted mean, a lower bound of the mean: "> x" (CSV: the
+  // number, "mean" in the `censored` cell).
   std::vector<std::string> c = {std::to_string(s.count), std::to_string(s.censored), std::to_string(s.missing),
-                                num(s.horizon), num(s.mean)};
+                                num(s.horizon), s.censored > 0 && !csv ? "> " + num(s.mean) : num(s.mean)};
   std::string censored = s.censored > 0 ? "mean" : "";
   const std::pair<const char*, double> stats[] = {{"min", s.min}, {"p5", s.p5}, {"p50", s.p50}, {"p95", s.p95}, {"max", s.max}};
   for (const auto& [name, x] : stats) {
@@ -199,6 +201,12 @@ std::string groupby(const ResultTable& t, const std::vector<std::string>& by, co
 
 }  // namespace
 
+std::string explain_unknown_name(const ResultTable& t, const std::string& name) {
+  std::vector<std::string> names = t.params;
+  names.insert(names.end(), t.columns.begin(), t.columns.end());
+  return explain_unknown_column(name, names, "a parameter or result column", "the parameters and columns");
+}
+
 std::vector<double> column_values(const ResultTable& t, const std::string& name) {
   std::vector<double> out;
   for (std::size_t c = 0; c < t.params.size(); ++c)
@@ -211,7 +219,7 @@ std::vector<double> column_values(const ResultTable& t, const std::string& name)
       for (const auto& r : t.rows) out.push_back(r.values[c]);
       return out;
     }
-  throw std::invalid_argument("no column '" + name + "'; there are: " + join(t.params, ", ") + ", " + join(t.columns, ", "));
+  throw std::invalid_argument(explain_unknown_name(t, name));
 }
 
 std::vector<double> horizon_values(const ResultTable& t, const std::string& metric) {

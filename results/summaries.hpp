@@ -13,8 +13,12 @@
 
 namespace ff {
 
-// Values of a parameter or metric column by name; throws std::invalid_argument naming the column
-// and the columns there are when it does not exist.
+// "" when `name` is a parameter or metric column of t, else why not, with the closest name and the
+// names there are (explain_unknown_column).
+std::string explain_unknown_name(const ResultTable& t, const std::string& name);
+
+// Values of a parameter or metric column by name; throws std::invalid_argument(explain_unknown_name)
+// when it does not exist.
 std::vector<double> column_values(const ResultTable& t, const std::string& name);
 
 // The horizons of a censored summary (censoring.hpp) as text, "7.68-9.09" or "8" when they are one,

@@ -1,5 +1,6 @@
 #include "results/table.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cctype>
 #include <climits>
@@ -9,6 +10,7 @@
 #include <stdexcept>
 
 #include "common/text.hpp"
+#include "common/closest.hpp"
 #include "results/run_metrics.hpp"
 
 namespace ff {
@@ -31,6 +33,26 @@ std::string fmt(const char* f, double x) {
 }  // namespace
 
 std::string format_cell(double x, const char* format) { return std::isnan(x) ? "-" : fmt(format, x); }
+
+std::string format_metric_cell(double x, double horizon, const char* format) {
+  if (std::isnan(x) && !std::isnan(horizon)) return "> " + fmt(format, horizon) + " (not settled)";
+  return format_cell(x, format);
+}
+
+double find_row_horizon(const ResultTable& t, const ResultRow& row, const std::string& column) {
+  const std::string h = calc_horizon_column(column);
+  for (std::size_t c = 0; c < t.columns.size() && c < row.values.size(); ++c)
+    if (!h.empty() && t.columns[c] == h) return row.values[c];
+  return std::nan("");
+}
+
+std::string explain_unknown_column(const std::string& name, const std::vector<std::string>& valid, const std::string& what,
+                                   const std::string& list_name) {
+  if (std::find(valid.begin(), valid.end(), name) != valid.end()) return "";
+  std::string list;
+  for (const std::string& v : valid) list += (list.empty() ? "" : ", ") + v;
+  return "'" + name + "' is not " + what + format_did_you_mean(name, valid) + " (" + list_name + ": " + list + ")";
+}
 
 std::string format_results_header(const ResultTable& t) {
   std::string out = "eval_id,seed,label,status";
@@ -154,10 +176,7 @@ std::string format_settling_table_md(const ResultTable& t, const std::vector<std
       "|---|---|---|---|---|---|---|---|---|\n";
   const std::size_t per_move = kMoveMetrics.size();
   // Not settled: "> H (not settled)" with the move's horizon H, the largest settling time the run could confirm.
-  auto settle = [](double x, double horizon) {
-    if (!std::isnan(x)) return fmt("%.2f", x);
-    return std::isnan(horizon) ? std::string("not settled") : "> " + fmt("%.2f", horizon) + " (not settled)";
-  };
+  auto settle = [](double x, double horizon) { return format_metric_cell(x, horizon, "%.2f"); };
   // "-": no number (a move the run ended before).
   auto number = [](const char* format, double x) { return std::isnan(x) ? std::string("-") : fmt(format, x); };
   for (std::size_t i = 0; i < t.rows.size(); ++i) {

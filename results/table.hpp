@@ -26,6 +26,21 @@ struct ResultTable {
 // A number for a readable table: printf `format` ("%.4g"), "-" for NaN (no number).
 std::string format_cell(double x, const char* format = "%.4g");
 
+// A metric's cell in a readable table: x in `format`; without a number, "> H (not settled)" when it is a
+// settling time right-censored at its horizon H (a number), else "-": no value (a run that diverged, a
+// move it never ran, an event that did not happen) is not censored.
+std::string format_metric_cell(double x, double horizon, const char* format = "%.4g");
+
+// The horizon `column` of `row` is censored at (calc_horizon_column), NaN for a column that is not a
+// settling time or a table without its horizon column.
+double find_row_horizon(const ResultTable& table, const ResultRow& row, const std::string& column);
+
+// Every reader of a metric's or parameter's name (specs, tolerances, requirements, `table --by/--metric/
+// --spec`, the diff) checks it here: "" when `name` is one of `valid`, else "'NAME' is not a result
+// column (did you mean `CLOSEST`?) (the columns: A, B, ...)" (`what`: "a result column").
+std::string explain_unknown_column(const std::string& name, const std::vector<std::string>& valid,
+                                   const std::string& what = "a result column", const std::string& list_name = "the columns");
+
 // CSV header: eval_id,seed,label,status,<params>,<columns>.
 std::string format_results_header(const ResultTable& table);
 // One CSV row (with its newline); NaN cells are empty; numbers with 17 significant digits (exact).
@@ -44,7 +59,7 @@ std::vector<std::string> split_csv_line(const std::string& line);
 ResultTable parse_results_csv(const std::string& text, const std::string& source);
 
 // Markdown table, one line per run and move: tip and hub settling (s; not settled: "> H (not settled)",
-// H the move's settling_horizon_s, or "not settled" without one), overshoot (%),
+// H the move's settling_horizon_s; "-" without one: a diverged run, a move never run), overshoot (%),
 // peak tip deflection (mm), residual vibration (mm), peak torque (kN·m).
 // moves[row][j] describes move j of that row, e.g. "0 -> 0.5 rad".
 std::string format_settling_table_md(const ResultTable& table, const std::vector<std::vector<std::string>>& moves);

@@ -350,12 +350,14 @@ std::uint64_t read_seed(YamlReader& top) {
 
 StudyCriteria read_study_criteria(YamlReader& top, std::uint64_t seed) {
   StudyCriteria c;
+  c.file = top.file();
   if (const YAML::Node specs = top.raw("specs")) {
     if (!specs.IsMap()) top.fail("specs", "expected a map of RESPONSE: limit");
     for (const auto& kv : specs) {
       const double x = numeric_value(kv.second);
       if (!std::isfinite(x)) top.fail("specs", "limit of '" + kv.first.as<std::string>() + "' must be a number");
       c.specs[kv.first.as<std::string>()] = x;
+      c.spec_lines[kv.first.as<std::string>()] = kv.first.Mark().line + 1;
     }
   }
   c.tolerances = read_tolerances(top);
@@ -366,6 +368,16 @@ StudyCriteria read_study_criteria(YamlReader& top, std::uint64_t seed) {
   c.requirements = read_requirements(top);
   c.requirements.seed = seed;
   return c;
+}
+
+void check_criteria_columns(const StudyCriteria& c, const std::vector<std::string>& columns) {
+  for (const auto& [metric, line] : c.spec_lines)
+    if (const std::string why = explain_unknown_column(metric, columns); !why.empty())
+      throw ConfigError(c.file, line, "specs." + metric, why);
+  for (const Tolerance& t : c.tolerances)
+    if (const std::string why = explain_unknown_column(t.metric, columns); !why.empty())
+      throw ConfigError(c.file, t.line, "tolerances." + t.metric, why);
+  check_requirement_columns(c.requirements, columns);
 }
 
 StudyCriteria read_study_criteria(const std::string& text, const std::string& source) {
@@ -401,6 +413,7 @@ Study read_study(const std::string& path, int max_variants) {
 
   StudyCriteria criteria = read_study_criteria(top, st.seed);
   st.specs = std::move(criteria.specs);
+  st.spec_lines = std::move(criteria.spec_lines);
   st.tolerances = std::move(criteria.tolerances);
   st.requirements = std::move(criteria.requirements);
   if (st.requirements.stop_when_decided && (st.listed || st.design.kind != DesignKind::kMonteCarlo || !st.case_labels.empty()))
@@ -445,8 +458,9 @@ void check_models(Study& st) {
   };
   if (st.arm) st.arm_nominal = build_arm(0);
   else st.nominal = build(0);  // variant 0, or case 0's nominal point
-  check_requirement_columns(st.requirements, st.arm ? arm_metric_columns(st.arm_nominal)
-                                                    : calc_metric_columns(static_cast<int>(st.nominal.spec.trajectory.moves.size())));
+  check_criteria_columns({st.specs, st.spec_lines, st.tolerances, st.requirements, st.source},
+                         st.arm ? arm_metric_columns(st.arm_nominal)
+                                : calc_metric_columns(static_cast<int>(st.nominal.spec.trajectory.moves.size())));
   std::vector<std::exception_ptr> errors(n);
 #pragma omp parallel for schedule(dynamic, 8)
   for (std::size_t i = 1; i < n; ++i) {

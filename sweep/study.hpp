@@ -51,6 +51,7 @@ struct Study {
                                 // value: the result table's columns; a bad override fails at load
   bool drawn = false;           // the values are drawn from distributions, not written in the file
   std::map<std::string, double> specs;      // response -> limit a run must not exceed (Monte Carlo summaries)
+  std::map<std::string, int> spec_lines;    // response -> where its spec is written
   std::vector<Tolerance> tolerances;        // how much worse than the last run is a regression (flexfarm diff)
   RequirementSet requirements;  // `requirements:` (results/requirements.hpp); their metrics checked by check_models
   bool keep_traces = false;     // write every variant's trace (default: when there are at most 50)
@@ -66,11 +67,17 @@ inline constexpr int kMaxStudyVariants = 1000000;
 // the study's `seed:`. read_study reads them so; flexfarm diff from a run's recorded study text.
 struct StudyCriteria {
   std::map<std::string, double> specs;
+  std::map<std::string, int> spec_lines;  // where each spec is written
   std::vector<Tolerance> tolerances;
   RequirementSet requirements;
+  std::string file;                       // the study file, for errors
 };
 StudyCriteria read_study_criteria(YamlReader& top, std::uint64_t seed);
 StudyCriteria read_study_criteria(const std::string& text, const std::string& source);
+// Every metric the criteria name (each spec, tolerance and requirement) is one of `columns`, else a
+// ConfigError naming the file, line and key, the closest column and the columns there are
+// (explain_unknown_column): a misspelled name would be a spec or a regression guard that never fires.
+void check_criteria_columns(const StudyCriteria& c, const std::vector<std::string>& columns);
 
 // Loads and checks a study: read_study, then check_models.
 Study load_study(const std::string& path);
@@ -85,7 +92,7 @@ Study read_study(const std::string& path, int max_variants = kMaxStudyVariants);
 // nominal point only (its written set, every variable at its median): a draw from a distribution's
 // tail that the model rejects is a result of the run (status `invalid`), not an error. Models are
 // built again, per batch, when the variants run: memory does not grow with the study. Every metric
-// a requirement names must be one of the nominal model's result columns.
+// a spec, tolerance or requirement names must be one of the nominal model's result columns.
 void check_models(Study& st);
 
 // The legends of variants shown together (`flexfarm plot`): each one's label less the `path=value`

@@ -447,6 +447,37 @@ TEST_F(Cli, SimulateShortMoveWritesEveryOutput) {
   EXPECT_EQ(tree(out).size(), 7u);  // trace.csv, metrics.csv, table.md, four PNGs
 }
 
+// (#32.8) A run that goes non-finite (PD gain 1e12, one explicit RK4 step a period) writes its outputs and
+// exits 3, as `run` does, so a script can tell; (#32.12) its metrics are "-", not "not settled".
+TEST_F(Cli, SimulateOfARunThatGoesNonFiniteExitsThreeWithNoValues) {
+  const auto r = run("simulate configs/fbtb.yaml --out out --set controller.kp=1e12 --set simulation.integrator=rk4 "
+                     "--set simulation.substeps=1 --set " + quote("trajectory.moves=[{target: 0.5, hold: 2}]"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("status: nonfinite"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("flexfarm: error: the run failed numerically (status nonfinite): it has no metrics"), std::string::npos)
+      << r.output;
+  const auto metrics = split_lines(read_text(work / "out" / "metrics.csv"));
+  ASSERT_EQ(metrics.size(), 2u);
+  EXPECT_NE(metrics[1].find(",nonfinite,,,"), std::string::npos) << metrics[1];
+  const std::string table = read_text(work / "out" / "table.md");
+  EXPECT_NE(table.find("| - | - | - | - | - | - | - |"), std::string::npos) << table;
+  EXPECT_EQ(table.find("not settled"), std::string::npos) << table;
+  for (const char* png : kPlots) expect_png(work / "out" / png);
+
+  const auto arm = run("simulate " + kSource + "/configs/two_link_flexible.yaml --out arm --set joints.shoulder.controller.kp=1.0e12 "
+                       "--set simulation.integrator=rk4 --set simulation.substeps=1");
+  EXPECT_EQ(arm.exit_code, 3) << arm.output;
+  EXPECT_NE(arm.output.find("status: nonfinite"), std::string::npos) << arm.output;
+  const std::string arm_table = read_text(work / "arm" / "table.md");
+  EXPECT_NE(arm_table.find("| tool_settling_s | - |"), std::string::npos) << arm_table;
+  EXPECT_NE(arm_table.find("| shoulder_overshoot_pct | - |"), std::string::npos) << arm_table;
+  EXPECT_EQ(arm_table.find("not settled"), std::string::npos) << arm_table;
+  // A run that is fine exits 0; one that did not settle too (a result), its settling time a bound.
+  const auto slow = run("simulate " + kSource + "/configs/two_link_flexible.yaml --out slow --set simulation.settle=0.5");
+  EXPECT_EQ(slow.exit_code, 0) << slow.output;
+  EXPECT_NE(read_text(work / "slow" / "table.md").find("| tool_settling_s | > 0"), std::string::npos) << read_text(work / "slow" / "table.md");
+}
+
 TEST_F(Cli, RunShortStudyWritesEveryOutput) {
   write("study.yaml",
         "name: short\n"

@@ -116,6 +116,26 @@ TEST_F(NightlyCli, TheScriptFlagsTheNightTheModelGotWorseAndNotTheNightsAround) 
   EXPECT_EQ(flexfarm("diff --bogus").exit_code, 2);
 }
 
+// (#32.9) A recorded study whose tolerance names no result column (a run recorded before the check, here
+// its run.yaml edited) is refused by `flexfarm diff`, exit 2, naming the line, the key and the closest
+// column: a regression guard that could never fire.
+TEST_F(NightlyCli, ADiffRefusesARecordedToleranceThatNamesNoColumn) {
+  write("configs/two.yaml", "name: two\nmodel: fbtb.yaml\nset:\n  trajectory.moves: [{target: 0.2, hold: 3}]\n"
+                            "runs:\n  - {label: a}\ntolerances:\n  m1_peak_torque_Nm: {increase: 3%}\n");
+  ASSERT_EQ(flexfarm("run configs/two.yaml --out a").exit_code, 0);
+  ASSERT_EQ(flexfarm("run configs/two.yaml --out b").exit_code, 0);
+  EXPECT_EQ(flexfarm("diff a b").exit_code, 0);
+  std::string record = read_text(work / "b/run.yaml");
+  record.replace(record.find("    m1_peak_torque_Nm: {increase"), 21, "    m1_peak_torqe_Nm");
+  write("b/run.yaml", record);
+  const Result r = flexfarm("diff a b");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("configs/two.yaml:8: tolerances.m1_peak_torqe_Nm: 'm1_peak_torqe_Nm' is not a result column (did you "
+                          "mean `m1_peak_torque_Nm`?)"),
+            std::string::npos)
+      << r.output;
+}
+
 TEST_F(NightlyCli, AHistoryThatCannotBeWrittenIsAWarningAndTheRunStandsAndNoHistoryRecordsNothing) {
   // A history under a file cannot be made: the run warns, writes everything else and exits 0.
   write("not_a_dir", "x");

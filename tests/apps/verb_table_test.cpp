@@ -82,4 +82,28 @@ TEST_F(TableCli, HelpSaysWhenAColumnIsBinnedAndABadBinningIsRefused) {
   EXPECT_NE(run("table out --by payload.mass --bins -1").exit_code, 0);
 }
 
+// (#32.9) A misspelled name in --spec, --metric or --by is refused (exit 2), naming the option, the
+// closest column and the columns there are: a spec that names no column would never miss.
+TEST_F(TableCli, AMisspelledSpecMetricOrGroupIsRefusedWithTheClosestColumn) {
+  const auto spec = run("table out --by payload.mass --spec m1_tip_setling_s=1.5");
+  EXPECT_EQ(spec.exit_code, 2) << spec.output;
+  EXPECT_NE(spec.output.find("--spec: 'm1_tip_setling_s' is not a result column (did you mean `m1_tip_settling_s`?) "
+                             "(the columns: m1_tip_settling_s, m1_tip_overshoot_pct, m1_settling_horizon_s) of out/results.csv"),
+            std::string::npos)
+      << spec.output;
+  const auto metric = run("table out --metric m1_tip_overshot_pct");
+  EXPECT_EQ(metric.exit_code, 2) << metric.output;
+  EXPECT_NE(metric.output.find("--metric: 'm1_tip_overshot_pct' is not a result column (did you mean `m1_tip_overshoot_pct`?)"),
+            std::string::npos)
+      << metric.output;
+  const auto by = run("table out --by payload.mas,segments");
+  EXPECT_EQ(by.exit_code, 2) << by.output;
+  EXPECT_NE(by.output.find("--by: 'payload.mas' is not a parameter or result column (did you mean `payload.mass`?) "
+                           "(the parameters and columns: payload.mass, segments, m1_tip_settling_s, "),
+            std::string::npos)
+      << by.output;
+  // A spec's limit must be a number: "1.5s" is not 1.5.
+  EXPECT_EQ(run("table out --spec m1_tip_settling_s=1.5s").exit_code, 2);
+}
+
 }  // namespace

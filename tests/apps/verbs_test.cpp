@@ -56,8 +56,9 @@ TEST_F(Verbs, TableGroupsRowsByParameterWithSpecMisses) {
   EXPECT_EQ(heavy.substr(heavy.rfind(',') + 1), "\"mean min p5 p50 p95 max\"") << heavy;
   EXPECT_NE(light.find(",0.000,"), std::string::npos) << light;            // nothing misses a 1000 s spec
   const auto bad = flexfarm("table " + (dir / "out").string() + " --by payload.colour");
-  EXPECT_NE(bad.exit_code, 0);
-  EXPECT_NE(bad.output.find("no column 'payload.colour'"), std::string::npos) << bad.output;
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("--by: 'payload.colour' is not a parameter or result column (the parameters and columns: payload.mass, "),
+            std::string::npos) << bad.output;
 }
 
 TEST_F(Verbs, PlotResimulatesChosenVariantsExactly) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -156,6 +157,66 @@ ArmModel pendulum(double kp, double kd) {
                                            ", kd: " + std::to_string(kd) + ", gravity_compensation: 1}}\n"
                                            "trajectory:\n  waypoints:\n    - {time: 0.5, joints: {arm: 0.5}}\n"
                                            "simulation: {duration: 3.0, integrator: rk4, substeps: 1}\n"));
+}
+
+// (#32.13) Out to 0.6 rad and part way back to 0.2: the joint's overshoot is its last move's (0.6 -> 0.2,
+// from its start at 0.5 s on), not the start pose 0 lying 0.2 rad past 0.2 (50 % of the 0.4 rad move);
+// the tool's is along the reference's last move (from where it is at 0.5 s). Stored and online agree.
+TEST(ArmOnlineMetrics, AnOvershootIsOfTheLastMoveFromItsStart) {
+  const std::vector<ArmModel> lanes{test::arm_from(test::pendulum_arm(
+      "tool: {body: arm, point: [0.5, 0, 0]}\ncontroller: {rate: 1000}\n"
+      "joints:\n  arm: {controller: {kp: 400, kd: 40, gravity_compensation: 1}}\n"
+      "trajectory:\n  waypoints:\n    - {time: 0.5, joints: {arm: 0.6}}\n    - {time: 1.0, joints: {arm: 0.2}}\n"
+      "simulation: {duration: 3.0, integrator: rk4, substeps: 1}\n"))};
+  const ArmModel& m = lanes[0];
+  const ArmJointMoves mv = calc_arm_joint_moves(m, 0);
+  EXPECT_EQ(mv.start, 0.6);
+  EXPECT_EQ(mv.target, 0.2);
+  EXPECT_EQ(mv.t_start, 0.5);
+  EXPECT_EQ(calc_arm_last_move_start(m), 0.5);
+  Coverage seen;
+  expect_online_matches_stored(lanes, seen);
+  const ArmRun run = simulate_arms(lanes);
+  const ArmTrace& tr = run.traces[0];
+  const std::vector<double>& t = tr.t();
+  const std::vector<double> v = calc_arm_metrics(m, tr, run.status[0]);
+  const std::vector<std::string> columns = arm_metric_columns(m);
+  const auto value = [&](const std::string& c) { return v[static_cast<std::size_t>(std::find(columns.begin(), columns.end(), c) - columns.begin())]; };
+  // The joint: below 0.2 (the move's direction) from 0.5 s on, % of 0.4 rad.
+  const std::vector<double>& q = tr.column("arm.q");
+  double past = 0.0;
+  for (std::size_t k = 0; k < t.size(); ++k)
+    if (t[k] >= 0.5) past = std::max(past, 0.2 - q[k]);
+  EXPECT_DOUBLE_EQ(value("arm_overshoot_pct"), 100.0 * past / 0.4);
+  EXPECT_LT(value("arm_overshoot_pct"), 10.0);  // was 50: the start pose, 0, counted
+  // The tool: past its resting point along the reference from 0.5 s to the end, after the last waypoint.
+  const auto at = [&](const char* p, std::size_t k) { return Vec3(tr.column(std::string(p) + "x")[k], tr.column(std::string(p) + "y")[k],
+                                                                   tr.column(std::string(p) + "z")[k]); };
+  const std::size_t start = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), 0.5) - t.begin()), n = t.size();
+  const Vec3 begin = at("tool.ref_", start), target = at("tool.ref_", n - 1), rest = at("tool.", n - 1);
+  const Vec3 dir = (target - begin).normalized();
+  double over = 0.0;
+  for (std::size_t k = 0; k < n; ++k)
+    if (t[k] >= 1.0) over = std::max(over, dir.dot(at("tool.", k) - rest));
+  EXPECT_DOUBLE_EQ(value("tool_overshoot_pct"), 100.0 * over / (target - begin).norm());
+
+  // A step below kArmMoveTolerance (arm6's wrists, moved 1e-17 rad by the inverse kinematics) is no move:
+  // the last move is 0 -> 0.5, not 0.5 -> 0.5 + 1e-15 (overshoot 1e11 %, a settling band of 2e-17 rad).
+  const std::vector<ArmModel> tiny{test::arm_from(test::pendulum_arm(
+      "tool: {body: arm, point: [0.5, 0, 0]}\ncontroller: {rate: 1000}\n"
+      "joints:\n  arm: {controller: {kp: 400, kd: 40, gravity_compensation: 1}}\n"
+      "trajectory:\n  waypoints:\n    - {time: 0.5, joints: {arm: 0.5}}\n    - {time: 1.0, joints: {arm: 0.500000000000001}}\n"
+      "simulation: {duration: 3.0, integrator: rk4, substeps: 1}\n"))};
+  const ArmJointMoves small = calc_arm_joint_moves(tiny[0], 0);
+  EXPECT_EQ(small.start, 0.0);
+  EXPECT_EQ(small.target, 0.5);
+  EXPECT_EQ(small.largest, 0.5);
+  EXPECT_EQ(small.t_start, 0.0);
+  expect_online_matches_stored(tiny, seen);
+  const ArmRun tiny_run = simulate_arms(tiny);
+  const std::vector<double> w = calc_arm_metrics(tiny[0], tiny_run.traces[0], tiny_run.status[0]);
+  EXPECT_LT(w[1], 10.0);          // arm_overshoot_pct
+  EXPECT_FALSE(std::isnan(w[0]));  // arm_settling_s: settled
 }
 
 TEST(ArmOnlineMetrics, AFailedLaneGivesAllNaNAndItsNeighboursTheirStoredBits) {

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "results/run_metrics.hpp"
 #include "tests/temp_dir.hpp"
 
 namespace ff {
@@ -92,6 +93,56 @@ TEST(Report, TableMdSplitsIntoTheHeadTheResultsAndTheRequirements) {
   EXPECT_EQ(report.requirements.rfind("\n## Requirements\n\n", 0), 0u) << report.requirements;
   EXPECT_NE(report.requirements.find("| `P(m1_tip_settling_s <= 5) >= 0.5` | pass |"), std::string::npos) << report.requirements;
   EXPECT_EQ(read_text((dir.path / "table.md").string()), report.md());
+}
+
+// (#32.12) A listed arm study: a run that diverged has no values ("-"), not "not settled"; one that did
+// not settle reads "> H (not settled)" with its horizon H, and its other metrics stay numbers.
+TEST(Report, AListedArmStudysDivergedRunHasNoValuesNotNotSettled) {
+  const test::TempDir dir("ff_report_arm");
+  Study study;
+  study.name = "arm";
+  study.listed = true;
+  study.arm = true;
+  ResultTable t;
+  t.columns = {"arm_settling_s", "arm_overshoot_pct", "arm_peak_torque_Nm", "arm_peak_speed", "tool_settling_s",
+               "tool_overshoot_pct", "tool_peak_error_m", "tool_final_error_m", "tool_sag_m", "settling_horizon_s"};
+  t.rows.push_back({0, 0, "settles", "ok", {}, {1.1, 0.5, 4, 1, 1.2, 0.25, 0.02, 0.001, 0, 3}});
+  t.rows.push_back({1, 0, "rings", "not_settled", {}, {NAN, 1, 5, 1, NAN, 2.5, 0.01, 0.001, 0, 3}});
+  t.rows.push_back({2, 0, "diverged", "nonfinite", {}, std::vector<double>(10, NAN)});
+  const std::string md = write_study_report(study, t, dir.path.string(), make_run_record(study, t, dir.path.string(), {})).md();
+  EXPECT_NE(md.find("| settles | ok | 1.2 | 0.25 | 0.02 | 0.001 | 4 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| rings | not_settled | > 3 (not settled) | 2.5 | 0.01 | 0.001 | 5 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| diverged | nonfinite | - | - | - | - | - |"), std::string::npos) << md;
+}
+
+// (#32.11) A study with cases: a cell where runs did not settle is their restricted mean, a lower bound
+// ("> v"; at the horizon when none settled), never a bare number and never a gap; a cell with a run
+// that diverged has no value ("-").
+TEST(Report, ACasesCellThatDidNotSettleIsALowerBound) {
+  const test::TempDir dir("ff_report_cases");
+  Study study;
+  study.name = "cases";
+  study.case_labels = {"PD", "ZV"};
+  ResultTable t;
+  t.params = {"case", "payload.mass"};
+  t.columns = calc_metric_columns(1);
+  const auto row = [&](int id, double c, double mass, double settling, double horizon, const char* status) {
+    std::vector<double> v(t.columns.size(), 1.0);
+    v[0] = settling;
+    v[7] = horizon;
+    if (std::string(status) == "nonfinite") v.assign(v.size(), NAN);
+    t.rows.push_back({id, 0, "r" + std::to_string(id), status, {c, mass}, v});
+  };
+  row(0, 0, 8, 2.0, 3.0, "ok");
+  row(1, 0, 12, NAN, 2.77, "not_settled");  // none settled: > the horizon
+  row(2, 1, 8, 1.5, 3.0, "ok");
+  row(3, 1, 8, NAN, 3.0, "not_settled");    // half settled: > the restricted mean (1.5 + 3) / 2
+  row(4, 1, 12, NAN, NAN, "nonfinite");
+  const std::string md = write_study_report(study, t, dir.path.string(), make_run_record(study, t, dir.path.string(), {})).md();
+  EXPECT_NE(md.find("| PD | 2.00 | > 2.77 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| ZV | > 2.25 | - |"), std::string::npos) << md;
+  EXPECT_NE(md.find("\"> v\": some runs did not settle"), std::string::npos) << md;
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "cases_m1_tip_settling_s.png"));
 }
 
 }  // namespace

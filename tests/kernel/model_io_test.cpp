@@ -158,6 +158,25 @@ TEST(ModelIo, UnknownTopLevelKeyIsRejectedWithItsLine) {
   expect_rejected(with_line(3, "gravity: 9.81"), 3, "gravity", "unknown key");
 }
 
+// (#32.14) A rig with no inertia (a massless beam, no payload, no hub inertia) has a singular mass matrix
+// (modes of 0 Hz, no dynamics): one line naming the keys. A massless beam of several segments too (its
+// joints carry nothing); one rigid massless segment on a hub with inertia is the EMPS axis.
+TEST(ModelIo, ARigWithNoInertiaIsRejectedNamingTheKeys) {
+  auto lines = reference_lines();
+  lines.at(8 - 1) = "  density: 0";
+  lines.at(11 - 1) = "segments: 1";
+  lines.at(19 - 1) = "  inertia: 0";
+  lines.at(22 - 1) = "  mass: 0";
+  lines.at(23 - 1) = "  inertia: 0";
+  expect_rejected(join(lines), 8, "beam.density",
+                  "the rig has no inertia: beam.density, hub.inertia, payload.mass and payload.inertia are all 0");
+  lines.at(19 - 1) = "  inertia: 50.0";
+  EXPECT_NO_THROW(ff::parse_model(YAML::Load(join(lines)), "ok.yaml"));
+  lines.at(11 - 1) = "segments: 6";
+  lines.at(22 - 1) = "  mass: 328.7";
+  expect_rejected(join(lines), 8, "beam.density", "0 (a massless beam) needs segments: 1");
+}
+
 TEST(ModelIo, UnknownNestedKeyNamesFullPath) {
   expect_rejected(with_line(24, "  colour: red"), 24, "payload.colour", "unknown key");
 }

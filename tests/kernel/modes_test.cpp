@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "common/errors.hpp"
 #include "kernel/cantilever.hpp"
@@ -95,6 +96,31 @@ TEST(Modes, IntegralActionAddsASlowRealPoleNearTheOrigin) {
   const auto base = calc_closed_loop_modes(rig_with(6));
   EXPECT_EQ(modes.size(), base.size() + 1);
   EXPECT_LT(modes[0].omega_n, 0.05);  // ~ ki / kp = 0.01 1/s
+}
+
+// (#32.14) A free hub (kp = kd = 0): its rigid-body mode is zero to the eigen-solve's resolution at every
+// N (omega 0: free), not a slow or unstable pole of round-off, and the beam's modes stay (at N = 96 the
+// dampers' real poles reach 1e7 rad/s: no scale for it). The threshold is relative: 1.5e-6 of the
+// stiffness scale sqrt(|M^-1 K|).
+TEST(Modes, AFreeHubsRigidModeIsZeroAtEveryN) {
+  for (int n : {6, 24, 64, 96}) {
+    ModelSpec s = test::rig_spec();
+    s.segments = n;
+    s.simulation.substeps = 1;
+    s.controller.kp = s.controller.kd = 0.0;
+    const std::vector<Mode> modes = calc_closed_loop_modes(make_model(s));
+    int free = 0;
+    for (const Mode& m : modes) free += m.omega_n == 0.0;
+    EXPECT_GE(free, 1) << "N = " << n;
+    EXPECT_LE(free, 2) << "N = " << n;  // the hub's angle and rate: a double zero
+    const Mode& first = modes[static_cast<std::size_t>(free)];
+    EXPECT_TRUE(first.oscillatory) << "N = " << n;
+    EXPECT_GT(first.frequency_hz(), 0.3) << "N = " << n;  // the free beam's first bending mode
+    EXPECT_GT(first.zeta, 0.0) << "N = " << n;
+  }
+  EXPECT_TRUE(is_zero_eigenvalue(0.004, 1e5));
+  EXPECT_FALSE(is_zero_eigenvalue(0.2, 1e5));
+  EXPECT_TRUE(is_zero_eigenvalue(0.0, 0.0));
 }
 
 // The segmented beam is a cantilever of flexural rigidity kappa EI with kappa = k l / (E I).

@@ -111,6 +111,37 @@ TEST(TreeModes, DampedJointHasItsClosedFormFrequencyAndDampingAndAPdLoopAddsToTh
 // A zero mode either moves the joints (a free joint: nothing resists it) or is an actuator state that
 // nothing restores and that moves no joint (a valve-controlled actuator's mean chamber pressure);
 // `moves` tells them apart.
+// (#32.14) A flexible link on a free revolute hub (no spring, no gain), its cells damped (so the damped
+// problem is solved): the hub's rigid-body rotation is zero to the solve's resolution at every N, omega
+// 0 (free), never a slow or unstable real pole of round-off (it was 0.004 rad/s, "unstable", at N = 64).
+TEST(TreeModes, AFreeHubsRigidModeIsZeroAtEveryN) {
+  for (int N : {8, 16, 32, 64}) {
+    TreeSpec s;
+    FlexibleLinkSpec link;
+    link.length = 2.0;
+    link.section = {200e9, 80e9, 7850.0, 1.6e-4, 2.13e-10, 2.13e-10, 4.3e-10};
+    link.segments = N;
+    link.planar = true;
+    link.damping_time = 1e-3;
+    link.root_joint.type = JointType::kRevolute;
+    link.root_joint.armature = 0.5;
+    append_flexible_link(s, -1, Vec3::Zero(), Mat3::Identity(), link);
+    s.gravity = Vec3::Zero();
+    const Tree tree = make_tree(s);
+    const std::vector<TreeMode> modes = calc_tree_modes(tree, VectorXd::Zero(tree.nv()));
+    int free = 0;
+    for (const TreeMode& m : modes) {
+      free += m.omega_n == 0.0;
+      EXPECT_GE(m.zeta, 0.0) << "N " << N << ": omega " << m.omega_n;  // nothing unstable
+    }
+    EXPECT_GE(free, 1) << "N " << N;
+    EXPECT_LE(free, 2) << "N " << N;
+    EXPECT_EQ(modes[0].omega_n, 0.0) << "N " << N;
+    EXPECT_NEAR(std::abs(modes[0].shape[0]), 1.0, 1e-6) << "N " << N;  // the whole link turning on the hub
+    EXPECT_GT(modes[static_cast<std::size_t>(free)].omega_n, 1.0) << "N " << N;
+  }
+}
+
 TEST(TreeModes, AnActuatorStateNothingRestoresMovesNoJointButAFreeJointMoves) {
   TreeSpec s;
   BodySpec b = damped_spring_body();

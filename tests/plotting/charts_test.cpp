@@ -181,6 +181,33 @@ TEST(Charts, HeatMapRejectsInconsistentSizes) {
   EXPECT_THROW(ff::render_heat_map_rgb(m), std::invalid_argument);
 }
 
+// Pixels of the top-right quarter of a cell that differ from its centre's colour.
+int corner_pixels(const ff::ChartImage& c, int ix, int iy) {
+  const Image img = image(c);
+  const ff::Rgb fill = img.at(px(c.frame.x_to_px(ix)), px(c.frame.y_to_px(iy)));
+  int n = 0;
+  for (int y = px(c.frame.y_to_px(iy + 0.45)); y <= px(c.frame.y_to_px(iy + 0.05)); ++y)
+    for (int x = px(c.frame.x_to_px(ix + 0.05)); x <= px(c.frame.x_to_px(ix + 0.45)); ++x) n += !near(img.at(x, y), fill, 3);
+  return n;
+}
+
+// (#32.11) A cell whose value is a lower bound (runs not settled, counted at their horizon) carries the
+// bound marker in its corner, visible without the annotation; annotated, it reads "> v" (wider text).
+TEST(Charts, HeatMapBoundCellsAreMarkedAsLowerBounds) {
+  ff::HeatMap m = heat_map_2x3();
+  m.bounds = {0, 1, 0, 0, 0, 1};
+  const ff::ChartImage c = ff::render_heat_map_rgb(m);
+  EXPECT_GT(corner_pixels(c, 1, 0), 20);
+  EXPECT_GT(corner_pixels(c, 2, 1), 20);  // dark on yellow
+  for (auto [ix, iy] : {std::pair{0, 0}, {2, 0}, {0, 1}, {1, 1}}) EXPECT_EQ(corner_pixels(c, ix, iy), 0) << ix << "," << iy;
+  m.annotate = true;
+  ff::HeatMap plain = m;
+  plain.bounds.clear();
+  EXPECT_GT(text_pixels(ff::render_heat_map_rgb(m), 1, 0), text_pixels(ff::render_heat_map_rgb(plain), 1, 0) + 10);
+  m.bounds.pop_back();
+  EXPECT_THROW(ff::render_heat_map_rgb(m), std::invalid_argument);
+}
+
 // ---------------------------------------------------------------- band plot
 
 TEST(Charts, BandIsFilledBetweenLoAndHi) {
@@ -232,6 +259,26 @@ TEST(Charts, BandNanLeavesAGap) {
   const int y = px(c.frame.y_to_px(0.55));
   EXPECT_TRUE(near(img.at(px(c.frame.x_to_px(2.3)), y), fill, 4));
   EXPECT_FALSE(near(img.at(px(c.frame.x_to_px(5)), y), fill, 4));
+}
+
+// (#32.11) A percentile above the horizon, drawn at it, is marked as a lower bound where it stands.
+TEST(Charts, BandPointsThatAreLowerBoundsCarryTheBoundMarker) {
+  ff::BandPlot p;
+  ff::BandSeries s;
+  for (int i = 0; i <= 10; ++i) s.x.push_back(i), s.mid.push_back(1), s.lo.push_back(0), s.hi.push_back(i < 7 ? 2 : 3);
+  p.series = {s};
+  const Image plain = image(ff::render_band_plot_rgb(p));
+  p.series[0].bound_x = {8.0};
+  p.series[0].bound_y = {3.0};
+  const ff::ChartImage c = ff::render_band_plot_rgb(p);
+  const Image marked = image(c);
+  int changed = 0;
+  for (int y = px(c.frame.y_to_px(3.2)); y <= px(c.frame.y_to_px(2.8)); ++y)
+    for (int x = px(c.frame.x_to_px(7.8)); x <= px(c.frame.x_to_px(8.2)); ++x) changed += !near(marked.at(x, y), plain.at(x, y), 3);
+  EXPECT_GT(changed, 20);
+  // Nowhere near the other points.
+  for (int y = px(c.frame.y_to_px(2.2)); y <= px(c.frame.y_to_px(1.8)); ++y)
+    EXPECT_TRUE(near(marked.at(px(c.frame.x_to_px(3.5)), y), plain.at(px(c.frame.x_to_px(3.5)), y), 3)) << y;
 }
 
 TEST(Charts, BandRejectsMismatchedLengths) {

@@ -79,7 +79,27 @@ TEST(Summaries, GroupByMarkdownShowsBoundsPerGroup) {
   ASSERT_EQ(lines.size(), 4u) << md;
   EXPECT_EQ(lines[0], "| x | metric | count | not settled | missing | horizon | mean | min | p5 | p50 | p95 | max | "
                       "P(miss spec) | 95% CI |");
-  EXPECT_EQ(lines[2].rfind("| 0 | m1_tip_settling_s | 3 | 2 | 0 | 8 | 5.2 | 1 | 1 | 5 | > 8 | > 8 |", 0), 0u) << lines[2];
+  EXPECT_EQ(lines[2].rfind("| 0 | m1_tip_settling_s | 3 | 2 | 0 | 8 | > 5.2 | 1 | 1 | 5 | > 8 | > 8 |", 0), 0u) << lines[2];
+}
+
+// (#32.11) The mean of a group with runs not settled is the restricted mean, a lower bound: "> x" in
+// Markdown, never a bare number beside "> H" (an all-censored group's mean is its horizon); a group that
+// settled keeps its plain mean; CSV keeps the number and names it in `censored`.
+TEST(Summaries, TheMeanOfAGroupWithRunsNotSettledIsALowerBound) {
+  ResultTable t;
+  t.params = {"x"};
+  t.columns = {"m1_tip_settling_s", "m1_settling_horizon_s"};
+  t.rows.push_back({0, 0, "a", "not_settled", {0}, {kNaN, 3.791}});
+  t.rows.push_back({1, 0, "b", "not_settled", {0}, {kNaN, 3.791}});
+  t.rows.push_back({2, 0, "c", "ok", {1}, {2.0, 3.791}});
+  t.rows.push_back({3, 0, "d", "ok", {1}, {3.0, 3.791}});
+  const auto lines = lines_of(format_groupby_md(t, {"x"}, {"m1_tip_settling_s"}, {}));
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[2].rfind("| 0 | m1_tip_settling_s | 0 | 2 | 0 | 3.791 | > 3.791 | > 3.791 | > 3.791 |", 0), 0u) << lines[2];
+  EXPECT_EQ(lines[3].rfind("| 1 | m1_tip_settling_s | 2 | 0 | 0 | - | 2.5 | 2 |", 0), 0u) << lines[3];
+  const auto csv = lines_of(format_groupby_csv(t, {"x"}, {"m1_tip_settling_s"}, {}));
+  EXPECT_EQ(csv[1].rfind("0,m1_tip_settling_s,0,2,0,3.791,3.791,3.791,", 0), 0u) << csv[1];
+  EXPECT_EQ(csv[1].substr(csv[1].rfind(',') + 1), "\"mean min p5 p50 p95 max\"") << csv[1];
 }
 
 // 40 runs, x = 1..40 (shuffled), tip settling x / 4 s except every fifth run, not settled (horizon 8 s);

@@ -33,11 +33,14 @@ TEST(Table, SettlingTableShowsTheHorizonOfANotSettledMove) {
   t.rows[0].label = "PD";
   t.rows[0].values = {kNaN, 38.0, 1.5, 6.7, 0.66, 0.62, 3880, 3.35};
   t.rows[1].label = "no horizon";
-  t.rows[1].values = {kNaN, 38.0, kNaN, 6.7, 0.66, 0.62, 3880, kNaN};  // e.g. a diverged run: the plain words
+  t.rows[1].values = {kNaN, 38.0, kNaN, 6.7, 0.66, 0.62, 3880, kNaN};  // e.g. a diverged run: no value (#32.12)
   const std::string md = format_settling_table_md(t, {{"0 -> 0.5 rad"}, {"0 -> 0.5 rad"}});
   EXPECT_NE(md.find("| PD | 0 -> 0.5 rad | > 3.35 (not settled) | 38.0 | 1.50 | 6.7 | 660.0 | 620.00 | 3.88 |"),
             std::string::npos) << md;
-  EXPECT_NE(md.find("| no horizon | 0 -> 0.5 rad | not settled | 38.0 | not settled |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| no horizon | 0 -> 0.5 rad | - | 38.0 | - |"), std::string::npos) << md;
+  EXPECT_EQ(format_metric_cell(kNaN, 2.5, "%.2f"), "> 2.50 (not settled)");
+  EXPECT_EQ(format_metric_cell(kNaN, kNaN), "-");
+  EXPECT_EQ(format_metric_cell(1.25, 2.5), "1.25");
 }
 
 // fuzz_results: the header `...,m1",` opened a quote it never closed, so its last column read as

@@ -227,6 +227,41 @@ TEST_F(StudyFiles, AModelFileGivenAsAStudyIsNamedWithTheVerbThatTakesIt) {
       << load_error(outer).what();
 }
 
+// (#32.9) A misspelled metric under specs: or tolerances: is refused when the study is loaded, naming the
+// line and key, the closest column and the columns: a spec or regression guard that names no column
+// would never fire. The rig's columns and an arm's.
+TEST_F(StudyFiles, AMisspelledSpecOrToleranceIsRefusedWithTheClosestColumn) {
+  const std::string rig = "name: s\nmodel: " + kModel + "\nruns:\n  - label: a\n";
+  auto e = load_error(write("spec.yaml", rig + "specs:\n  m1_tip_settling_s: 3\n  m1_tip_setling_s: 3\n"));
+  EXPECT_EQ(e.line(), 7);
+  EXPECT_EQ(e.key(), "specs.m1_tip_setling_s");
+  EXPECT_EQ(e.message().rfind("'m1_tip_setling_s' is not a result column (did you mean `m1_tip_settling_s`?) (the columns: "
+                              "m1_tip_settling_s, m1_tip_overshoot_pct, ", 0), 0u) << e.what();
+  e = load_error(write("tol.yaml", rig + "tolerances:\n  m1_peak_torque_Nm: {increase: 3%}\n  m1_peak_torqe_Nm: {increase: 3%}\n"));
+  EXPECT_EQ(e.line(), 7);
+  EXPECT_EQ(e.key(), "tolerances.m1_peak_torqe_Nm");
+  EXPECT_NE(e.message().find("(did you mean `m1_peak_torque_Nm`?)"), std::string::npos) << e.what();
+  // A name far from every column: no guess, the list.
+  e = load_error(write("far.yaml", rig + "specs:\n  overshoot: 3\n"));
+  EXPECT_EQ(e.message().rfind("'overshoot' is not a result column (the columns: m1_tip_settling_s, ", 0), 0u) << e.what();
+  // An arm study: its own columns (the tool's).
+  const std::string arm = "name: a\nmodel: " + kSource + "/configs/two_link_flexible.yaml\nruns:\n  - label: a\n";
+  e = load_error(write("arm.yaml", arm + "specs:\n  tool_setling_s: 2\n"));
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_EQ(e.key(), "specs.tool_setling_s");
+  EXPECT_NE(e.message().find("(did you mean `tool_settling_s`?)"), std::string::npos) << e.what();
+  EXPECT_NO_THROW(ff::load_study(write("ok.yaml", arm + "specs:\n  tool_settling_s: 2\ntolerances:\n  tool_sag_m: {increase: 1%}\n")));
+  // Read from a recorded study text (flexfarm diff): the same check against the run's columns.
+  const ff::StudyCriteria c = ff::read_study_criteria("tolerances:\n  tool_setling_s: {increase: 1}\n", "rec.yaml");
+  try {
+    ff::check_criteria_columns(c, {"tool_settling_s", "settling_horizon_s"});
+    ADD_FAILURE() << "accepted";
+  } catch (const ff::ConfigError& x) {
+    EXPECT_STREQ(x.what(), "rec.yaml:2: tolerances.tool_setling_s: 'tool_setling_s' is not a result column (did you mean "
+                           "`tool_settling_s`?) (the columns: tool_settling_s, settling_horizon_s)");
+  }
+}
+
 TEST_F(StudyFiles, NegativeMassInARunNamesTheStudyLineAndKey) {
   const auto path = write("s.yaml",
                           "name: bad\n"
