@@ -55,13 +55,9 @@ Eigen::VectorXd parse_pose(const TreeDescription& d, Eigen::VectorXd q0, const s
     if (eq == std::string::npos) throw ConfigError("--at", 0, a, "expected JOINT=VALUE");
     const std::string name = a.substr(0, eq);
     const int j = dof_of(d, name, "--at");
-    try {
-      std::size_t used = 0;
-      q0[j] = std::stod(a.substr(eq + 1), &used);
-      if (used != a.size() - eq - 1 || !std::isfinite(q0[j])) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-      throw ConfigError("--at", 0, a, "expected a finite number after '=' (rad or m)");
-    }
+    const auto value = parse_finite(std::string_view(a).substr(eq + 1));
+    if (!value) throw ConfigError("--at", 0, a, "expected a finite number after '=' (rad or m)");
+    q0[j] = *value;
     for (std::size_t i = 0; i < d.joints.size() && check_units; ++i)
       if (d.joints[i].name == name && d.spec.bodies[i].joint == JointType::kRevolute && !explain_angle_unit(q0[j]).empty())
         throw ConfigError("--at", 0, name, explain_angle_unit(q0[j]));

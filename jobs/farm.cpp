@@ -12,6 +12,7 @@
 
 #include "jobs/journal.hpp"
 #include "common/files.hpp"
+#include "common/text.hpp"
 
 namespace ff {
 
@@ -133,12 +134,12 @@ AttemptLog::AttemptLog(const std::string& out, const std::string& tag, const std
     while (std::getline(text, line)) {
       const std::size_t c1 = line.find(','), c2 = line.find(',', c1 + 1);
       if (c1 == std::string::npos || c2 == std::string::npos) continue;  // the header, a torn line
-      try {
-        auto& [start, seconds] = earlier[std::stoi(line.substr(0, c1))];
-        start = line.substr(c1 + 1, c2 - c1 - 1);
-        seconds = std::max(seconds, std::stod(line.substr(c2 + 1)));
-      } catch (const std::exception&) {
-      }
+      const auto attempt = parse_integer<int>(std::string_view(line).substr(0, c1));
+      const auto at = parse_finite(std::string_view(line).substr(c2 + 1));
+      if (!attempt || !at) continue;  // a line that is not whole numbers (a corrupted one): not an attempt
+      auto& [start, seconds] = earlier[*attempt];
+      start = line.substr(c1 + 1, c2 - c1 - 1);
+      seconds = std::max(seconds, *at);
     }
   }
   for (const auto& [attempt, at] : earlier) earlier_ += at.second;
