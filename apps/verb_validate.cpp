@@ -113,7 +113,7 @@ void add_diagnose_verb(CLI::App& app) {
 
 void add_calibrate_verb(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "calibrate", "Add one effect to a model with its parameters fitted to a record; write the new model YAML "
+      "calibrate", "Add effects to a model with their parameters fitted to a record, in turn; write the new model YAML "
                    "and record both versions and their fit in a model ledger (SQLite) with a plot of the error");
   struct Args {
     std::string model, data, add, out, ledger, mode = "closed-loop";
@@ -123,7 +123,8 @@ void add_calibrate_verb(CLI::App& app) {
   auto a = std::make_shared<Args>();
   cmd->add_option("--model", a->model, "model YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
   cmd->add_option("--data", a->data, "measurement record CSV")->required()->check(kPath)->check(CLI::ExistingFile);
-  cmd->add_option("--add", a->add, "the effect to add (see `flexfarm diagnose`)")->required();
+  cmd->add_option("--add", a->add, "the effects to add, comma separated, fitted in turn in this order, each on top of "
+                                  "those before (diagnose's selected set, e.g. backlash,sensor_quantization)")->required();
   cmd->add_option("--out", a->out, "the new model YAML")->required()->check(kPath);
   cmd->add_option("--ledger", a->ledger, "model ledger (default: ledger.sqlite beside --out)")->check(kPath);
   cmd->add_option("--mode", a->mode, "closed-loop, open-loop or inverse-dynamics")->capture_default_str();
@@ -138,21 +139,29 @@ void add_calibrate_verb(CLI::App& app) {
     opt.max_samples = a->samples;
     opt.refit = split_list(a->refit);
     const auto [arm, src, r] = read_fit_inputs(a->model, a->sets, a->data, opt.mode, "calibrated");
+    const auto add = split_list({a->add});
+    if (add.empty()) throw ExitError("--add: name at least one effect", 2);
+    std::vector<std::string> offered;
     if (arm) {
       const ArmModel base = build_arm(src);
       check_arm_record(r, base);
-      const auto offered = make_arm_candidate_effects(base, apply_overrides(src), r);
-      if (std::none_of(offered.begin(), offered.end(), [&](const Effect& e) { return e.name == a->add; })) {
-        std::string names;
-        for (const auto& e : offered) names += (names.empty() ? "" : ", ") + e.name;
-        throw ExitError("--add: unknown effect '" + a->add + "' (this model offers: " + names + ")", 2);
-      }
+      for (const auto& e : make_arm_candidate_effects(base, apply_overrides(src), r)) offered.push_back(e.name);
     } else {
-      const auto names = effect_names();
-      if (std::find(names.begin(), names.end(), a->add) == names.end())
-        throw ExitError("--add: unknown effect '" + a->add + "'", 2);
+      offered = effect_names();
     }
-    const EffectFit f = arm ? fit_arm_effect(src, r, opt, a->add) : fit_effect(src, r, opt, a->add);
+    for (const auto& name : add)
+      if (std::find(offered.begin(), offered.end(), name) == offered.end()) {
+        std::string names;
+        for (const auto& n : offered) names += (names.empty() ? "" : ", ") + n;
+        throw ExitError("--add: unknown effect '" + name + "' (this model offers: " + names + ")", 2);
+      }
+    const EffectFit f = [&] {
+      try {
+        return arm ? fit_arm_effects(src, r, opt, add) : fit_effects(src, r, opt, add);
+      } catch (const std::invalid_argument& e) {  // a name twice, two that write the same path
+        throw ExitError(std::string("--add: ") + e.what(), 2);
+      }
+    }();
     if (!f.ok) throw ExitError("the fit of " + a->add + " failed: " + f.note, 3);
     const std::string yaml = arm ? format_calibrated_arm(src, f, a->data, a->out) : format_calibrated_model(src, f, a->data);
     const std::string ledger = a->ledger.empty()
@@ -164,7 +173,7 @@ void add_calibrate_verb(CLI::App& app) {
     const auto before = arm ? calc_arm_record_fits(build_arm(src), r) : calc_record_fits(build_model(src), r, opt.mode);
     const auto after = arm ? calc_arm_record_fits(load_arm_with(a->out, {}), r) : calc_record_fits(load_model(a->out), r, opt.mode);
     const auto versions = record_calibration(ledger, a->model, before, a->out, after, f, r, opt.mode);
-    print_safe(stdout, "added %s to %s -> %s (delta BIC %.1f)\n", a->add.c_str(), a->model.c_str(), a->out.c_str(),
+    print_safe(stdout, "added %s to %s -> %s (delta BIC %.1f)\n", f.effect.c_str(), a->model.c_str(), a->out.c_str(),
                 f.delta_bic);
     for (const auto& [p, v] : f.params) print_safe(stdout, "  %s = %.6g\n", p.c_str(), v);
     print_safe(stdout, "%s", versions.c_str());

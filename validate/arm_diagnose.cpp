@@ -285,15 +285,25 @@ Diagnosis diagnose_arm(const ModelSource& src, const Record& r, const DiagnoseOp
           p.sensitive.emplace_back(q.path, number_at(p.doc, q.path, 0.0));
   // The ranges of named re-fits: the first joint's torque scales (signed offsets are within twice its torque).
   p.scales = make_torque_scales(replay, r, base.actuated.front());
+  // The bootstrap's noise in the loop: each joint's encoder and tachometer without noise of their own get
+  // the noise that joint's controller read (calc_loop_noise).
+  for (const ActuatedJoint& a : base.actuated) {
+    auto floor_of = [&](const std::string& column, double none) { return r.has(column) ? calc_noise_floor(r.at(column)) : none; };
+    const auto [sa, sr] = calc_loop_noise(floor_of(a.name + ".angle", 0.0), floor_of(a.name + ".rate", 0.0),
+                                          floor_of(a.name + ".torque", NAN), a.control.kp, a.control.kd);
+    const std::string path = "joints." + a.name + ".sensors.";
+    if (sa > 0 && number_at(p.doc, path + "angle.noise", 0.0) == 0.0) p.loop_noise.emplace_back(path + "angle.noise", sa);
+    if (sr > 0 && number_at(p.doc, path + "rate.noise", 0.0) == 0.0) p.loop_noise.emplace_back(path + "rate.noise", sr);
+  }
   return diagnose_problem(p, opt);
 }
 
-EffectFit fit_arm_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& name) {
+EffectFit fit_arm_effects(const ModelSource& src, const Record& r, const DiagnoseOptions& opt,
+                          const std::vector<std::string>& names) {
   DiagnoseOptions o = opt;
-  o.only = {name};
-  const Diagnosis d = diagnose_arm(src, r, o);
-  if (d.ranking.empty()) throw std::invalid_argument("effect '" + name + "' does not apply to this model");
-  return d.ranking[0];
+  o.only.clear();
+  o.add = names;
+  return combine_effects(diagnose_arm(src, r, o).selected);
 }
 
 std::string format_calibrated_arm(const ModelSource& src, const EffectFit& fit, const std::string& record_path,

@@ -29,8 +29,8 @@ std::vector<Effect> make_arm_candidate_effects(const ArmModel& base, const YAML:
 // another opt.mode is std::invalid_argument.
 Diagnosis diagnose_arm(const ModelSource& src, const Record& r, const DiagnoseOptions& opt);
 
-// One effect fitted alone (calibrate --add); an effect the model does not offer is std::invalid_argument.
-EffectFit fit_arm_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& effect);
+// Effects fitted in turn, combined (calibrate --add a,b); an effect the model does not offer is std::invalid_argument.
+EffectFit fit_arm_effects(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::vector<std::string>& effects);
 
 // The calibrated arm model's YAML (format_calibrated_model) to be written at out_path: its `urdf` and
 // `sidecar` re-based from the source's directory to out_path's.

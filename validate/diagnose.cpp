@@ -12,6 +12,7 @@
 
 #include "kernel/batch.hpp"
 #include "common/errors.hpp"
+#include "common/random.hpp"
 #include "common/yaml_reader.hpp"
 #include "sweep/design.hpp"
 #include "validate/residuals.hpp"
@@ -111,6 +112,7 @@ struct Scorer {
   std::vector<std::size_t> index;  // decimated sample indices
   std::vector<double> scale;       // 1 / sigma_c per channel: the residual's weight
   std::vector<double> noise;       // the record's noise floor per channel, as a fraction of sd(y) (reports)
+  std::vector<double> sigma;       // the record's noise floor per channel, in its unit (not clamped)
   std::vector<std::vector<double>> input;  // per channel the loop's external input at the decimated samples (CCF)
   std::vector<std::pair<std::string, std::vector<double>>> states;  // at the decimated samples (misfit binning)
   struct BandPower {               // kPowerChannel, scored after the samples (closed loop, with a torque)
@@ -144,8 +146,16 @@ struct Scorer {
   std::size_t samples() const { return channels.size() * index.size(); }
   int size() const { return static_cast<int>(samples() + (power.on ? power.measured.size() : 0)); }
 
-  // What each model (the source with an assignment set) predicts for the record.
-  std::vector<Prediction> predict(const std::vector<std::vector<Assignment>>& sets) const { return family->predict(sets); }
+  // The effects selected so far (forward selection): every model is the source with these, then its own set.
+  std::vector<Assignment> prefix;
+
+  // What each model (the source with the prefix and an assignment set) predicts for the record.
+  std::vector<Prediction> predict(const std::vector<std::vector<Assignment>>& sets) const {
+    if (prefix.empty()) return family->predict(sets);
+    std::vector<std::vector<Assignment>> full(sets.size(), prefix);
+    for (std::size_t i = 0; i < sets.size(); ++i) full[i].insert(full[i].end(), sets[i].begin(), sets[i].end());
+    return family->predict(full);
+  }
 
   // Residuals of each model (empty vector for one that failed to build or run).
   std::vector<std::vector<double>> residuals(const std::vector<std::vector<Assignment>>& sets) const {
@@ -170,6 +180,29 @@ struct Scorer {
         }
     }
     return out;
+  }
+
+  // The residual of a model's prediction against a record simulated by the same model with other noise
+  // (`sim`), each channel given the record's own measurement noise (stream `key`): what the record's
+  // residual would be if that model were the truth (the bootstrap).
+  std::vector<double> simulated_residual(const Prediction& model, const Prediction& sim, std::uint64_t key) const {
+    CounterRng rng(key);
+    std::vector<double> r;
+    std::vector<double> torque;
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      std::vector<double> y = sim.channels.at(channels[c]);
+      for (double& x : y) x += sigma[c] * rng.normal();
+      if (channels[c] == "hub_torque") torque = y;
+      if (split && channels[c] == "hub_torque") y = calc_low_pass(y, low_pass);
+      const auto yh = predicted(model, c);
+      for (std::size_t k : index) r.push_back((y[k] - yh[k]) * scale[c]);
+    }
+    if (power.on) {
+      const auto measured = calc_log_band_power(torque, power.window, power.offset);
+      const auto lp = calc_log_band_power(model.channels.at("hub_torque"), power.window, power.noise_power + power.offset);
+      for (std::size_t w = 0; w < measured.size(); ++w) r.push_back((measured[w] - lp[w]) * power.scale);
+    }
+    return r;
   }
 
   // Channel c's residual (c = channels.size(): the band power's).
@@ -200,6 +233,7 @@ struct Scorer {
       t.n_eff = calc_effective_samples(e, kEffectiveLags);
       double mean = 0.0;
       for (double x : e) mean += x / e.size();
+      t.mean = mean;
       t.unbiased = std::abs(mean) <= 2.58 * std::sqrt(std::max(t.rss / e.size() - mean * mean, 0.0) / std::max(t.n_eff, 1.0));
       out[band ? kPowerChannel : channels[c]] = t;
       ne += t.n_eff;
@@ -430,57 +464,87 @@ double calc_delta_bic(const std::map<std::string, ChannelTest>& fit, const std::
   return d + k * std::log(std::max(n, 1.0));
 }
 
-// Least-squares fit of one effect: the grid (if any), else the global scan and Ceres from its best
-// starts. `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
-EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const DiagnoseOptions& opt, int shared = 0) {
+// Where an effect's fit starts: its grid's best value (if any), then the global scan's points of its
+// parameters, best (lowest RSS) first.
+struct Scanned {
+  double grid_value = 0.0;
+  double grid_rss = INFINITY;
+  std::vector<std::vector<double>> points;  // coordinates, best first (failed points dropped)
+  std::vector<double> rss;                  // theirs
+  std::string error;                        // non-empty: the scan failed
+};
+
+Scanned scan_effect(const Scorer& sc, const Effect& e) {
+  Scanned s;
+  std::vector<double> theta;
+  for (const auto& p : e.params) theta.push_back(param_theta(p, std::clamp(p.initial, p.lo, p.hi)));
+  try {
+    if (!e.grid_path.empty()) s.grid_value = search_grid(sc, e, theta, &s.grid_rss);
+    if (e.params.empty()) return s;
+    const auto points = scan_points(e, theta);
+    const auto rss = trial_rss(sc, make_trials(e, points, s.grid_value));
+    std::vector<std::size_t> order(points.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rss[a] < rss[b]; });
+    for (std::size_t i : order)
+      if (std::isfinite(rss[i])) {
+        s.points.push_back(points[i]);
+        s.rss.push_back(rss[i]);
+      }
+    if (s.points.empty()) s.error = "every point of the scan failed";
+  } catch (const std::exception& ex) {
+    s.error = ex.what();
+  }
+  return s;
+}
+
+// The scan's RSS of an effect (its best point, or its grid's best value): what the screening ranks by.
+double scanned_rss(const Scanned& s) { return s.rss.empty() ? s.grid_rss : s.rss[0]; }
+
+// Least-squares fit of one effect from its scan: full, Ceres from the scan's best starts (a race: a few
+// iterations from each, then the leader runs on to max_iterations), else the scan's best point as it is
+// (screened). `shared`: the last parameters of e are re-fits of existing ones, counted in the baseline's k too.
+EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const DiagnoseOptions& opt, int shared,
+                  const Scanned& scan, bool full) {
   EffectFit f;
   f.effect = e.name;
   f.physics = e.physics;
   f.switches = e.set;
-  double grid_value = 0.0;
-  std::vector<double> theta;
-  for (const auto& p : e.params) theta.push_back(param_theta(p, std::clamp(p.initial, p.lo, p.hi)));
   for (std::size_t j = e.params.size() - shared; j < e.params.size(); ++j) f.refit.push_back(e.params[j].path);
   try {
+    if (!scan.error.empty()) throw std::runtime_error(scan.error);
+    const double grid_value = scan.grid_value;
     if (!e.grid_path.empty()) {
-      grid_value = search_grid(sc, e, theta, &f.rss);
       f.params[e.grid_path] = grid_value;
       f.stderr_[e.grid_path] = NAN;
     }
     std::vector<double> res(sc.size());
-    const int p = static_cast<int>(theta.size());
+    const int p = static_cast<int>(e.params.size());
     std::vector<double> jac(static_cast<std::size_t>(sc.size()) * std::max(p, 1));
     ReplayCost cost(sc, e, grid_value);
-    if (p > 0) {
-      // Global scan (lanes of one batch), then Ceres from the best distinct starts; the best end wins.
-      const auto points = scan_points(e, theta);
-      const auto rss = trial_rss(sc, make_trials(e, points, grid_value));
-      std::vector<std::size_t> order(points.size());
-      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rss[a] < rss[b]; });
-      if (!std::isfinite(rss[order[0]])) throw std::runtime_error("every point of the scan failed");
-      // A race: a few iterations from each start, then the leader runs on to max_iterations.
+    std::vector<double> theta = p > 0 ? scan.points[0] : std::vector<double>{};
+    f.screened = p > 0 && !full;
+    if (p > 0 && full) {
       const int race = opt.starts > 1 ? std::max(3, opt.max_iterations / 4) : opt.max_iterations;
       double best = INFINITY;
-      std::vector<double> best_theta = points[order[0]];
-      for (int s = 0; s < std::min<int>(opt.starts, static_cast<int>(order.size())); ++s) {
-        if (!std::isfinite(rss[order[s]])) break;
-        std::vector<double> t = points[order[s]];
+      for (int s = 0; s < std::min<int>(opt.starts, static_cast<int>(scan.points.size())); ++s) {
+        std::vector<double> t = scan.points[s];
         run_ceres(&cost, e, t, race);
         const double* params[] = {t.data()};
         if (!cost.Evaluate(params, res.data(), nullptr)) continue;
         const double r2 = sum_squares(res);
         if (r2 < best) {
           best = r2;
-          best_theta = t;
+          theta = t;
         }
       }
-      theta = best_theta;
       if (race < opt.max_iterations) run_ceres(&cost, e, theta, opt.max_iterations - race);
+    }
+    const double* params[] = {theta.data()};
+    if (p > 0 && full) {
       // Standard errors from the Jacobian at the optimum: cov = s^2 (J^T J)^+, s^2 = RSS / (n - k), by
       // the SVD J = U S V^T. A parameter with weight in a (near-)null direction is not identifiable:
       // the record cannot tell it from the others; its standard error is NaN.
-      const double* params[] = {theta.data()};
       double* jacs[] = {jac.data()};
       if (!cost.Evaluate(params, res.data(), jacs)) throw std::runtime_error("the fitted model failed to run");
       f.rss = sum_squares(res);
@@ -501,20 +565,24 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
       cov *= f.rss / std::max(1, sc.size() - p);
       for (int j = 0; j < p; ++j) {
         const auto& pj = e.params[j];
-        for (const auto& [path, value] : param_settings(pj, theta[j])) f.params[path] = value;
         const double unit = param_unit(pj, theta[j]) * (pj.scale == ParamScale::kShare ? pj.total / pj.divisor : 1.0);
         f.stderr_[pj.path] = null[j] ? NAN : std::abs(unit) * std::sqrt(std::max(cov(j, j), 0.0));
         if (null[j]) f.unidentifiable.push_back(pj.path);
-        const double lo = param_theta(pj, pj.lo), hi = param_theta(pj, pj.hi), tol = 1e-3 * (hi - lo);
-        if (theta[j] <= lo + tol || theta[j] >= hi - tol) f.at_bound.push_back(pj.path);
       }
     } else {
-      const double* params[] = {theta.data()};
       if (!cost.Evaluate(params, res.data(), nullptr)) throw std::runtime_error("the fitted model failed to run");
+      f.rss = sum_squares(res);
+      for (int j = 0; j < p; ++j) f.stderr_[e.params[j].path] = NAN;
+    }
+    for (int j = 0; j < p; ++j) {
+      const auto& pj = e.params[j];
+      for (const auto& [path, value] : param_settings(pj, theta[j])) f.params[path] = value;
+      const double lo = param_theta(pj, pj.lo), hi = param_theta(pj, pj.hi), tol = 1e-3 * (hi - lo);
+      if (theta[j] <= lo + tol || theta[j] >= hi - tol) f.at_bound.push_back(pj.path);
     }
     f.tests = sc.tests(res, &f.n_eff);
     f.explained = all_explained(f.tests);
-    f.k = static_cast<int>(e.params.size()) - shared + (e.grid_path.empty() ? 0 : 1);
+    f.k = p - shared + (e.grid_path.empty() ? 0 : 1);
     f.delta_bic = calc_delta_bic(f.tests, base.tests, f.k);
     const double floor = sc.floor_rss();
     f.explains = base.rss > floor ? std::clamp((base.rss - f.rss) / (base.rss - floor), 0.0, 1.0) : 0.0;
@@ -528,6 +596,11 @@ EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const 
     f.note = ex.what();
   }
   return f;
+}
+
+// A full fit of one effect (its scan, then Ceres).
+EffectFit fit_one(const Scorer& sc, const Effect& e, const Against& base, const DiagnoseOptions& opt, int shared = 0) {
+  return fit_one(sc, e, base, opt, shared, scan_effect(sc, e), true);
 }
 
 // The record as scored: its channels decimated to at most opt.max_samples, each weighted by its noise
@@ -544,7 +617,8 @@ Scorer make_scorer(const DiagnoseProblem& p, const DiagnoseOptions& opt) {
     const auto& y = r.at(c);
     const double sd = calc_standard_deviation(y);
     const double unit = sd > 0 ? sd : 1.0;
-    sc.noise.push_back(std::max(calc_noise_floor(y) / unit, kRelevantError));
+    sc.sigma.push_back(calc_noise_floor(y));
+    sc.noise.push_back(std::max(sc.sigma.back() / unit, kRelevantError));
     sc.scale.push_back(1.0 / (sc.noise.back() * unit));
   }
   auto decimate = [&](const std::vector<double>& x) {
@@ -659,6 +733,134 @@ void quiet_ceres() {
   (void)quiet;
 }
 
+// Occam: an effect ranked above the simpler one it extends must fit visibly better, else the simpler goes first.
+void order_nested(std::vector<EffectFit>& ranking, const std::vector<Effect>& effects) {
+  for (const Effect& e : effects) {
+    if (e.extends.empty()) continue;
+    auto rich = std::find_if(ranking.begin(), ranking.end(), [&](const EffectFit& f) { return f.effect == e.name; });
+    auto simple = std::find_if(ranking.begin(), ranking.end(), [&](const EffectFit& f) { return f.effect == e.extends; });
+    if (rich == ranking.end() || simple == ranking.end() || simple < rich || !simple->ok) continue;
+    double gain = -INFINITY;
+    for (const auto& [c, v] : rich->fit_percent) gain = std::max(gain, v - simple->fit_percent.at(c));
+    if (gain < kNestedFitMargin) std::rotate(rich, simple, simple + 1);
+  }
+}
+
+// One round of the search: every candidate scanned (its grid, its global scan), the `keep` best of those
+// with parameters by the scan's Delta BIC (n_eff ln(RSS_scan / RSS_base) + k ln n_eff, the baseline's
+// n_eff) fitted in full, the others as the scan left them (screened); ranked best first. against[i],
+// shared[i]: effect i's baseline and how many of its parameters are re-fits (as fit_one).
+std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& effects, const std::vector<Against>& against,
+                                  const std::vector<int>& shared, int keep, const DiagnoseOptions& opt) {
+  const std::size_t n = effects.size();
+  std::vector<Scanned> scans(n);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t i = 0; i < n; ++i) scans[i] = scan_effect(sc, effects[i]);
+  std::vector<std::pair<double, std::size_t>> screen;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (effects[i].params.empty() || !scans[i].error.empty()) continue;
+    double n_eff = 0.0;
+    for (const auto& [c, t] : against[i].tests) n_eff += t.n_eff;
+    const int k = static_cast<int>(effects[i].params.size()) - shared[i] + (effects[i].grid_path.empty() ? 0 : 1);
+    screen.emplace_back(n_eff * std::log(std::max(scanned_rss(scans[i]), 1e-300) / std::max(against[i].rss, 1e-300)) +
+                            k * std::log(std::max(n_eff, 1.0)),
+                        i);
+  }
+  std::stable_sort(screen.begin(), screen.end());
+  std::vector<bool> full(n, true);
+  for (std::size_t j = static_cast<std::size_t>(std::max(keep, 0)); j < screen.size(); ++j) full[screen[j].second] = false;
+  // The costliest fits (full ones with most parameters) first, so that the threads finish together.
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (full[a] != full[b]) return static_cast<bool>(full[a]);
+    return effects[a].params.size() > effects[b].params.size();
+  });
+  std::vector<EffectFit> ranking(n);
+  int done = 0;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t o = 0; o < n; ++o) {
+    const std::size_t i = order[o];
+    ranking[i] = fit_one(sc, effects[i], against[i], opt, shared[i], scans[i], full[i]);
+    if (opt.on_fitted) {
+#pragma omp critical(diagnose_progress)
+      opt.on_fitted(++done, static_cast<int>(n), ranking[i]);
+    }
+  }
+  std::stable_sort(ranking.begin(), ranking.end(), [](const EffectFit& a, const EffectFit& b) {
+    if (a.ok != b.ok) return a.ok;
+    return a.delta_bic < b.delta_bic;
+  });
+  order_nested(ranking, effects);
+  return ranking;
+}
+
+// Judges a fitted model's residual tests (`tests`, of the record against the model: the scorer's prefix and
+// `fitted`) against what that model leaves of records it made itself: `lanes` runs of it with other noise
+// in its loop (p.loop_noise, p.seed_path), each given the record's measurement noise, scored against the
+// model's own prediction. A channel is within the bootstrap when its RMS is at most kBootstrapMargin times
+// the largest over the lanes, its fractions of correlation lags outside the band at most the largest plus
+// kTestFraction, and its mean unbiased, at most the largest |mean|, or below kRelevantError of the channel's
+// standard deviation (a fit converged to 10^-4 of its RSS leaves such a bias); or its RMS is itself below
+// kRelevantError of the channel's standard deviation (what no rig's sensor resolves). A limit cycle the model makes with
+// its quantised encoder, whose phase no replay follows, is judged against the misfit it really produces.
+constexpr double kBootstrapMargin = 1.2;
+void judge_by_bootstrap(const Scorer& sc, const std::vector<Assignment>& fitted, const DiagnoseProblem& p, int lanes,
+                        std::map<std::string, ChannelTest>& tests) {
+  if (lanes <= 0) return;
+  std::vector<std::vector<Assignment>> sets(lanes + 1, fitted);
+  for (int b = 1; b <= lanes; ++b) {
+    sets[b].push_back(assign(p.seed_path, YAML::Node(1000 + b)));
+    for (const auto& [path, sd] : p.loop_noise) sets[b].push_back(assign(path, YAML::Node(sd)));
+  }
+  const auto pred = sc.predict(sets);
+  if (!pred[0].ok) return;
+  std::map<std::string, ChannelTest> worst;
+  int ran = 0;
+  for (int b = 1; b <= lanes; ++b) {
+    if (!pred[b].ok) continue;
+    ++ran;
+    const auto r = sc.simulated_residual(pred[0], pred[b], 0x62006f6f74ull + b);  // "boot" + b
+    for (const auto& [c, t] : sc.tests(r, nullptr)) {
+      auto& w = worst[c];
+      w.rms = ran == 1 ? t.rms : std::max(w.rms, t.rms);
+      w.acf_outside = ran == 1 ? t.acf_outside : std::max(w.acf_outside, t.acf_outside);
+      w.ccf_outside = ran == 1 ? t.ccf_outside : std::max(w.ccf_outside, t.ccf_outside);
+      w.mean = ran == 1 ? std::abs(t.mean) : std::max(w.mean, std::abs(t.mean));
+    }
+  }
+  if (2 * ran < lanes) return;  // most noise realisations failed to run: no judgement
+  for (auto& [c, t] : tests) {
+    if (!worst.count(c)) continue;
+    const auto& w = worst.at(c);
+    t.boot_rms = w.rms;
+    t.boot_acf = w.acf_outside;
+    t.boot_ccf = w.ccf_outside;
+    t.boot_mean = w.mean;
+    t.bootstrapped = true;
+    t.within_bootstrap = t.rms <= kRelevantError || (t.rms <= kBootstrapMargin * w.rms && t.acf_outside <= w.acf_outside + kTestFraction &&
+                         t.ccf_outside <= w.ccf_outside + kTestFraction && (t.unbiased || std::abs(t.mean) <= w.mean || std::abs(t.mean) * t.noise <= kRelevantError));
+  }
+}
+
+// Whether an effect writes a path another already selected writes (they cannot both be added).
+bool overlaps(const Effect& e, const std::vector<EffectFit>& selected) {
+  const auto paths = effect_paths(e);
+  for (const auto& f : selected) {
+    for (const auto& [path, v] : f.switches)
+      if (std::find(paths.begin(), paths.end(), path) != paths.end()) return true;
+    for (const auto& [path, v] : f.params)
+      if (std::find(paths.begin(), paths.end(), path) != paths.end()) return true;
+  }
+  return false;
+}
+
+std::string join_effects(const std::vector<EffectFit>& fits) {
+  std::string out;
+  for (const auto& f : fits) out += (out.empty() ? "" : " + ") + f.effect;
+  return out;
+}
+
 // The diagnosis of a scored record whose base residual is r0: every candidate of p fitted and ranked.
 Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const DiagnoseProblem& p,
                           const DiagnoseOptions& opt) {
@@ -671,18 +873,32 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   d.base_fit = sc.fit_percent({});
   const EffectScales& scales = p.scales;
   auto effects = p.effects;
-  for (const auto& name : opt.only)
+  // --effects (opt.only) or calibrate's --add: only those, each a name the model offers.
+  const std::vector<std::string>& named_effects = opt.add.empty() ? opt.only : opt.add;
+  for (const auto& name : named_effects)
     if (std::find(p.names.begin(), p.names.end(), name) == p.names.end()) {
       std::string offered;
       for (const auto& n : p.names) offered += (offered.empty() ? "" : ", ") + n;
       throw std::invalid_argument("unknown effect '" + name + "' (this model offers: " + offered + ")");
     }
-  if (!opt.only.empty())
+  for (std::size_t i = 0; i < opt.add.size(); ++i)
+    if (std::find(opt.add.begin(), opt.add.begin() + i, opt.add[i]) != opt.add.begin() + i)
+      throw std::invalid_argument("effect '" + opt.add[i] + "' is named twice");
+  if (!named_effects.empty())
     effects.erase(std::remove_if(effects.begin(), effects.end(),
                                  [&](const Effect& e) {
-                                   return std::find(opt.only.begin(), opt.only.end(), e.name) == opt.only.end();
+                                   return std::find(named_effects.begin(), named_effects.end(), e.name) == named_effects.end();
                                  }),
                   effects.end());
+  for (const auto& name : opt.add)
+    if (std::none_of(effects.begin(), effects.end(), [&](const Effect& e) { return e.name == name; }))
+      throw std::invalid_argument("effect '" + name + "' does not apply in " + replay_mode_name(p.mode) + " mode");
+  for (const Effect& a : effects)
+    for (const Effect& b : effects)
+      if (!opt.add.empty() && a.name < b.name)
+        for (const auto& path : effect_paths(a))
+          if (fits_path(b, path))
+            throw std::invalid_argument("effects '" + a.name + "' and '" + b.name + "' both write " + path + ": add one of them");
   // Re-fitted existing parameters. Named (--refit a,b): the same for the baseline and every effect,
   // which then drops them from its own. `auto`: for each effect the (at most two) most sensitive
   // existing parameters it does not fit itself, its Delta BIC taken against the baseline re-fitted
@@ -763,6 +979,11 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   d.misfit = locate_misfit(sc, r0, d.base_tests, d.base_fit);
   // Each effect: its own parameters, then its re-fitted ones starting where its baseline put them.
   std::vector<std::vector<std::string>> refits;
+  // The later rounds' candidates: the effects as they are (no re-fits); round 1 (calibrate: its first effect).
+  const std::vector<Effect> plain = effects;
+  if (!opt.add.empty())
+    effects.erase(std::remove_if(effects.begin(), effects.end(), [&](const Effect& e) { return e.name != opt.add[0]; }),
+                  effects.end());
   for (auto& e : effects) refits.push_back(refit_of(e));
   for (std::size_t i = 0; i < effects.size(); ++i)
     for (const auto& p : refits[i]) {
@@ -770,41 +991,52 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
       q.initial = baselines.at(refits[i]).params.at(p);
       effects[i].params.push_back(q);
     }
-  // The costliest fits (most parameters) first, so that the threads finish together.
-  std::vector<std::size_t> order(effects.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return effects[a].params.size() > effects[b].params.size(); });
-  d.ranking.resize(effects.size());
-  int done = 0;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t o = 0; o < order.size(); ++o) {
-    const std::size_t i = order[o];
-    const EffectFit& b = baselines.at(refits[i]);
-    d.ranking[i] = fit_one(sc, effects[i], {b.rss, b.fit_percent, b.tests}, opt, static_cast<int>(refits[i].size()));
-    if (opt.on_fitted) {
-#pragma omp critical(diagnose_progress)
-      opt.on_fitted(++done, static_cast<int>(order.size()), d.ranking[i]);
-    }
-  }
-  std::stable_sort(d.ranking.begin(), d.ranking.end(), [](const EffectFit& a, const EffectFit& b) {
-    if (a.ok != b.ok) return a.ok;
-    return a.delta_bic < b.delta_bic;
-  });
-  // Occam: an effect ranked above the simpler one it extends must fit visibly better, else the simpler goes first.
+  // Round 1: every candidate against its baseline (screened, the best fitted in full).
+  std::vector<Against> against;
+  std::vector<int> shared;
   for (std::size_t i = 0; i < effects.size(); ++i) {
-    if (effects[i].extends.empty()) continue;
-    auto rich = std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectFit& f) { return f.effect == effects[i].name; });
-    auto simple = std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectFit& f) { return f.effect == effects[i].extends; });
-    if (rich == d.ranking.end() || simple == d.ranking.end() || simple < rich || !simple->ok) continue;
-    double gain = -INFINITY;
-    for (const auto& [c, v] : rich->fit_percent) gain = std::max(gain, v - simple->fit_percent.at(c));
-    if (gain < kNestedFitMargin) std::rotate(rich, simple, simple + 1);
+    const EffectFit& b = baselines.at(refits[i]);
+    against.push_back({b.rss, b.fit_percent, b.tests});
+    shared.push_back(static_cast<int>(refits[i].size()));
   }
-  // The verdict: the best effect when it is significant and explains the record; else "none" when the
-  // model already does; else "unexplained".
-  const bool found = !d.ranking.empty() && d.ranking[0].ok && d.ranking[0].significant && d.ranking[0].explained;
-  d.verdict = found ? d.ranking[0].effect : d.base_explained ? "none" : "unexplained";
+  const bool all_full = !opt.only.empty() || !opt.add.empty();
+  d.ranking = rank_round(sc, effects, against, shared, all_full ? static_cast<int>(effects.size()) : kFullFits, opt);
+  // The base model judged by the bootstrap.
+  judge_by_bootstrap(sc, reported.assignments(), p, opt.bootstrap_lanes, d.base_tests);
+  d.base_explained = all_explained(d.base_tests);
+  // Forward selection: the best significant effect is added (its tests judged by the bootstrap); while the
+  // model with it is not explained, every candidate that does not write what a selected one does is tried
+  // again on top of it (screened, the kFullFitsLater best fitted in full): an effect whose signature the
+  // first one masked is found now. calibrate (opt.add): its effects in its order.
+  Scorer current = sc;
+  std::vector<EffectFit> ranked = d.ranking;
+  for (std::size_t round = 0;; ++round) {
+    const bool forced = !opt.add.empty();
+    if (ranked.empty() || !ranked[0].ok || (!forced && !ranked[0].significant)) break;
+    EffectFit chosen = ranked[0];
+    judge_by_bootstrap(current, chosen.assignments(), p, opt.bootstrap_lanes, chosen.tests);
+    chosen.explained = all_explained(chosen.tests);
+    d.selected.push_back(chosen);
+    if (forced ? d.selected.size() == opt.add.size() : chosen.explained || d.selected.size() >= kMaxEffects) break;
+    const auto mine = chosen.assignments();
+    current.prefix.insert(current.prefix.end(), mine.begin(), mine.end());
+    const Against now{chosen.rss, chosen.fit_percent, chosen.tests};
+    std::vector<Effect> next;
+    for (const Effect& e : plain)
+      if ((forced ? e.name == opt.add[d.selected.size()] : true) && !overlaps(e, d.selected)) next.push_back(e);
+    if (forced && next.empty())
+      throw std::invalid_argument("effect '" + opt.add[d.selected.size()] + "' writes what an effect before it does");
+    if (next.empty()) break;
+    ranked = rank_round(current, next, std::vector<Against>(next.size(), now), std::vector<int>(next.size(), 0),
+                        forced ? 1 : kFullFitsLater, opt);
+    d.rounds.push_back(ranked);
+  }
+  // The verdict: the selected effects when with them the record is explained; else "none" when the model
+  // already explains it and no effect is significant; else "unexplained".
+  if (!d.selected.empty())
+    d.verdict = d.selected.back().explained ? join_effects(d.selected) : "unexplained";
+  else
+    d.verdict = d.base_explained ? "none" : "unexplained";
   return d;
 }
 
@@ -856,12 +1088,47 @@ std::vector<Assignment> EffectFit::assignments() const {
   return a;
 }
 
-EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& name) {
+std::pair<double, double> calc_loop_noise(double s_angle, double s_rate, double s_torque, double kp, double kd) {
+  const double driven = std::hypot(kp * s_angle, kd * s_rate);
+  const double f = std::isfinite(s_torque) && driven > s_torque ? s_torque / driven : 1.0;
+  return {f * s_angle, f * s_rate};
+}
+
+EffectFit combine_effects(const std::vector<EffectFit>& fits) {
+  if (fits.empty()) throw std::invalid_argument("no effect to combine");
+  EffectFit out = fits.back();
+  out.effect = join_effects(fits);
+  out.physics.clear();
+  out.switches.clear();
+  out.params.clear();
+  out.stderr_.clear();
+  out.unidentifiable.clear();
+  out.refit.clear();
+  out.at_bound.clear();
+  out.k = 0;
+  out.delta_bic = 0.0;
+  for (const auto& f : fits) {
+    out.physics += (out.physics.empty() ? "" : "; ") + f.physics;
+    out.switches.insert(out.switches.end(), f.switches.begin(), f.switches.end());
+    for (const auto& [path, v] : f.params) out.params[path] = v;
+    for (const auto& [path, v] : f.stderr_) out.stderr_[path] = v;
+    out.unidentifiable.insert(out.unidentifiable.end(), f.unidentifiable.begin(), f.unidentifiable.end());
+    out.refit.insert(out.refit.end(), f.refit.begin(), f.refit.end());
+    out.at_bound.insert(out.at_bound.end(), f.at_bound.begin(), f.at_bound.end());
+    out.k += f.k;
+    out.delta_bic += f.delta_bic;
+    out.significant = out.significant && f.significant;
+    out.screened = out.screened || f.screened;
+    out.ok = out.ok && f.ok;
+  }
+  return out;
+}
+
+EffectFit fit_effects(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::vector<std::string>& names) {
   DiagnoseOptions o = opt;
-  o.only = {name};
-  const Diagnosis d = diagnose(src, r, o);
-  if (d.ranking.empty()) throw std::invalid_argument("effect '" + name + "' does not apply in " + replay_mode_name(opt.mode) + " mode");
-  return d.ranking[0];
+  o.only.clear();
+  o.add = names;
+  return combine_effects(diagnose(src, r, o).selected);
 }
 
 Diagnosis diagnose_problem(const DiagnoseProblem& p, const DiagnoseOptions& opt) {
@@ -919,6 +1186,15 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   p.names = effect_names();
   const auto& s = base.spec;
   const bool beam = base.nseg > 1;
+  // The bootstrap's noise in the loop: an encoder or tachometer without noise of its own gets the noise
+  // the controller read (calc_loop_noise).
+  {
+    const auto [sa, sr] = calc_loop_noise(calc_noise_floor(angle), r.has("hub_rate") ? calc_noise_floor(r.at("hub_rate")) : 0.0,
+                                          r.has("hub_torque") ? calc_noise_floor(r.at("hub_torque")) : NAN,
+                                          s.controller.kp, s.controller.kd);
+    if (s.sensors.hub_angle.noise == 0.0 && sa > 0) p.loop_noise.emplace_back("sensors.hub_angle.noise", sa);
+    if (s.sensors.hub_rate.noise == 0.0 && sr > 0) p.loop_noise.emplace_back("sensors.hub_rate.noise", sr);
+  }
   p.sensitive = {{"hub.inertia", s.hub_inertia},           {"payload.mass", s.payload_mass},
                  {"payload.inertia", s.payload_inertia},   {"friction.viscous", s.friction.viscous},
                  {"friction.coulomb", s.friction.coulomb}, {"joints.stiffness", beam ? s.joints.stiffness : 0.0},
@@ -972,10 +1248,30 @@ std::string json_tests(const std::map<std::string, ChannelTest>& tests) {
   for (const auto& [c, t] : tests)
     out += (out.size() > 1 ? ", " : "") + json_string(c) + ": {\"rms\": " + json_number(t.rms) + ", \"noise\": " +
            json_number(t.noise) + ", \"acf_outside\": " + json_number(t.acf_outside) + ", \"ccf_outside\": " +
-           json_number(t.ccf_outside) + ", \"white\": " + json_bool(t.white) + ", \"uncorrelated\": " +
-           json_bool(t.uncorrelated) + ", \"unbiased\": " + json_bool(t.unbiased) + ", \"at_floor\": " + json_bool(t.at_floor) + ", \"rss\": " + json_number(t.rss) +
-           ", \"n_eff\": " + json_number(t.n_eff) + "}";
+           json_number(t.ccf_outside) + ", \"mean\": " + json_number(t.mean) + ", \"white\": " + json_bool(t.white) +
+           ", \"uncorrelated\": " + json_bool(t.uncorrelated) + ", \"unbiased\": " + json_bool(t.unbiased) +
+           ", \"at_floor\": " + json_bool(t.at_floor) + ", \"rss\": " + json_number(t.rss) + ", \"n_eff\": " +
+           json_number(t.n_eff) + ", \"bootstrap\": {\"rms\": " + json_number(t.boot_rms) + ", \"acf_outside\": " +
+           json_number(t.boot_acf) + ", \"ccf_outside\": " + json_number(t.boot_ccf) + ", \"mean\": " +
+           json_number(t.boot_mean) + ", \"within\": " + json_bool(t.within_bootstrap) + "}}";
   return out + "}";
+}
+
+// A list of effect fits, one per line at `indent`.
+std::string json_effects(const std::vector<EffectFit>& fits, const std::string& indent) {
+  std::string out = "[\n";
+  for (std::size_t i = 0; i < fits.size(); ++i) {
+    const auto& f = fits[i];
+    out += indent + "{\"effect\": " + json_string(f.effect) + ", \"params\": " + json_map(f.params) + ", \"stderr\": " +
+           json_map(f.stderr_) + ", \"unidentifiable\": " + json_list(f.unidentifiable) + ", \"at_bound\": " +
+           json_list(f.at_bound) + ", \"refit\": " + json_list(f.refit) + ", \"fit_percent\": " +
+           json_map(f.fit_percent) + ", \"delta_bic\": " + json_number(f.delta_bic) + ", \"n_eff\": " +
+           json_number(f.n_eff) + ", \"significant\": " + json_bool(f.significant) + ", \"screened\": " +
+           json_bool(f.screened) + ", \"explained\": " + json_bool(f.explained) + ", \"explains\": " +
+           json_number(f.explains) + ", \"tests\": " + json_tests(f.tests) + ", \"ok\": " + json_bool(f.ok) +
+           (f.note.empty() ? "" : ", \"note\": " + json_string(f.note)) + "}" + (i + 1 < fits.size() ? "," : "") + "\n";
+  }
+  return out + indent.substr(0, indent.size() >= 2 ? indent.size() - 2 : 0) + "]";
 }
 
 // The best partial candidates of an unexplained record: significant ones by the share of the misfit they explain.
@@ -1007,19 +1303,10 @@ std::string format_diagnosis_json(const Diagnosis& d) {
            "], \"worst_ratio\": " + json_number(m.worst_ratio) + ", \"peak_hz\": " + json_number(m.peak_hz) +
            ", \"state\": " + json_string(m.state) + ", \"departure\": " + json_number(m.departure) + "}";
   }
-  out += "],\n  \"ranking\": [\n";
-  for (std::size_t i = 0; i < d.ranking.size(); ++i) {
-    const auto& f = d.ranking[i];
-    out += "    {\"effect\": " + json_string(f.effect) + ", \"params\": " + json_map(f.params) + ", \"stderr\": " +
-           json_map(f.stderr_) + ", \"unidentifiable\": " + json_list(f.unidentifiable) + ", \"at_bound\": " +
-           json_list(f.at_bound) + ", \"refit\": " + json_list(f.refit) + ", \"fit_percent\": " +
-           json_map(f.fit_percent) + ", \"delta_bic\": " + json_number(f.delta_bic) + ", \"n_eff\": " +
-           json_number(f.n_eff) + ", \"significant\": " + json_bool(f.significant) + ", \"explained\": " +
-           json_bool(f.explained) + ", \"explains\": " + json_number(f.explains) + ", \"tests\": " + json_tests(f.tests) +
-           ", \"ok\": " + json_bool(f.ok) + (f.note.empty() ? "" : ", \"note\": " + json_string(f.note)) + "}" +
-           (i + 1 < d.ranking.size() ? "," : "") + "\n";
-  }
-  out += "  ],\n  \"verdict\": " + json_string(d.verdict) + "\n}\n";
+  out += "],\n  \"ranking\": " + json_effects(d.ranking, "    ") + ",\n";
+  out += "  \"selected\": " + json_effects(d.selected, "    ") + ",\n  \"rounds\": [";
+  for (std::size_t i = 0; i < d.rounds.size(); ++i) out += (i ? ", " : "") + json_effects(d.rounds[i], "      ");
+  out += "],\n  \"verdict\": " + json_string(d.verdict) + "\n}\n";
   return out;
 }
 
@@ -1066,19 +1353,36 @@ std::string format_diagnosis_text(const Diagnosis& d) {
       params += buf;
       if (bound) params += " (at its bound)";
     }
-    std::snprintf(buf, sizeof buf, "  %4d  %-26s %10.1f%s%s %-15s  %s\n", ++rank, f.effect.c_str(), f.delta_bic,
-                  f.significant ? "*" : " ", f.ok && f.explained ? "=" : " ", f.ok ? fits.c_str() : "failed",
-                  f.ok ? params.c_str() : f.note.c_str());
+    std::snprintf(buf, sizeof buf, "  %4d  %-26s %10.1f%s%s%s %-15s  %s\n", ++rank, f.effect.c_str(), f.delta_bic,
+                  f.significant ? "*" : " ", f.ok && f.explained ? "=" : " ", f.screened ? "~" : " ",
+                  f.ok ? fits.c_str() : "failed", f.ok ? params.c_str() : f.note.c_str());
     out += buf;
   }
   out += "\n  * significant: delta BIC < " + json_number(kSignificantDeltaBic) +
-         " (in effective samples); = after it every channel's residual is noise\n";
+         " (in effective samples); = after it every channel's residual is noise; ~ screened: the global scan's best "
+         "point, not fitted further (its delta BIC an upper bound)\n";
+  if (!d.selected.empty()) {
+    out += "  selected in turn (each fitted on top of those before it):\n";
+    int i = 0;
+    for (const auto& f : d.selected) {
+      std::string params;
+      for (const auto& [p, v] : f.params) {
+        std::snprintf(buf, sizeof buf, "%s%s = %.4g", params.empty() ? "" : ", ", p.c_str(), v);
+        params += buf;
+      }
+      std::snprintf(buf, sizeof buf, "    %d. %s: delta BIC %.1f, %s; %s\n", ++i, f.effect.c_str(), f.delta_bic,
+                    f.explained ? "with it the record is explained" : "not yet explained", params.c_str());
+      out += buf;
+    }
+  }
   if (d.verdict == "none") {
     out += "verdict: none - the model explains the record down to its noise\n";
   } else if (d.verdict != "unexplained") {
-    out += "verdict: " + d.verdict + " is missing\n";
+    out += "verdict: " + d.verdict + (d.selected.size() > 1 ? " are missing\n" : " is missing\n");
   } else {
-    out += "verdict: unexplained - the model misfits the record and no candidate explains it\n";
+    out += d.selected.empty() ? "verdict: unexplained - the model misfits the record and no candidate explains it\n"
+                              : "verdict: unexplained - with " + join_effects(d.selected) +
+                                    " the model still misfits the record and no further candidate is significant\n";
     for (const auto* f : partial_candidates(d)) {
       std::snprintf(buf, sizeof buf, "  %s explains %.0f %% of the misfit above the noise\n", f->effect.c_str(),
                     100.0 * f->explains);

@@ -8,9 +8,14 @@
 // parameters and n_eff = sum over channels of n_c / (1 + 2 sum_k rho_k), the effective sample size of
 // the fit's own residual (rho its autocorrelation, summed while positive: Geyer's initial positive
 // sequence, Geyer 1992). Delta BIC < -10 is "very strong" evidence (Kass and Raftery 1995): significant,
-// when the fit also visibly improves (kMinFitGain). The verdict is one of three (docs/validation.md):
-// "none" (the model explains the record down to its noise), the effect's name (significant, and after it
-// the record is explained), or "unexplained" (the model misfits and no candidate explains it).
+// when the fit also visibly improves (kMinFitGain). Every candidate is screened first by its global scan
+// alone; the kFullFits best go on to Ceres. Effects are then selected in turn (forward selection): the
+// best significant one is added to the model and the candidates are tried again on top of it, until none
+// is significant (or kMaxEffects). Whether a channel's residual is noise is judged against what the
+// fitted model itself leaves when simulated again with the record's noise in its loop (a parametric
+// bootstrap over lanes, kBootstrapLanes). The verdict (docs/validation.md): "none" (the model explains
+// the record down to its noise), the selected effects joined by " + " (each significant, and with them
+// the record is explained), or "unexplained" (the model misfits and no set of candidates explains it).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -31,6 +36,13 @@ inline constexpr double kSignificantDeltaBic = -10.0;
 // ... and must improve the fit of some channel by this many percentage points: on a noise-free
 // record whose residual is rounding, any parameter "explains" a share of it, and BIC alone says yes.
 inline constexpr double kMinFitGain = 0.02;
+// Candidates fitted by Ceres after the screening scan, in the first round and in each later one.
+inline constexpr int kFullFits = 6;
+inline constexpr int kFullFitsLater = 3;
+// At most this many effects are selected in turn.
+inline constexpr int kMaxEffects = 3;
+// Noise realisations of the fitted model the residual tests are judged against.
+inline constexpr int kBootstrapLanes = 16;
 
 
 // Residual tests of one scored channel (decimated, normalised residual): is what is left noise?
@@ -43,10 +55,16 @@ struct ChannelTest {
   double acf_outside = NAN;     // fraction of autocorrelation lags 1..L outside the 99 % band
   double ccf_outside = NAN;     // fraction of cross-correlation lags with the input outside its band
   bool white = false, uncorrelated = false;
+  double mean = NAN;            // of the normalised residual
   bool unbiased = false;        // its mean within the 99 % band of zero: |mean| <= 2.58 sd / sqrt(n_eff) (the
                                 // whiteness tests centre the residual, so a constant misfit passes them)
   bool at_floor = false;        // rms^2 <= kFloorFactor noise^2: what is left is mostly noise
-  bool explained() const { return (white && uncorrelated && unbiased) || at_floor; }
+  // The fitted model simulated again with the record's noise (the bootstrap): the largest of each statistic
+  // over its lanes, and whether the record's residual is within them (NaN, false: not simulated).
+  double boot_rms = NAN, boot_acf = NAN, boot_ccf = NAN, boot_mean = NAN;
+  bool bootstrapped = false, within_bootstrap = false;
+  // Judged by the bootstrap where it ran, else by the fixed thresholds.
+  bool explained() const { return bootstrapped ? within_bootstrap : (white && uncorrelated && unbiased) || at_floor; }
 };
 // A residual whose mean square is within this factor of the noise floor's is at the floor.
 inline constexpr double kFloorFactor = 2.0;
@@ -83,6 +101,8 @@ struct EffectFit {
   int k = 0;                                   // parameters fitted (a grid search counts one)
   double delta_bic = NAN;
   bool significant = false;
+  bool screened = false;                       // fitted by the global scan alone (not among the best kFullFits):
+                                               // its Delta BIC an upper bound
   bool ok = false;                             // false: the fit failed (reason in `note`)
   std::string note;
   std::vector<Assignment> assignments() const; // what to set in the model to add this effect
@@ -104,13 +124,24 @@ struct Diagnosis {
   bool base_explained = false;
   double base_n_eff = NAN;
   std::vector<Misfit> misfit;                  // where the baseline misfits, per channel
-  std::vector<EffectFit> ranking;              // best (lowest Delta BIC) first
-  std::string verdict = "none";                // "none", the effect that explains the record, or "unexplained"
+  std::vector<EffectFit> ranking;              // the first round: best (lowest Delta BIC) first
+  // The effects selected in turn, each fitted on top of those before it (its Delta BIC against the model
+  // with them; its tests those of the model with it and them). The last one's tests are the final model's.
+  std::vector<EffectFit> selected;
+  std::vector<std::vector<EffectFit>> rounds;  // the later rounds' rankings (round 2 on), as `ranking`
+  std::string verdict = "none";                // "none", the selected effects joined by " + ", or "unexplained"
 };
+
+// The selected effects as one (calibrate writes it): their switches and parameters together, Delta BIC
+// summed (against the base model), the last one's fit and tests.
+EffectFit combine_effects(const std::vector<EffectFit>& fits);
 
 struct DiagnoseOptions {
   ReplayMode mode = ReplayMode::kClosedLoop;
   std::vector<std::string> only;               // effects to try (empty = all that apply)
+  // calibrate: exactly these effects, fitted in turn in this order (each on top of those before), with no
+  // screening and whether or not significant; empty: diagnose's selection.
+  std::vector<std::string> add;
   // Existing parameters re-fitted with the baseline and every effect (paths); {"auto"}: for each
   // effect the (at most two) existing parameters the residual is most sensitive to that the effect
   // does not fit itself; {} or {"none"}: none (the default: with `auto` by default the hidden-effect
@@ -123,6 +154,7 @@ struct DiagnoseOptions {
   // Progress: called as each candidate's fit ends (done of total, that fit), one call at a time, from
   // whichever thread fitted it; the ranking does not depend on it. Empty: silent.
   std::function<void(int done, int total, const EffectFit& fit)> on_fitted;
+  int bootstrap_lanes = kBootstrapLanes;       // 0: the residual tests by their fixed thresholds alone
 };
 
 // The reference rig's model (src, its --set applied) against a rig record.
@@ -152,11 +184,22 @@ struct DiagnoseProblem {
   std::vector<std::string> names;                // every effect the family knows (`only` is checked against it)
   std::vector<std::pair<std::string, double>> sensitive;  // `--refit auto`'s targets: (path, value)
   EffectScales scales;                           // ranges of re-fitted parameters
+  // The bootstrap's noise: its seed path, and the in-loop sensors' noise paths with the standard deviation
+  // each gets where the model has none (the record's noise floor of that channel).
+  std::string seed_path = "simulation.seed";
+  std::vector<std::pair<std::string, double>> loop_noise;
 };
+
+// The noise a joint's controller read (the bootstrap's in-loop noise): the record's noise floors of its
+// angle and rate columns (rad, rad/s; 0 = none), scaled down together so that what they drive through the
+// gains, sqrt(kp^2 s_angle^2 + kd^2 s_rate^2), is at most the record's torque noise floor s_torque (N·m;
+// NaN = no torque column): a record whose noise was added to the logged columns only did not feed it back.
+// Returns the two standard deviations.
+std::pair<double, double> calc_loop_noise(double s_angle, double s_rate, double s_torque, double kp, double kd);
 Diagnosis diagnose_problem(const DiagnoseProblem& p, const DiagnoseOptions& opt);
 
-// One effect fitted alone (what `calibrate --add` uses).
-EffectFit fit_effect(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::string& effect);
+// Effects fitted in turn, each on top of those before (what `calibrate --add a,b` uses), combined.
+EffectFit fit_effects(const ModelSource& src, const Record& r, const DiagnoseOptions& opt, const std::vector<std::string>& effects);
 
 // JSON of a diagnosis (docs/cli.md, "flexfarm diagnose").
 std::string format_diagnosis_json(const Diagnosis& d);

@@ -402,7 +402,9 @@ TEST_F(Cli, DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict) {
   EXPECT_NE(json.find("\"payload.mass\": null", second), std::string::npos) << json;
   // Coulomb friction alone does not explain a real axis (viscous friction, the offset): "unexplained".
   EXPECT_NE(json.find("\"misfit\": [{\"channel\": \"hub_torque\""), std::string::npos) << json;
-  const std::string end = "  ],\n  \"verdict\": \"unexplained\"\n}\n";
+  // Selected in turn: Coulomb friction, then nothing more is significant on top of it.
+  EXPECT_NE(json.find("\"selected\": [\n    {\"effect\": \"coulomb_friction\""), std::string::npos) << json;
+  const std::string end = "],\n  \"verdict\": \"unexplained\"\n}\n";
   EXPECT_EQ(json.substr(json.size() - end.size()), end);
 }
 

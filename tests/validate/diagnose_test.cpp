@@ -1,6 +1,6 @@
 // diagnose (validate/diagnose.cpp) on particular records: nothing hidden, the independent reference
 // trace, re-fits, a fitted value against its truth, the examples (a late tip sensor on an
-// independent record, strong stiffening, two effects at once). The randomised acceptance suite is
+// independent record, strong stiffening, two effects at once, found in turn), calibrate's set. The randomised acceptance suite is
 // hidden_effect_suite_test.cpp.
 #include <gtest/gtest.h>
 
@@ -132,16 +132,59 @@ TEST(Diagnose, StrongJointStiffeningIsFittedOverDecades) {
 
 // A record the model cannot explain with any one candidate (two effects): the verdict says so, and
 // names the best partial candidates and where the misfit lives.
-TEST(Diagnose, TwoHiddenEffectsAreUnexplainedWithTheBestPartialCandidates) {
+// Two effects at once are found as two (forward selection): Coulomb friction first (its misfit masks the
+// late tip sensor's), then the delay on top of it, each with its value; the verdict names both.
+TEST(Diagnose, TwoHiddenEffectsAreFoundInTurnWithTheirValues) {
   const Diagnosis d = diagnose_hidden({"friction.coulomb=300", "sensors.tip_deflection.delay=30"}, 22);
-  EXPECT_EQ(d.verdict, "unexplained") << format_diagnosis_text(d);
-  ASSERT_FALSE(d.ranking.empty());
-  EXPECT_TRUE(d.ranking[0].effect == "coulomb_friction" || d.ranking[0].effect == "sensor_delay.tip_deflection")
-      << format_diagnosis_text(d);
-  EXPECT_GT(d.ranking[0].explains, 0.3);
-  ASSERT_EQ(d.misfit.size(), d.channels.size());
   const std::string text = format_diagnosis_text(d);
-  EXPECT_NE(text.find("explains"), std::string::npos) << text;
+  ASSERT_EQ(d.selected.size(), 2u) << text;
+  EXPECT_EQ(d.selected[0].effect, "coulomb_friction") << text;
+  EXPECT_EQ(d.selected[1].effect, "sensor_delay.tip_deflection") << text;
+  EXPECT_EQ(d.verdict, "coulomb_friction + sensor_delay.tip_deflection") << text;
+  EXPECT_NEAR(d.selected[0].params.at("friction.coulomb"), 300.0, 15.0) << text;
+  EXPECT_EQ(d.selected[1].params.at("sensors.tip_deflection.delay"), 30.0) << text;
+  EXPECT_FALSE(d.selected[0].explained) << text;  // the friction alone leaves the delay's misfit
+  EXPECT_TRUE(d.selected[1].explained) << text;
+  EXPECT_LT(d.selected[1].delta_bic, kSignificantDeltaBic) << text;  // against the model with the friction
+  ASSERT_EQ(d.rounds.size(), 1u) << text;
+  EXPECT_NE(text.find("selected in turn"), std::string::npos) << text;
+}
+
+// calibrate's set: the two effects fitted in the order given (diagnose's: the friction, then the delay on
+// top of it) and combined into one model addition.
+TEST(Diagnose, CalibratesSetIsFittedInTurnAndCombined) {
+  std::vector<std::string> truth_set = kShortRun;
+  for (const char* a : {"friction.coulomb=300", "sensors.tip_deflection.delay=30"}) truth_set.push_back(a);
+  const Record r = make_synthetic_record(build_model(load_model_source(kModel, truth_set)), 0.01, 22, 5);
+  DiagnoseOptions opt;
+  opt.max_iterations = 15;
+  const EffectFit f = fit_effects(load_model_source(kModel, kShortRun), r, opt, {"coulomb_friction", "sensor_delay.tip_deflection"});
+  EXPECT_EQ(f.effect, "coulomb_friction + sensor_delay.tip_deflection");
+  EXPECT_EQ(f.params.at("sensors.tip_deflection.delay"), 30.0);
+  EXPECT_NEAR(f.params.at("friction.coulomb"), 300.0, 15.0);
+  EXPECT_EQ(f.k, 3);  // the delay (a grid), the Coulomb level and its smoothing
+  EXPECT_TRUE(f.explained);
+  // Two effects that write the same path cannot both be added.
+  EXPECT_THROW(fit_effects(load_model_source(kModel, kShortRun), r, opt, {"coulomb_friction", "stribeck_friction"}),
+               std::invalid_argument);
+}
+
+// With the one effect that would explain it left out, a record is unexplained, and the report gives the
+// best partial candidates and where the misfit lives.
+TEST(Diagnose, ARecordNoCandidateExplainsIsUnexplainedWithTheBestPartialCandidates) {
+  std::vector<std::string> truth_set = kShortRun;
+  truth_set.push_back("friction.coulomb=300");
+  const Record r = make_synthetic_record(build_model(load_model_source(kModel, truth_set)), 0.01, 22, 5);
+  DiagnoseOptions opt;
+  opt.max_iterations = 15;
+  opt.only = {"viscous_friction", "torque_offset", "sensor_delay.tip_deflection"};
+  const Diagnosis d = diagnose(load_model_source(kModel, kShortRun), r, opt);
+  const std::string text = format_diagnosis_text(d);
+  EXPECT_EQ(d.verdict, "unexplained") << text;
+  ASSERT_FALSE(d.ranking.empty());
+  EXPECT_EQ(d.ranking[0].effect, "viscous_friction") << text;
+  EXPECT_GT(d.ranking[0].explains, 0.3) << text;
+  ASSERT_EQ(d.misfit.size(), d.channels.size());
   EXPECT_NE(text.find("of the misfit"), std::string::npos) << text;
 }
 
