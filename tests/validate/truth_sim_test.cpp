@@ -134,13 +134,20 @@ TEST(TruthSim, MatchesTheIndependentReferenceTrace) {
 }
 
 // Energy drift max |E(t) - E(0)| / E(0) of a 5 s free vibration from a 0.01 rad bend.
-double energy_drift(bool drive, double rtol) {
+// multi_slope: the mesh with three slopes (knees at 5 and 15 urad, the twist reaching ~20 urad).
+double energy_drift(bool drive, double rtol, bool multi_slope = false) {
   TruthRig r = free_rig(0.01, 5.0);
   r.joint.damping = 0.0;
   r.joint.stiffening = 0.3;
   r.drive.enabled = drive;
   r.drive.damping = 0.0;
   r.drive.cubic_stiffness = 1e9;  // a hardening mesh: its energy k d^2/2 + k3 d^4/4 too
+  if (multi_slope) {
+    r.drive.knee_1 = 5e-6;
+    r.drive.stiffness_2 = 4e7;
+    r.drive.knee_2 = 1.5e-5;
+    r.drive.stiffness_3 = 8e7;
+  }
   r.solver.rtol = rtol;
   const TruthTrace tr = run_truth(r).trace;
   const double e0 = tr.energy.front();
@@ -162,6 +169,8 @@ TEST(TruthSim, ConservesEnergyWithoutControlAndDamping) {
   EXPECT_LT(chain, 2e-8);
   EXPECT_LT(geared, 5e-7);
   EXPECT_LT(energy_drift(true, 1e-11), 0.1 * geared);
+  // The multi-slope mesh's piecewise-quadratic potential balances its piecewise-linear torque.
+  EXPECT_LT(energy_drift(true, 1e-9, true), 2e-6);
 }
 
 
@@ -470,6 +479,276 @@ TEST(TruthSim, HydraulicTorqueLoopDeliversTheDemandAtRest) {
   EXPECT_NEAR(demand - delivered, D * h.supply_pressure * x / h.pressure_gain, 0.01 * (demand - delivered));
   EXPECT_GT(demand - delivered, 1.0);  // N m
   EXPECT_NEAR(tr.pressure_a.back() - tr.pressure_b.back(), dp, 1e-6 * dp);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Effects in forms flexfarm does not share (issue 33): LuGre, exponential Stribeck, a worn gear's
+// position-dependent friction, a multi-slope mesh, one-sided mesh damping, a late logger, a nominal
+// feed-forward.
+
+// The hub alone (no beam, no payload: J = 50 kg m^2), no control, a constant torque `load` on it
+// (torque_offset = -load), for `duration` s.
+TruthRig hub_rig(double load, double duration) {
+  TruthRig r = free_rig(0.0, duration);
+  r.segments = 1;
+  r.beam.density = 0.0;
+  r.payload.mass = r.payload.inertia = 0.0;
+  r.torque_offset = -load;
+  return r;
+}
+
+TEST(TruthSim, LuGreBristlesHoldTheHubOnTheirPresliding) {
+  // Below breakaway LuGre's bristles hold the hub: moving one way, dz/dtheta = 1 - sigma0 z / Fc, so
+  // z = (Fc/sigma0)(1 - exp(-sigma0 theta / Fc)); at rest sigma0 z = load, the hub at
+  //   theta = -(Fc/sigma0) ln(1 - load/Fc)   (Canudas de Wit et al. 1995; overdamped by sigma1).
+  TruthRig r = hub_rig(300.0, 3.0);
+  r.friction.coulomb = 500.0;
+  r.friction.bristle_stiffness = 1e5;
+  r.friction.bristle_damping = 1e4;
+  const TruthTrace tr = run_truth(r).trace;
+  const double theta = -(500.0 / 1e5) * std::log(1.0 - 300.0 / 500.0);  // 4.58 mrad (a linear spring: 3 mrad)
+  EXPECT_NEAR(tr.hub_angle.back(), theta, 1e-3 * theta);
+  EXPECT_NEAR(tr.bristle.back(), 300.0 / 1e5, 1e-6 * 3e-3);
+  EXPECT_NEAR(tr.friction.back(), -300.0, 1e-3);
+  EXPECT_LT(std::fabs(tr.hub_rate.back()), 1e-6);
+  // Monotone (overdamped): it never went past the rest point.
+  for (double x : tr.hub_angle) ASSERT_LE(x, theta * (1 + 1e-6));
+}
+
+// The hub rate w solving load = g(w) s(w) + b w, g = Fc + (Fs - Fc) exp(-|w/vs|^delta), s = 1 (LuGre) or
+// the static law's (2/pi) atan(w/eps) (eps > 0); g s + b w rises in w here (b exceeds g's steepest fall).
+double steady_slip(double load, double fc, double fs, double vs, double delta, double b, double eps) {
+  double lo = 0.0, hi = load / b;
+  for (int i = 0; i < 200; ++i) {
+    const double w = 0.5 * (lo + hi);
+    const double s = eps > 0 ? M_2_PI * std::atan(w / eps) : 1.0;
+    ((fc + (fs - fc) * std::exp(-std::pow(w / vs, delta))) * s + b * w < load ? lo : hi) = w;
+  }
+  return 0.5 * (lo + hi);
+}
+
+TEST(TruthSim, LuGreAndStaticFrictionSlideAtTheStribeckCurvesSteadyState) {
+  // Driven by 600 N m against Fc = 300, Fs = 500 N m, vs = 0.2 rad/s, b = 1500 N m s/rad: the hub slides at
+  // the w where load = g(w) + b w. LuGre's steady state is exactly that (z' = 0: sigma0 z = g); the static
+  // law's is g (2/pi) atan(w/eps) + b w. The exponent delta changes w: 1 (exponential) against 3.
+  auto slide = [](double delta, double sigma0) {
+    TruthRig r = hub_rig(600.0, 1.5);
+    r.friction.coulomb = 300.0;
+    r.friction.stiction = 500.0;
+    r.friction.stribeck_velocity = 0.2;
+    r.friction.stribeck_exponent = delta;
+    r.friction.viscous = 1500.0;
+    r.friction.bristle_stiffness = sigma0;
+    r.friction.bristle_damping = sigma0 > 0 ? 300.0 : 0.0;
+    return run_truth(r).trace;
+  };
+  const double eps = TruthRig{}.friction.smoothing;
+  const double w1 = steady_slip(600.0, 300.0, 500.0, 0.2, 1.0, 1500.0, 0.0);
+  const double w1s = steady_slip(600.0, 300.0, 500.0, 0.2, 1.0, 1500.0, eps);
+  const double w3s = steady_slip(600.0, 300.0, 500.0, 0.2, 3.0, 1500.0, eps);
+  std::printf("steady slip: delta 1 %.6f rad/s (static law %.6f), delta 3 %.6f rad/s\n", w1, w1s, w3s);
+  ASSERT_GT(std::fabs(w1s - w3s), 0.02 * w1);  // the exponent matters here
+  const TruthTrace lugre = slide(1.0, 1e5), exp1 = slide(1.0, 0.0), exp3 = slide(3.0, 0.0);
+  EXPECT_NEAR(lugre.hub_rate.back(), w1, 1e-5 * w1);
+  EXPECT_NEAR(lugre.friction.back(), -600.0, 1e-3);
+  EXPECT_NEAR(exp1.hub_rate.back(), w1s, 1e-5 * w1s);
+  EXPECT_NEAR(exp3.hub_rate.back(), w3s, 1e-5 * w3s);
+}
+
+TEST(TruthSim, WornGearFrictionFollowsTheHubAngle) {
+  // Heavy viscous damping (J/b = 0.5 ms): the hub slides quasi-statically at
+  //   w(theta) = (load - Fc (1 + a cos(p theta + phase))) / b,
+  // so the rate traces the gear's wear pattern: 4 waves per revolution, a = 0.5.
+  TruthRig r = hub_rig(52000.0, 6.0);
+  r.friction.viscous = 1e5;
+  r.friction.coulomb = 2000.0;
+  r.friction.position_amplitude = 0.5;
+  r.friction.position_waves = 4.0;
+  r.friction.position_phase = 0.3;
+  const TruthTrace tr = run_truth(r).trace;
+  double worst = 0.0, lo = INFINITY, hi = -INFINITY;
+  for (std::size_t k = 500; k < tr.t.size(); ++k) {
+    const double w = (52000.0 - 2000.0 * (1.0 + 0.5 * std::cos(4.0 * tr.hub_angle[k] + 0.3))) / 1e5;
+    worst = std::max(worst, std::fabs(tr.hub_rate[k] - w));
+    lo = std::min(lo, tr.hub_rate[k]);
+    hi = std::max(hi, tr.hub_rate[k]);
+  }
+  EXPECT_GT(tr.hub_angle.back(), 2.0 * M_PI / 4.0);  // more than one wave
+  EXPECT_LT(worst, 0.01 * (0.5 * 2000.0 / 1e5));     // 1 % of the swing a Fc / b
+  EXPECT_NEAR(hi - lo, 2.0 * 0.5 * 2000.0 / 1e5, 0.03 * (hi - lo));
+}
+
+// The rig with the default drive, moving 0.5 rad, for 1 s.
+TruthRig geared_rig() {
+  TruthRig r;
+  r.trajectory.moves = {{0.5, 7.0}};
+  r.duration = 1.0;
+  r.drive.enabled = true;
+  return r;
+}
+
+TEST(TruthSim, MultiSlopeMeshWithEqualSlopesIsTheLinearMesh) {
+  TruthRig r = geared_rig();
+  const TruthTrace linear = run_truth(r).trace;
+  r.drive.knee_1 = 1e-5;
+  r.drive.knee_2 = 3e-5;
+  r.drive.stiffness_2 = r.drive.stiffness_3 = r.drive.stiffness;
+  const TruthTrace same = run_truth(r).trace;
+  double peak = 0.0, worst = 0.0, twist = 0.0;
+  for (std::size_t k = 0; k < linear.t.size(); ++k) {
+    peak = std::max(peak, std::fabs(linear.hub_torque[k]));
+    twist = std::max(twist, std::fabs(linear.twist[k]));
+    worst = std::max(worst, std::fabs(same.hub_torque[k] - linear.hub_torque[k]));
+  }
+  EXPECT_GT(twist, 3e-5);  // the move's twist reaches past both knees
+  EXPECT_LT(worst, 1e-6 * peak);
+  // Stiffer slopes beyond the knees change the motion.
+  r.drive.stiffness_2 = r.drive.stiffness_3 = 3.0 * r.drive.stiffness;
+  const TruthTrace stiff = run_truth(r).trace;
+  double differ = 0.0;
+  for (std::size_t k = 0; k < linear.t.size(); ++k) differ = std::max(differ, std::fabs(stiff.twist[k] - linear.twist[k]));
+  EXPECT_GT(differ, 0.1 * twist);
+}
+
+TEST(TruthSim, MultiSlopeMeshHoldsALoadAtItsPiecewiseTwist) {
+  // PD holding r = 0 against 5000 N m on the hub: at rest the mesh carries the load, s(e) = 5000 N m, so
+  // e = knee_1 + (5000 - k knee_1)/k2 with two slopes, knee_2 + (5000 - s(knee_2))/k3 with three.
+  auto twist = [](double knee_2) {
+    TruthRig r = hub_rig(-5000.0, 4.0);  // the hub gets -5000 N m
+    r.controller = TruthRig{}.controller;
+    r.drive.enabled = true;
+    r.drive.knee_1 = 1e-4;  // s(knee_1) = 2000 N m
+    r.drive.stiffness_2 = 6e7;
+    r.drive.knee_2 = knee_2;
+    r.drive.stiffness_3 = 1.5e8;
+    const TruthTrace tr = run_truth(r).trace;
+    EXPECT_NEAR(tr.hub_torque.back(), 5000.0, 0.05);
+    return tr.twist.back();
+  };
+  EXPECT_NEAR(twist(0.0), 1e-4 + 3000.0 / 6e7, 1e-5 * 1.5e-4);                    // 0.150 mrad
+  EXPECT_NEAR(twist(1.2e-4), 1.2e-4 + (5000.0 - 3200.0) / 1.5e8, 1e-5 * 1.3e-4);  // 0.132 mrad
+}
+
+// Energy lost over each sample interval of a free hub hitting the drive's shaft through a 1 mrad gap,
+// split by whether either end of the interval had the teeth in contact and closing (|d| > b, d d' > 0).
+std::pair<double, double> mesh_losses(bool one_sided) {
+  TruthRig r = hub_rig(0.0, 0.05);
+  r.controller.rate = 20000.0;  // a fine trace: the collisions last about 1.5 ms
+  r.initial.hub_rate = 0.5;
+  r.drive.enabled = true;
+  r.drive.backlash = 1e-3;
+  r.drive.damping = 1e3;  // zeta 0.05 in contact
+  r.drive.one_sided_damping = one_sided;
+  const TruthTrace tr = run_truth(r).trace;
+  const double b = 0.5e-3;
+  auto closing = [&](std::size_t k) { return std::fabs(tr.twist[k]) > b && tr.twist[k] * tr.twist_rate[k] > 0; };
+  double in_closing = 0.0, elsewhere = 0.0;
+  int contacts = 0;
+  for (std::size_t k = 0; k + 1 < tr.t.size(); ++k) {
+    const double loss = tr.energy[k] - tr.energy[k + 1];
+    (closing(k) || closing(k + 1) ? in_closing : elsewhere) += loss;
+    contacts += std::fabs(tr.twist[k]) <= b && std::fabs(tr.twist[k + 1]) > b;
+  }
+  EXPECT_GE(contacts, 4);
+  std::printf("mesh damping %s: %d contacts, lost %.4g J closing, %.4g J otherwise, of %.4g J\n",
+              one_sided ? "one-sided" : "two-sided", contacts, in_closing, elsewhere, tr.energy.front());
+  return {in_closing, elsewhere};
+}
+
+TEST(TruthSim, OneSidedMeshDampingDissipatesOnlyWhileTheTeethClose) {
+  const auto [closing, elsewhere] = mesh_losses(true);
+  const auto [closing2, elsewhere2] = mesh_losses(false);
+  const double e0 = 0.5 * 50.0 * 0.5 * 0.5;         // J, the hub's kinetic energy at the start
+  EXPECT_GT(closing, 0.01 * e0);                    // the impacts dissipate
+  EXPECT_LT(std::fabs(elsewhere), 1e-3 * closing);  // nothing while the gap is open or the teeth part
+  EXPECT_GT(elsewhere2, 0.2 * closing2);            // the two-sided mesh also damps as the teeth part
+}
+
+TEST(TruthSim, LoggerRecordsTheLateQuantisedReadingTheControllerUsed) {
+  // record.as_seen: the hub angle and rate columns are what the controller read, 5 and 2 samples late,
+  // the angle quantised by the in-loop 16-bit encoder; without it, the same readings on time.
+  TruthRig r = reference_rig();
+  r.duration = 2.0;
+  r.sensors.hub_angle.delay = 5;
+  r.sensors.hub_angle.quantize = true;
+  r.sensors.hub_angle.noise = 2e-5;
+  r.sensors.hub_rate.delay = 2;  // 3 ms makes the rate loop ring near Nyquist (kd / J_hub = 500 /s)
+  r.sensors.hub_rate.noise = 1e-3;
+  r.record.as_seen = true;
+  const TruthRun seen = run_truth(r);
+  r.record.as_seen = false;
+  const Record on_time = simulate_truth(r);
+  const double q = kTwoPi / 65536.0;
+  const auto &a = seen.record.at("hub_angle"), &w = seen.record.at("hub_rate");
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a[k], seen.trace.seen_angle[k]) << k;
+    ASSERT_EQ(w[k], seen.trace.seen_rate[k]) << k;
+    ASSERT_EQ(a[k], on_time.at("hub_angle")[k >= 5 ? k - 5 : 0]) << k;
+    ASSERT_EQ(w[k], on_time.at("hub_rate")[k >= 2 ? k - 2 : 0]) << k;
+    ASSERT_NEAR(a[k] / q, std::nearbyint(a[k] / q), 1e-9) << k;
+  }
+}
+
+TEST(TruthSim, NominalFeedForwardLeavesThePayloadMismatchAsTrackingError) {
+  // A rigid arm under PD + f (J_nom r'' + kd r'). With J_nom the plant's inertia the error obeys
+  // J e'' + kd e' + kp e = 0 from rest: it tracks but for the zero-order hold. With a nominal payload of
+  // 250 kg (plant 328.7 kg) it obeys J e'' + kd e' + kp e = dJ r'', dJ = 78.7 kg L^2; on the cubic
+  // (fourth derivative 0) the forced error is e = (dJ/kp)(r'' - (kd/kp) r''').
+  TruthRig r;
+  r.segments = 1;
+  r.trajectory.moves = {{0.5, 0.0}};
+  r.duration = 2.5;
+  auto worst_error = [](const TruthTrace& tr) {
+    double e = 0.0;
+    for (std::size_t k = 0; k < tr.t.size(); ++k) e = std::max(e, std::fabs(tr.ref[k] - tr.hub_angle[k]));
+    return e;
+  };
+  const double pd = worst_error(run_truth(r).trace);
+  r.controller.feedforward = 1.0;
+  const double matched = worst_error(run_truth(r).trace);
+  EXPECT_LT(matched, 0.01 * pd) << "PD alone " << pd;
+  r.controller.nominal_payload_mass = 250.0;
+  const double dj = calc_truth_rigid_inertia(r) - calc_truth_rigid_inertia(r, true);
+  EXPECT_NEAR(dj, 78.7 * r.beam.length * r.beam.length, 1e-9 * dj);
+  const TruthTrace tr = run_truth(r).trace;
+  const double T = 3.0, u = 2.5 / T, kp = r.controller.kp, kd = r.controller.kd;
+  const double acc = 0.5 * 6.0 * (1.0 - 2.0 * u) / (T * T), jerk = -0.5 * 12.0 / (T * T * T);
+  const double forced = dj / kp * (acc - kd / kp * jerk);  // -2.1 mrad
+  std::printf("feed-forward: PD alone %.3g rad, matched %.3g rad, forced %.4g rad, got %.4g rad\n", pd, matched,
+              forced, tr.ref.back() - tr.hub_angle.back());
+  EXPECT_NEAR(tr.ref.back() - tr.hub_angle.back(), forced, 0.03 * std::fabs(forced));
+  EXPECT_GT(std::fabs(forced), 20.0 * matched);
+}
+
+TEST(TruthSim, NewEffectFieldsAreCheckedByName) {
+  TruthRig r = reference_rig();
+  r.duration = 0.01;
+  auto message = [](const TruthRig& x) {
+    try {
+      run_truth(x);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("ran");
+  };
+  TruthRig a = r;
+  a.friction.position_amplitude = 1.0;
+  EXPECT_EQ(message(a).rfind("friction.position_amplitude: must be in [0, 1)", 0), 0u) << message(a);
+  TruthRig b = r;
+  b.drive.knee_1 = 2e-4;
+  b.drive.stiffness_2 = 1e7;
+  b.drive.knee_2 = 1e-4;
+  b.drive.stiffness_3 = 1e7;
+  EXPECT_EQ(message(b).rfind("drive.knee_2: must be", 0), 0u) << message(b);
+  TruthRig c = r;
+  c.friction.stribeck_exponent = 0.0;
+  EXPECT_EQ(message(c).rfind("friction.stribeck_exponent: must be > 0", 0), 0u) << message(c);
+  set_truth_field(r, "friction.bristle_stiffness", "1e5");
+  set_truth_field(r, "controller.nominal_payload_mass", "250");
+  set_truth_field(r, "drive.one_sided_damping", "true");
+  EXPECT_EQ(r.friction.bristle_stiffness, 1e5);
+  EXPECT_EQ(r.controller.nominal_payload_mass, 250.0);
+  EXPECT_TRUE(r.drive.one_sided_damping);
 }
 
 }  // namespace

@@ -44,13 +44,23 @@ void visit_fields(Rig& r, F&& f) {
   f("controller.kd", r.controller.kd, "N m s/rad");
   f("controller.ki", r.controller.ki, "N m/(rad s)");
   f("controller.torque_limit", r.controller.torque_limit, "N m");
+  f("controller.feedforward", r.controller.feedforward, "");
+  f("controller.nominal_hub_inertia", r.controller.nominal_hub_inertia, "kg m^2");
+  f("controller.nominal_payload_mass", r.controller.nominal_payload_mass, "kg");
+  f("controller.nominal_payload_inertia", r.controller.nominal_payload_inertia, "kg m^2");
   f("trajectory.move_time", r.trajectory.move_time, "s");
   f("trajectory.moves", r.trajectory.moves, "rad:s,...");
   f("friction.viscous", r.friction.viscous, "N m s/rad");
   f("friction.coulomb", r.friction.coulomb, "N m");
   f("friction.stiction", r.friction.stiction, "N m");
   f("friction.stribeck_velocity", r.friction.stribeck_velocity, "rad/s");
+  f("friction.stribeck_exponent", r.friction.stribeck_exponent, "");
   f("friction.smoothing", r.friction.smoothing, "rad/s");
+  f("friction.bristle_stiffness", r.friction.bristle_stiffness, "N m/rad");
+  f("friction.bristle_damping", r.friction.bristle_damping, "N m s/rad");
+  f("friction.position_amplitude", r.friction.position_amplitude, "");
+  f("friction.position_waves", r.friction.position_waves, "1/rev");
+  f("friction.position_phase", r.friction.position_phase, "rad");
   f("torque_offset", r.torque_offset, "N m");
   f("drive.enabled", r.drive.enabled, "");
   f("drive.inertia", r.drive.inertia, "kg m^2");
@@ -60,6 +70,11 @@ void visit_fields(Rig& r, F&& f) {
   f("drive.damping", r.drive.damping, "N m s/rad");
   f("drive.backlash", r.drive.backlash, "rad");
   f("drive.backlash_smoothing", r.drive.backlash_smoothing, "rad");
+  f("drive.knee_1", r.drive.knee_1, "rad");
+  f("drive.stiffness_2", r.drive.stiffness_2, "N m/rad");
+  f("drive.knee_2", r.drive.knee_2, "rad");
+  f("drive.stiffness_3", r.drive.stiffness_3, "N m/rad");
+  f("drive.one_sided_damping", r.drive.one_sided_damping, "");
   f("hydraulics.enabled", r.hydraulics.enabled, "");
   f("hydraulics.piston_area", r.hydraulics.piston_area, "m^2");
   f("hydraulics.pinion_radius", r.hydraulics.pinion_radius, "m");
@@ -92,6 +107,7 @@ void visit_fields(Rig& r, F&& f) {
   f("seed", r.seed, "");
   f("duration", r.duration, "s");
   f("initial.joint_angle", r.initial.joint_angle, "rad");
+  f("initial.hub_rate", r.initial.hub_rate, "rad/s");
   f("solver.rtol", r.solver.rtol, "");
   f("solver.atol", r.solver.atol, "");
   f("solver.max_steps", r.solver.max_steps, "");
@@ -236,6 +252,7 @@ void validate(const TruthRig& r) {
   non_negative("controller.kd", r.controller.kd);
   non_negative("controller.ki", r.controller.ki);
   non_negative("controller.torque_limit", r.controller.torque_limit);
+  require(std::isfinite(r.controller.feedforward), "controller.feedforward", "finite", r.controller.feedforward);
   positive("trajectory.move_time", r.trajectory.move_time);
   for (const auto& m : r.trajectory.moves) {
     require(std::isfinite(m.target), "trajectory.moves", "finite targets", m.target);
@@ -248,6 +265,13 @@ void validate(const TruthRig& r) {
           ">= friction.coulomb (or 0 for no peak)", r.friction.stiction);
   positive("friction.stribeck_velocity", r.friction.stribeck_velocity);
   positive("friction.smoothing", r.friction.smoothing);
+  positive("friction.stribeck_exponent", r.friction.stribeck_exponent);
+  non_negative("friction.bristle_stiffness", r.friction.bristle_stiffness);
+  non_negative("friction.bristle_damping", r.friction.bristle_damping);
+  require(r.friction.position_amplitude >= 0 && r.friction.position_amplitude < 1, "friction.position_amplitude",
+          "in [0, 1)", r.friction.position_amplitude);
+  require(std::isfinite(r.friction.position_waves), "friction.position_waves", "finite", r.friction.position_waves);
+  require(std::isfinite(r.friction.position_phase), "friction.position_phase", "finite", r.friction.position_phase);
   require(std::isfinite(r.torque_offset), "torque_offset", "finite", r.torque_offset);
   positive("drive.inertia", r.drive.inertia);
   positive("drive.ratio", r.drive.ratio);
@@ -256,6 +280,14 @@ void validate(const TruthRig& r) {
   non_negative("drive.damping", r.drive.damping);
   non_negative("drive.backlash", r.drive.backlash);
   positive("drive.backlash_smoothing", r.drive.backlash_smoothing);
+  non_negative("drive.knee_1", r.drive.knee_1);
+  if (r.drive.knee_1 > 0) positive("drive.stiffness_2", r.drive.stiffness_2);
+  non_negative("drive.knee_2", r.drive.knee_2);
+  if (r.drive.knee_2 > 0) {
+    require(r.drive.knee_1 > 0 && r.drive.knee_2 > r.drive.knee_1, "drive.knee_2", "> drive.knee_1 > 0 (or 0)",
+            r.drive.knee_2);
+    positive("drive.stiffness_3", r.drive.stiffness_3);
+  }
   const auto& h = r.hydraulics;
   positive("hydraulics.piston_area", h.piston_area);
   positive("hydraulics.pinion_radius", h.pinion_radius);
@@ -287,6 +319,7 @@ void validate(const TruthRig& r) {
   require(r.record.decimate >= 1, "record.decimate", ">= 1", r.record.decimate);
   non_negative("duration", r.duration);
   require(std::isfinite(r.initial.joint_angle), "initial.joint_angle", "finite", r.initial.joint_angle);
+  require(std::isfinite(r.initial.hub_rate), "initial.hub_rate", "finite", r.initial.hub_rate);
   positive("solver.rtol", r.solver.rtol);
   positive("solver.atol", r.solver.atol);
   require(r.solver.max_steps >= 1, "solver.max_steps", ">= 1", static_cast<double>(r.solver.max_steps));
@@ -339,6 +372,17 @@ TruthChain make_truth_chain(const TruthRig& r) {
   return ch;
 }
 
+double calc_truth_rigid_inertia(const TruthRig& rig, bool nominal) {
+  TruthRig r = rig;
+  if (nominal) {  // the controller's model: its own hub and payload where given (>= 0)
+    const auto& c = rig.controller;
+    if (c.nominal_hub_inertia >= 0) r.hub_inertia = c.nominal_hub_inertia;
+    if (c.nominal_payload_mass >= 0) r.payload.mass = c.nominal_payload_mass;
+    if (c.nominal_payload_inertia >= 0) r.payload.inertia = c.nominal_payload_inertia;
+  }
+  return make_truth_chain(r).a.sum();  // 1' M(0) 1: every cos(phi_j - phi_k) = 1
+}
+
 Eigen::MatrixXd calc_truth_mass_matrix(const TruthChain& ch, const Eigen::VectorXd& phi) {
   Eigen::MatrixXd M(ch.n, ch.n);
   for (int j = 0; j < ch.n; ++j)
@@ -365,35 +409,81 @@ double calc_ref(const TruthRig::Trajectory& tr, double t) {
   return r0;
 }
 
+// Its rate r' = (r1 - r0) 6u(1 - u)/T (rad/s) and acceleration r'' = (r1 - r0) 6(1 - 2u)/T^2 (rad/s^2);
+// 0 while holding.
+void calc_ref_derivatives(const TruthRig::Trajectory& tr, double t, double& rate, double& accel) {
+  double r0 = 0.0, t0 = 0.0;
+  rate = accel = 0.0;
+  const double T = tr.move_time;
+  for (const auto& mv : tr.moves) {
+    const double u = (t - t0) / T;
+    if (u < 1.0) {
+      rate = (mv.target - r0) * 6.0 * u * (1.0 - u) / T;
+      accel = (mv.target - r0) * 6.0 * (1.0 - 2.0 * u) / (T * T);
+      return;
+    }
+    r0 = mv.target;
+    t0 += T + mv.hold;
+    if (t < t0) return;
+  }
+}
+
 class Plant {
  public:
   explicit Plant(const TruthRig& r)
       : rig_(r), ch_(make_truth_chain(r)), n_(ch_.n), sh_(rig_.drive.enabled ? 2 * n_ : -1),
-        hy_(rig_.hydraulics.enabled ? 2 * n_ + (sh_ >= 0 ? 2 : 0) : -1), M_(n_, n_), llt_(n_), rhs_(n_), acc_(n_),
-        s_(n_), c_(n_) {
+        hy_(rig_.hydraulics.enabled ? 2 * n_ + (sh_ >= 0 ? 2 : 0) : -1),
+        lu_(rig_.friction.bristle_stiffness > 0 ? 2 * n_ + (sh_ >= 0 ? 2 : 0) + (hy_ >= 0 ? 4 : 0) : -1), M_(n_, n_),
+        llt_(n_), rhs_(n_), acc_(n_), s_(n_), c_(n_) {
     const auto& h = rig_.hydraulics;
     D_ = h.piston_area * h.pinion_radius;
     kv_ = h.rated_flow / std::sqrt(h.rated_drop);
   }
 
-  int size() const { return 2 * n_ + (sh_ >= 0 ? 2 : 0) + (hy_ >= 0 ? 4 : 0); }
+  int size() const { return 2 * n_ + (sh_ >= 0 ? 2 : 0) + (hy_ >= 0 ? 4 : 0) + (lu_ >= 0 ? 1 : 0); }
   int segments() const { return n_; }
 
-  // At rest, every beam joint bent by q0, the drive's shaft aligned with the hub (centre of the gap).
-  std::vector<double> initial_state(double q0) const {
+  // Every beam joint bent by q0, the arm turning rigidly at w0 (at rest by default), the drive's shaft
+  // at rest and aligned with the hub (centre of the gap), LuGre's bristles relaxed.
+  std::vector<double> initial_state(double q0, double w0) const {
     std::vector<double> y(size(), 0.0);
     for (int i = 0; i < n_; ++i) y[i] = i * q0;
+    for (int i = 0; i < n_; ++i) y[n_ + i] = w0;
     if (hy_ >= 0) y[hy_ + 2] = y[hy_ + 3] = 0.5 * (rig_.hydraulics.supply_pressure + rig_.hydraulics.tank_pressure) / kMPa;
     return y;
   }
 
-  // Hub friction, N m: -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) (2/pi) atan(w/eps)).
-  double friction(double w) const {
+  // The Stribeck curve with the worn gear's factor, N m:
+  //   g(w, theta) = (1 + a cos(p theta + phase)) (Fc + (Fs - Fc) exp(-|w/vs|^delta)).
+  double stribeck(double w, double theta) const {
     const auto& f = rig_.friction;
     const double fs = f.stiction > 0 ? f.stiction : f.coulomb;
-    const double x = w / f.stribeck_velocity;
-    return -(f.viscous * w + (f.coulomb + (fs - f.coulomb) * std::exp(-x * x)) * M_2_PI * std::atan(w / f.smoothing));
+    const double x = std::fabs(w / f.stribeck_velocity);
+    const double g = f.coulomb + (fs - f.coulomb) * (f.stribeck_exponent == 2.0 ? std::exp(-x * x)
+                                                                                 : std::exp(-std::pow(x, f.stribeck_exponent)));
+    return (1.0 + f.position_amplitude * std::cos(f.position_waves * theta + f.position_phase)) * g;
   }
+
+  // LuGre's bristle rate z' = w - sigma0 |w| z / g(w, theta), rad/s (Canudas de Wit et al. 1995, eq. 2).
+  double bristle_rate(const double* y) const {
+    const double w = y[n_], g = stribeck(w, y[0]);
+    if (g <= 0.0) return w;  // no Coulomb level: the bristles follow the hub and carry no load
+    return w - rig_.friction.bristle_stiffness * std::fabs(w) * y[lu_] / g;
+  }
+
+  // Hub friction, N m. Static: -(b w + g(w, theta) (2/pi) atan(w/eps)); LuGre: -(sigma0 z + sigma1 z' + b w).
+  double friction(const double* y) const {
+    const auto& f = rig_.friction;
+    const double w = y[n_];
+    if (lu_ >= 0) {
+      // Without a Coulomb level the bristles carry nothing (z is kept, the force is the viscous part).
+      if (stribeck(w, y[0]) <= 0.0) return -f.viscous * w;
+      return -(f.bristle_stiffness * y[lu_] + f.bristle_damping * bristle_rate(y) + f.viscous * w);
+    }
+    return -(f.viscous * w + stribeck(w, y[0]) * M_2_PI * std::atan(w / f.smoothing));
+  }
+
+  double bristle(const double* y) const { return lu_ >= 0 ? y[lu_] : 0.0; }
 
   // The drive's dead zone e = g(d) and its slope g'(d): s(d - b) - s(-d - b) with the smooth ramp
   // s(x) = (x + sqrt(x^2 + delta^2))/2 (written without cancellation for x < 0); e = d without backlash.
@@ -413,13 +503,44 @@ class Plant {
     slope = ramp_slope(d - b) + ramp_slope(-d - b);
   }
 
-  // Mesh torque on the hub, N m: k e + k3 e^3 + c de/dt; with backlash the teeth push, never pull.
+  // The multi-slope mesh spring s(e), N m (odd, continuous): slope k to knee_1, stiffness_2 to knee_2,
+  // stiffness_3 beyond; and its potential V(e) = integral of s, J. knee_1 = 0: s = k e.
+  double mesh_spring(double e) const {
+    const auto& dr = rig_.drive;
+    const double a = std::fabs(e);
+    double s = dr.stiffness * std::min(a, dr.knee_1 > 0 ? dr.knee_1 : a);
+    if (dr.knee_1 > 0 && a > dr.knee_1) {
+      const double top = dr.knee_2 > 0 ? std::min(a, dr.knee_2) : a;
+      s += dr.stiffness_2 * (top - dr.knee_1);
+      if (dr.knee_2 > 0 && a > dr.knee_2) s += dr.stiffness_3 * (a - dr.knee_2);
+    }
+    return std::copysign(s, e);
+  }
+  double mesh_potential(double e) const {
+    const auto& dr = rig_.drive;
+    const double a = std::fabs(e);
+    if (dr.knee_1 <= 0 || a <= dr.knee_1) return 0.5 * dr.stiffness * a * a;
+    const double e1 = dr.knee_1, s1 = dr.stiffness * e1;
+    double v = 0.5 * s1 * e1;
+    const double top = dr.knee_2 > 0 ? std::min(a, dr.knee_2) : a;
+    v += s1 * (top - e1) + 0.5 * dr.stiffness_2 * (top - e1) * (top - e1);  // linear from s(e1) with slope k2
+    if (dr.knee_2 > 0 && a > dr.knee_2) {
+      const double s2 = s1 + dr.stiffness_2 * (dr.knee_2 - e1), x = a - dr.knee_2;
+      v += s2 * x + 0.5 * dr.stiffness_3 * x * x;
+    }
+    return v;
+  }
+
+  // Mesh torque on the hub, N m: s(e) + k3 e^3 + c de/dt; with backlash the teeth push, never pull; with
+  // one-sided damping c acts only while the teeth close (e de/dt > 0).
   double mesh_torque(const double* y) const {
     const auto& dr = rig_.drive;
     const double d = y[sh_] / dr.ratio - y[0], dd = y[sh_ + 1] / dr.ratio - y[n_];
     double e, slope;
     dead_zone(d, e, slope);
-    const double t = (dr.stiffness + dr.cubic_stiffness * e * e) * e + dr.damping * slope * dd;
+    const double de = slope * dd;
+    const double damping = dr.one_sided_damping && e * de <= 0.0 ? 0.0 : dr.damping * de;
+    const double t = mesh_spring(e) + dr.cubic_stiffness * e * e * e + damping;
     if (dr.backlash == 0.0) return t;
     return e > 0 ? std::max(t, 0.0) : std::min(t, 0.0);
   }
@@ -478,8 +599,9 @@ class Plant {
       rhs_[i] += m;
       rhs_[i - 1] -= m;
     }
-    // Hub (on segment 0): actuator, friction, the constant load.
-    rhs_[0] += actuator_torque(y) + friction(w[0]) - rig_.torque_offset;
+    // Hub (on segment 0): actuator, friction, the constant load; LuGre's bristles.
+    rhs_[0] += actuator_torque(y) + friction(y) - rig_.torque_offset;
+    if (lu_ >= 0) ydot[lu_] = bristle_rate(y);
     if (sh_ >= 0) {  // J_a theta_a'' = tau_pinion - tau_s/n
       ydot[sh_] = y[sh_ + 1];
       ydot[sh_ + 1] = (pinion_torque(y) - mesh_torque(y) / rig_.drive.ratio) / rig_.drive.inertia;
@@ -530,8 +652,7 @@ class Plant {
       const auto& dr = rig_.drive;
       double ez, slope;
       dead_zone(twist(y), ez, slope);
-      e += 0.5 * dr.inertia * y[sh_ + 1] * y[sh_ + 1] + 0.5 * dr.stiffness * ez * ez +
-           0.25 * dr.cubic_stiffness * ez * ez * ez * ez;
+      e += 0.5 * dr.inertia * y[sh_ + 1] * y[sh_ + 1] + mesh_potential(ez) + 0.25 * dr.cubic_stiffness * ez * ez * ez * ez;
     }
     return e;
   }
@@ -543,7 +664,7 @@ class Plant {
   const TruthRig& rig_;
   TruthChain ch_;
   int n_;
-  int sh_, hy_;                       // first state of the drive's shaft, of the hydraulics; -1 = off
+  int sh_, hy_, lu_;                  // first state of the drive's shaft, of the hydraulics, LuGre's z; -1 = off
   double D_ = 0.0, kv_ = 0.0;         // m^3/rad, m^3/(s Pa^1/2)
   Eigen::MatrixXd M_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
@@ -686,7 +807,7 @@ TruthRun run_truth(const TruthRig& rig) {
   Plant plant(rig);
   Cvode cvode(plant, rig.solver);
   double* y = cvode.state();
-  const auto y0 = plant.initial_state(rig.initial.joint_angle);
+  const auto y0 = plant.initial_state(rig.initial.joint_angle, rig.initial.hub_rate);
   std::copy(y0.begin(), y0.end(), y);
   const int n = plant.segments();
 
@@ -699,6 +820,7 @@ TruthRun run_truth(const TruthRig& rig) {
   TruthRun run;
   TruthTrace& tr = run.trace;
   const auto& ctl = rig.controller;
+  const double j_nominal = calc_truth_rigid_inertia(rig, true);  // the feed-forward's model, kg m^2
   double integral = 0.0, held = NAN;
   for (long k = 0; k <= last; ++k) {
     const double t = k * T;
@@ -709,7 +831,10 @@ TruthRun run_truth(const TruthRig& rig) {
     // PID, zero-order hold, clamping anti-windup (the integral freezes while saturated in the error's direction).
     const double r = calc_ref(rig.trajectory, t);
     const double e = r - seen_angle;
-    const double raw = ctl.kp * e + ctl.ki * integral - ctl.kd * seen_rate;
+    double r_rate = 0.0, r_accel = 0.0;
+    if (ctl.feedforward != 0.0) calc_ref_derivatives(rig.trajectory, t, r_rate, r_accel);
+    const double raw = ctl.kp * e + ctl.ki * integral - ctl.kd * seen_rate +
+                       ctl.feedforward * (j_nominal * r_accel + ctl.kd * r_rate);
     const double lim = ctl.torque_limit > 0 ? ctl.torque_limit : INFINITY;
     plant.tau = std::clamp(raw, -lim, lim);
     if (!(raw != plant.tau && e * raw > 0)) integral += e * T;
@@ -734,6 +859,8 @@ TruthRun run_truth(const TruthRig& rig) {
     tr.twist.push_back(plant.twist(y));
     tr.twist_rate.push_back(plant.twist_rate(y));
     tr.energy.push_back(plant.energy(y));
+    tr.friction.push_back(plant.friction(y));
+    tr.bristle.push_back(plant.bristle(y));
     tr.seen_angle.push_back(seen_angle);
     tr.seen_rate.push_back(seen_rate);
 

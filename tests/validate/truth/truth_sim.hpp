@@ -58,31 +58,50 @@ struct TruthRig {
   } payload;
   // PID on the measured hub angle, derivative on the measured rate, zero-order hold:
   //   tau = sat(kp (r - theta_m) + ki I - kd omega_m),  I += (r - theta_m) T unless saturated that way.
+  // Feed-forward with the controller's own (nominal) model: + f (J_nom r'' + kd r'), J_nom the straight
+  // arm's inertia about the hub (1' M(0) 1) with the nominal hub and payload below (the drive's shaft not
+  // included), so a plant whose payload differs is not tracked exactly (README.md, "Controller").
   struct Controller {
     double rate = 1000.0;           // Hz
     double kp = 1.0e5;              // N m/rad
     double kd = 3.0e4;              // N m s/rad
     double ki = 0.0;                // N m/(rad s)
     double torque_limit = 0.0;      // |tau| bound, N m; 0 = none
+    double feedforward = 0.0;       // gain f; 0 = no feed-forward
+    double nominal_hub_inertia = -1.0;      // kg m^2 in J_nom; < 0 = the plant's hub_inertia
+    double nominal_payload_mass = -1.0;     // kg; < 0 = the plant's payload.mass
+    double nominal_payload_inertia = -1.0;  // kg m^2; < 0 = the plant's payload.inertia
   } controller;
   struct Trajectory {
     double move_time = 3.0;         // s, every move
     std::vector<TruthMove> moves = {{0.5, 7.0}, {0.0, 45.0}};  // from r = 0 at t = 0
   } trajectory;
-  // Hub friction, tau_f = -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) (2/pi) atan(w/eps)).
+  // Hub friction. The Stribeck curve g(w, theta) = P(theta) (Fc + (Fs - Fc) exp(-|w/vs|^delta)), with the
+  // worn-gear factor P(theta) = 1 + a cos(p theta + phase). Static law (bristle_stiffness 0):
+  //   tau_f = -(b w + g(w, theta) (2/pi) atan(w/eps));
+  // LuGre (Canudas de Wit et al. 1995, bristle_stiffness sigma0 > 0), bristle deflection z (rad):
+  //   z' = w - sigma0 |w| z / g(w, theta),   tau_f = -(sigma0 z + sigma1 z' + b w).
   struct Friction {
     double viscous = 0.0;           // b, N m s/rad
     double coulomb = 0.0;           // Fc, N m
     double stiction = 0.0;          // Fs >= Fc, the breakaway (Stribeck peak), N m; 0 = Fc (no peak)
     double stribeck_velocity = 0.01;  // vs, rad/s
-    double smoothing = 1e-4;        // eps of the atan regularisation, rad/s
+    double stribeck_exponent = 2.0; // delta of exp(-|w/vs|^delta)
+    double smoothing = 1e-4;        // eps of the atan regularisation, rad/s (static law only)
+    double bristle_stiffness = 0.0; // sigma0, N m/rad; > 0 = LuGre
+    double bristle_damping = 0.0;   // sigma1, N m s/rad (LuGre)
+    double position_amplitude = 0.0;  // a in P(theta), in [0, 1)
+    double position_waves = 1.0;    // p: waves of P per hub revolution
+    double position_phase = 0.0;    // rad
   } friction;
   // A constant signed load on the hub, N m: the hub gets tau_actuator + tau_f - torque_offset.
   double torque_offset = 0.0;
   // Drive train between actuator and hub (off: the controller's torque acts on the hub). The motor
   // torque tau/n acts on the actuator shaft (angle theta_a, inertia J_a); the mesh torque on the hub:
-  //   d = theta_a/n - theta_h,  e = g(d) (the dead zone),  tau_s = k e + k3 e^3 + c de/dt,
+  //   d = theta_a/n - theta_h,  e = g(d) (the dead zone),  tau_s = s(e) + k3 e^3 + c de/dt,
   //   J_a theta_a'' = (tau - tau_s)/n,  the hub gets tau_s; with backlash the teeth never pull.
+  // s(e) is the multi-slope mesh: slope k up to |e| = knee_1, stiffness_2 up to knee_2, stiffness_3
+  // beyond (odd, continuous); knee_1 = 0: s = k e. one_sided_damping: c acts only while |e| grows.
   struct Drive {
     bool enabled = false;
     double inertia = 5.0;           // J_a on the shaft, kg m^2
@@ -93,6 +112,11 @@ struct TruthRig {
     double backlash = 0.0;          // total gap 2b, rad (at the hub)
     // delta of the dead zone g(d) = s(d - b) - s(-d - b), s(x) = (x + sqrt(x^2 + delta^2))/2, rad
     double backlash_smoothing = 1e-6;
+    double knee_1 = 0.0;            // rad; 0 = linear mesh
+    double stiffness_2 = 0.0;       // N m/rad, slope beyond knee_1
+    double knee_2 = 0.0;            // rad (> knee_1); 0 = two slopes
+    double stiffness_3 = 0.0;       // N m/rad, slope beyond knee_2
+    bool one_sided_damping = false; // the mesh damps only while the teeth close (e de/dt > 0)
   } drive;
   // Hydraulic rotary actuator (rack and pinion) behind a servo valve, off by default; its pinion is on
   // the hub (or on the drive's shaft). Torque on the pinion D (p_a - p_b), D = piston_area x pinion_radius.
@@ -141,6 +165,7 @@ struct TruthRig {
   double duration = 0.0;            // s; 0 = the end of the last hold
   struct Initial {
     double joint_angle = 0.0;       // every beam joint starts bent by this, at rest, hub at 0, rad
+    double hub_rate = 0.0;          // the hub and arm start turning rigidly at this rate (the drive's shaft at rest), rad/s
   } initial;
   struct Solver {
     double rtol = 1e-9;             // CVODE relative tolerance
@@ -159,6 +184,9 @@ struct TruthChain {
 };
 TruthChain make_truth_chain(const TruthRig& rig);
 Eigen::MatrixXd calc_truth_mass_matrix(const TruthChain& chain, const Eigen::VectorXd& phi);
+// The straight arm's inertia about the hub, 1' M(0) 1, kg m^2; `nominal`: with the controller's nominal
+// hub and payload (what its feed-forward uses).
+double calc_truth_rigid_inertia(const TruthRig& rig, bool nominal = false);
 
 // The true signals at every controller sample (before that sample's torque acts), for tests.
 struct TruthTrace {
@@ -172,7 +200,9 @@ struct TruthTrace {
   std::vector<double> root_joint;     // q_1 = phi_1 - phi_0, rad (0 when N = 1)
   std::vector<double> twist;          // drive twist d = theta_a/n - theta_h, rad (0 without a drive)
   std::vector<double> twist_rate;     // its rate, rad/s
-  std::vector<double> energy;         // kinetic + elastic (joints, drive mesh without backlash), J
+  std::vector<double> energy;         // kinetic + elastic (joints, drive mesh), J
+  std::vector<double> friction;       // the friction torque on the hub, N m
+  std::vector<double> bristle;        // LuGre's z, rad (0 without)
   std::vector<double> seen_angle;     // what the controller used, rad
   std::vector<double> seen_rate;      // rad/s
   std::vector<double> pressure_a, pressure_b;  // chamber pressures, Pa (empty without hydraulics)
