@@ -439,7 +439,8 @@ void eval_mesh_spring(const TruthArmJoint::Drive& d, double x, double& torque, d
 }
 
 // The mesh torque on the link at twist d and its rate: without backlash k(d) + c d'; with a gap 2b the
-// teeth touch past |d| = b, the damper acts only in contact, and the teeth never pull.
+// teeth touch past |d| = b and the damper is one-sided: it acts only in contact and only while the teeth
+// close (penetration rate x' = d' sign(d) > 0), so the teeth never pull.
 double eval_mesh(const TruthArmJoint::Drive& dr, double d, double dd, double* energy = nullptr) {
   const double b = dr.backlash / 2.0, s = d < 0 ? -1.0 : 1.0;
   const double x = std::abs(d) - b;
@@ -448,7 +449,7 @@ double eval_mesh(const TruthArmJoint::Drive& dr, double d, double dd, double* en
   if (energy) *energy = e;
   if (b == 0.0) return s * spring + dr.damping * dd;
   if (x <= 0) return 0.0;
-  return s * std::max(0.0, spring + dr.damping * dd * s);
+  return s * (spring + dr.damping * std::max(dd * s, 0.0));
 }
 
 // p(x): the position-dependent friction level.

@@ -42,7 +42,7 @@ struct TruthArmJoint {
     double stiffness2 = 0.0;      // k2, N m/rad
     double knee2 = 0.0;           // e2 > e1, rad: where the third slope starts (0 = two slopes)
     double stiffness3 = 0.0;      // k3, N m/rad
-    double damping = 20.0;        // c, N m s/rad (with backlash: only in contact, the teeth never pull)
+    double damping = 20.0;        // c, N m s/rad (with backlash: only in contact, only while the teeth close)
     double backlash = 0.0;        // total gap 2b, rad at the joint
   } drive;
   // PD(+I) on the sensed angle (the motor side, in joint units; `link_side`: the joint's own angle) and
