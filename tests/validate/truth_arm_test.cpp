@@ -122,6 +122,32 @@ TEST(TruthArm, TwoLinkArmAgreesWithFlexfarmsArmModel) {
   EXPECT_GT(lag, 1e-3);
 }
 
+// A compliant elbow drive (the motor's own state and a spring-damper mesh) against flexfarm's `drive:`
+// (a rotor body and a passive twist joint): the motor-side angles and the torques agree, and the link lags.
+TEST(TruthArm, CompliantDriveAgreesWithFlexfarmsDriveTrain) {
+  TruthArm a = make_suite_arm(2);
+  a.duration = 2.0;
+  auto& d = a.joint[1].drive;
+  d.compliant = true;
+  d.stiffness = 3000.0;
+  d.damping = 3.0;
+  const TruthArmRun truth = run_truth_arm(a);
+  const ArmModel m = load_arm_with(data("arm2.yaml"), {"simulation.duration=2.0", "simulation.rtol=1e-10",
+                                                       "bodies[link2].joint.armature=0", "joints.j2.drive.stiffness=3000",
+                                                       "joints.j2.drive.damping=3", "joints.j2.drive.rotor_inertia=1e-5",
+                                                       "joints.j2.drive.ratio=100"});
+  const Record ff = make_arm_record(m, {}, 1);
+  for (const char* joint : {"j1", "j2"}) {
+    const std::string j = joint;
+    // Measured: 5e-8 rad, 1e-5 N m at worst.
+    EXPECT_LT(max_abs_diff(ff.at(j + ".angle"), truth.record.at(j + ".angle")), 1e-6) << j;
+    EXPECT_LT(max_abs_diff(ff.at(j + ".torque"), truth.record.at(j + ".torque")), 1e-4) << j;
+  }
+  double twist = 0.0;
+  for (std::size_t k = 0; k < truth.trace.t.size(); ++k) twist = std::max(twist, std::abs(truth.trace.motor[k][1] - truth.trace.q[k][1]));
+  EXPECT_GT(twist, 1e-3);  // rad (3.3e-3): the mesh carries the elbow's gravity torque and the move's
+}
+
 // The 3- and 6-joint suite arms agree with their nominal models too (the mapping of README.md; 3e-8 rad).
 TEST(TruthArm, SuiteArmsAgreeWithTheirNominalModels) {
   for (int n : {3, 6}) {
