@@ -6,10 +6,14 @@
 // or lighter payload the controller does not know, an angle logged late, an encoder quantised in the
 // loop), random moves, noise on every channel at random levels. The nominal flexfarm models are
 // tests/data/truth_arm/arm<n>.yaml; diagnose_arm runs with its defaults on each record. Scores:
-//   first     the ranking's first is one of the hidden effects (records with an effect)
-//   set       the first k of the ranking are the k hidden effects
-//   verdict   the verdict, split on " + ", is the hidden set ("none" on a clean record)
+//   first     the ranking's first is one of the hidden effects (records with a visible effect)
+//   set       the first k of the ranking are the k visible hidden effects
+//   verdict   the verdict, split on " + ", is the hidden set ("none" on a clean record; an invisible
+//             effect may be named or not)
 //   clean     a clean record given an effect or "unexplained"
+// An effect is drawn again (up to 8 times) until it is visible (is_visible: it changes the noise-free
+// record by the noise on some channel, in a run a rig could make); one no draw made visible is marked
+// "(invisible)" in the table and need not be found.
 // ctest runs two short records over a few candidates with robust assertions only; the whole suite, with issue 33's
 // targets (>= 90 % first, >= 85 % right verdict, <= 1 in 20 clean records given an effect or
 // unexplained), is
@@ -49,6 +53,7 @@ struct Hidden {
   std::string kind;                     // the truth's form, e.g. "lugre@j2"
   std::vector<std::string> fields;      // KEY=VALUE on the truth arm
   std::set<std::string> accepted;       // arm_diagnose candidate names (validate/arm_diagnose.cpp)
+  bool visible = true;                  // is_visible: no draw of 8 was, then it need not be found
 };
 
 struct Case {
@@ -97,7 +102,7 @@ Hidden draw_effect(std::mt19937_64& rng, const std::string& kind, int j, const T
       h.fields.push_back(p + "friction.position_phase=" + num(uniform(rng, 0.0, 2.0 * M_PI)));
     }
   } else if (kind == "multislope_mesh" || kind == "backlash") {
-    const double k = c.kp * log_uniform(rng, 20.0, 300.0);
+    const double k = c.kp * log_uniform(rng, 3.0, 60.0);
     h.fields = {p + "drive.compliant=true", p + "drive.stiffness=" + num(k),
                 p + "drive.damping=" + num(k * log_uniform(rng, 2e-4, 2e-3))};
     if (kind == "multislope_mesh") {
@@ -105,7 +110,7 @@ Hidden draw_effect(std::mt19937_64& rng, const std::string& kind, int j, const T
       h.fields.push_back(p + "drive.stiffness2=" + num(k * uniform(rng, 2.0, 6.0)));
       h.accepted = {"drive_compliance@" + J, "backlash@" + J};
     } else {
-      h.fields.push_back(p + "drive.backlash=" + num(log_uniform(rng, 5e-4, 5e-3)));
+      h.fields.push_back(p + "drive.backlash=" + num(log_uniform(rng, 1e-3, 8e-3)));
       h.accepted = {"backlash@" + J};
     }
   } else if (kind == "torque_offset") {
@@ -126,6 +131,46 @@ Hidden draw_effect(std::mt19937_64& rng, const std::string& kind, int j, const T
     h.accepted = {"sensor_quantization@" + J};
   }
   return h;
+}
+
+void apply_fields(TruthArm& a, const std::vector<std::string>& fields) {
+  for (const auto& f : fields) {
+    const auto eq = f.find('=');
+    truth::set_truth_arm_field(a, f.substr(0, eq), f.substr(eq + 1));
+  }
+}
+
+// Whether an effect can be found at all: alone on the noise-free arm it changes some joint's angle or
+// torque column by at least that channel's noise (RMS), and the run is one a rig could make (it does not
+// fail, every torque within ten times the clean run's peak). The criteria know nothing of diagnose.
+bool is_visible(const TruthArm& noise_free, const Record& clean, const Hidden& h, double sigma_angle,
+                const std::vector<double>& sigma_torque) {
+  TruthArm t = noise_free;
+  apply_fields(t, h.fields);
+  Record r;
+  try {
+    r = truth::run_truth_arm(t).record;
+  } catch (const std::runtime_error&) {
+    return false;
+  }
+  bool seen = false;
+  for (int j = 0; j < noise_free.joints; ++j) {
+    const std::string J = truth::truth_arm_joint_name(j);
+    const std::vector<double>&qa = r.at(J + ".angle"), &qc = clean.at(J + ".angle"), &ta = r.at(J + ".torque"),
+                               &tc = clean.at(J + ".torque");
+    double da = 0.0, dt = 0.0, peak = 0.0, peak_clean = 0.0;
+    for (std::size_t k = 0; k < qa.size(); ++k) {
+      if (!std::isfinite(qa[k]) || !std::isfinite(ta[k])) return false;
+      da += (qa[k] - qc[k]) * (qa[k] - qc[k]);
+      dt += (ta[k] - tc[k]) * (ta[k] - tc[k]);
+      peak = std::max(peak, std::abs(ta[k]));
+      peak_clean = std::max(peak_clean, std::abs(tc[k]));
+    }
+    if (peak > 10.0 * peak_clean) return false;
+    const double n = static_cast<double>(qa.size());
+    seen |= std::sqrt(da / n) >= sigma_angle || std::sqrt(dt / n) >= sigma_torque[static_cast<std::size_t>(j)];
+  }
+  return seen;
 }
 
 // Record i: the arm (2, 3, 6 joints in turn, 6 less often), the move, the noise, 0-2 effects.
@@ -165,6 +210,9 @@ Case draw_case(int i, bool fast) {
   }
   // Realistic sensors on every record: angle 2e-5-3e-4 rad, rate 10-30x that per rad, torque 0.3-3 % of its RMS.
   const double sa = log_uniform(rng, 2e-5, 3e-4), sr = sa * uniform(rng, 10.0, 30.0), st = log_uniform(rng, 0.003, 0.03);
+  const TruthArm noise_free = a;
+  std::vector<double> sigma_torque;
+  for (double x : tau) sigma_torque.push_back(st * x);
   for (int j = 0; j < c.joints; ++j) {
     auto& s = a.joint[static_cast<std::size_t>(j)].sensors;
     s.angle.noise = sa;
@@ -172,7 +220,8 @@ Case draw_case(int i, bool fast) {
     s.torque_noise = st * tau[static_cast<std::size_t>(j)];
   }
   a.seed = kSuiteSeed + static_cast<std::uint64_t>(i);
-  // 0, 1 or 2 hidden effects (a quarter clean, half one, a quarter two), at distinct joints.
+  // 0, 1 or 2 hidden effects (a quarter clean, half one, a quarter two), at distinct joints; each drawn
+  // again (up to 8 times) until it is visible.
   const double u = uniform(rng, 0.0, 1.0);
   const int count = fast ? (i % 2) : (u < 0.25 ? 0 : u < 0.75 ? 1 : 2);
   std::vector<int> joints(static_cast<std::size_t>(c.joints));
@@ -185,11 +234,13 @@ Case draw_case(int i, bool fast) {
     payload |= kind == "payload";
     if (fast) kind = "torque_offset";
     const int j = joints[static_cast<std::size_t>(e)];
-    c.hidden.push_back(draw_effect(rng, kind, j, a, tau[static_cast<std::size_t>(j)], w[static_cast<std::size_t>(j)]));
-    for (const auto& f : c.hidden.back().fields) {
-      const auto eq = f.find('=');
-      truth::set_truth_arm_field(a, f.substr(0, eq), f.substr(eq + 1));
+    Hidden h;
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      h = draw_effect(rng, kind, j, a, tau[static_cast<std::size_t>(j)], w[static_cast<std::size_t>(j)]);
+      if ((h.visible = is_visible(noise_free, clean.record, h, sa, sigma_torque))) break;
     }
+    apply_fields(a, h.fields);
+    c.hidden.push_back(h);
   }
   return c;
 }
@@ -204,17 +255,21 @@ std::vector<std::string> verdict_effects(const std::string& v) {
   return out;
 }
 
-// Whether `names` are exactly the hidden effects: each hidden effect matched by one name, none left over.
+// Whether `names` are the hidden effects: each visible one matched by one name, and any name left over
+// matching an invisible one (which may or may not be found).
 bool is_hidden_set(const std::vector<std::string>& names, const std::vector<Hidden>& hidden) {
-  if (names.size() != hidden.size()) return false;
   std::vector<bool> used(names.size(), false);
   for (const Hidden& h : hidden) {
     bool found = false;
     for (std::size_t k = 0; k < names.size() && !found; ++k)
       if (!used[k] && h.accepted.count(names[k])) used[k] = found = true;
-    if (!found) return false;
+    if (!found && h.visible) return false;
   }
-  return true;
+  return std::find(used.begin(), used.end(), false) == used.end();
+}
+
+int count_visible(const Case& c) {
+  return static_cast<int>(std::count_if(c.hidden.begin(), c.hidden.end(), [](const Hidden& h) { return h.visible; }));
 }
 
 struct Outcome {
@@ -237,11 +292,13 @@ Outcome run_case(const Case& c, bool print, const std::vector<std::string>& only
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   o.verdict = d.verdict;
   o.first = d.ranking.empty() ? "-" : d.ranking.front().effect;
-  for (const Hidden& h : c.hidden) o.first_right |= !d.ranking.empty() && h.accepted.count(d.ranking.front().effect) > 0;
+  for (const Hidden& h : c.hidden)
+    o.first_right |= h.visible && !d.ranking.empty() && h.accepted.count(d.ranking.front().effect) > 0;
   std::vector<std::string> top;
-  for (std::size_t k = 0; k < std::min(c.hidden.size(), d.ranking.size()); ++k) top.push_back(d.ranking[k].effect);
-  o.set_right = !c.hidden.empty() && is_hidden_set(top, c.hidden);
-  o.verdict_right = c.hidden.empty() ? d.verdict == "none" : is_hidden_set(verdict_effects(d.verdict), c.hidden);
+  for (std::size_t k = 0; k < std::min(static_cast<std::size_t>(count_visible(c)), d.ranking.size()); ++k)
+    top.push_back(d.ranking[k].effect);
+  o.set_right = count_visible(c) > 0 && is_hidden_set(top, c.hidden);
+  o.verdict_right = d.verdict != "unexplained" && is_hidden_set(verdict_effects(d.verdict), c.hidden);
   if (print) std::printf("%s", format_diagnosis_text(d).c_str());
   return o;
 }
@@ -249,7 +306,7 @@ Outcome run_case(const Case& c, bool print, const std::vector<std::string>& only
 std::string hidden_text(const Case& c) {
   if (c.hidden.empty()) return "none";
   std::string s;
-  for (const Hidden& h : c.hidden) s += (s.empty() ? "" : " + ") + h.kind;
+  for (const Hidden& h : c.hidden) s += (s.empty() ? "" : " + ") + (h.visible ? "" : std::string("(invisible) ")) + h.kind;
   return s;
 }
 
@@ -321,15 +378,16 @@ TEST(ArmDiagnosisAcceptance, HiddenEffectsAreFoundOnTruthArmRecords) {
       ++cleans;
       clean_unexplained += o.verdict == "unexplained";
       clean_effect += !verdict_effects(o.verdict).empty();
-    } else {
+    } else if (count_visible(c) > 0) {
       ++effects;
       first += o.first_right;
       set += o.set_right;
     }
     char row[512];
+    const bool scored = count_visible(c) > 0;
     std::snprintf(row, sizeof row, "| %d | %d | %s | %s | %s | %s | %s | %s | %.0f |\n", i, c.joints, hidden_text(c).c_str(),
-                  o.first.c_str(), o.verdict.c_str(), c.hidden.empty() ? "" : (o.first_right ? "yes" : "no"),
-                  c.hidden.empty() ? "" : (o.set_right ? "yes" : "no"), o.verdict_right ? "yes" : "no", o.seconds);
+                  o.first.c_str(), o.verdict.c_str(), scored ? (o.first_right ? "yes" : "no") : "",
+                  scored ? (o.set_right ? "yes" : "no") : "", o.verdict_right ? "yes" : "no", o.seconds);
     table << row;
     // Robust in every mode: a clean record is never given two effects, a diagnosis never fails outright.
     EXPECT_LE(verdict_effects(o.verdict).size(), c.hidden.size() + 1) << "record " << i;
