@@ -313,16 +313,16 @@ std::string hidden_text(const Case& c) {
 // The nominal model replays a clean, noise-free record of each suite arm: the mapping of
 // tests/data/truth_arm/README.md holds on the suite's own moves (else every verdict would be wrong).
 TEST(ArmDiagnosisAcceptance, NominalModelsExplainCleanTruthRecords) {
-  for (int i : {0, 1, 3}) {  // a 2-, a 3- and a 6-joint arm
-    Case c = draw_case(i, false);
-    c.arm = truth::make_suite_arm(c.joints);
-    c.arm.duration = 1.2;
-    const Record r = truth::run_truth_arm(c.arm).record;
-    const ArmModel m = load_arm_with(std::string(FLEXFARM_SOURCE_DIR) + "/tests/data/truth_arm/arm" + std::to_string(c.joints) + ".yaml",
+  for (int joints : {2, 3, 6}) {
+    TruthArm a = truth::make_suite_arm(joints);
+    a.duration = 1.2;
+    const Record r = truth::run_truth_arm(a).record;
+    const ArmModel m = load_arm_with(std::string(FLEXFARM_SOURCE_DIR) + "/tests/data/truth_arm/arm" + std::to_string(joints) + ".yaml",
                                      {"simulation.duration=1.2"});
     check_arm_record(r, m);
     const std::map<std::string, Fit> fits = calc_arm_record_fits(m, r);
-    for (const auto& [column, fit] : fits) EXPECT_GT(fit.percent, 99.9) << c.joints << " joints, " << column;
+    EXPECT_EQ(fits.size(), 2u * static_cast<std::size_t>(joints));  // every angle and torque scored
+    for (const auto& [column, fit] : fits) EXPECT_GT(fit.percent, 99.99) << joints << " joints, " << column;
   }
 }
 
