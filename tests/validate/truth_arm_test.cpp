@@ -228,6 +228,40 @@ TEST(TruthArm, HiddenEffectsObeyTheirAnalyticFacts) {
   for (std::size_t k = 7; k < r.record.t.size(); ++k) EXPECT_DOUBLE_EQ(r.record.at("j2.angle")[k], r.trace.q[k - 7][1]);
 }
 
+// One link in a horizontal plane driven by a constant torque tau0 against its friction runs up to the
+// speed where tau0 = b v + g(v) (2/pi) atan(v/eps) (static law), or tau0 = b v + g(v) (LuGre's steady
+// state: z = g(v)/sigma0), g(v) = Fc + (Fs - Fc) exp(-|v/vs|^delta): the exponent is the truth's own.
+TEST(TruthArm, FrictionLawsReachTheirSteadySlidingSpeed) {
+  for (const bool lugre : {false, true}) {
+    TruthArm a;
+    a.joints = 1;
+    a.gravity = 0.0;
+    a.payload = {0.0, 0.0};
+    auto& j = a.joint[0];
+    j.link = {1.0, 1.0, 0.5, 1.0 / 12.0};
+    j.controller.kp = j.controller.kd = j.controller.gravity_compensation = 0.0;
+    j.torque_offset = -3.0;  // the joint gets tau - offset = +3 N m
+    auto& f = j.friction;
+    f.viscous = 2.0;
+    f.coulomb = 1.0;
+    f.stiction = 2.0;
+    f.stribeck_velocity = 0.8;
+    f.stribeck_exponent = 1.0;
+    f.lugre = lugre;
+    a.trajectory.start = {0.0};
+    a.duration = 5.0;
+    const TruthArmRun run = run_truth_arm(a);
+    auto residual = [&](double v) {
+      const double g = f.coulomb + (f.stiction - f.coulomb) * std::exp(-std::pow(v / f.stribeck_velocity, f.stribeck_exponent));
+      return 3.0 - f.viscous * v - g * (lugre ? 1.0 : (2.0 / M_PI) * std::atan(v / f.smoothing));
+    };
+    double lo = 0.01, hi = 10.0;
+    for (int i = 0; i < 200; ++i) (residual(0.5 * (lo + hi)) > 0 ? lo : hi) = 0.5 * (lo + hi);
+    EXPECT_NEAR(run.trace.qd.back()[0], 0.5 * (lo + hi), 1e-6) << (lugre ? "LuGre" : "static");
+    EXPECT_GT(0.5 * (lo + hi), 0.5);  // where the Stribeck term still counts (exp(-v/vs) > 0.2)
+  }
+}
+
 TEST(TruthArm, FieldsAreNamedAndCheckedByKey) {
   TruthArm a;
   set_truth_arm_field(a, "j3.friction.coulomb", "2.5");
