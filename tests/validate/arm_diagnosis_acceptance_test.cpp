@@ -143,10 +143,10 @@ void apply_fields(TruthArm& a, const std::vector<std::string>& fields) {
 // Whether an effect can be found at all: alone on the noise-free arm it changes some joint's angle or
 // torque column by at least that channel's noise (RMS), and the run is one a rig could make (it does not
 // fail, every torque within ten times the clean run's peak). The criteria know nothing of diagnose.
-bool is_visible(const TruthArm& noise_free, const Record& clean, const Hidden& h, double sigma_angle,
+bool is_visible(const TruthArm& noise_free, const Record& clean, const std::vector<std::string>& fields, double sigma_angle,
                 const std::vector<double>& sigma_torque) {
   TruthArm t = noise_free;
-  apply_fields(t, h.fields);
+  apply_fields(t, fields);
   Record r;
   try {
     r = truth::run_truth_arm(t).record;
@@ -237,7 +237,21 @@ Case draw_case(int i, bool fast) {
     Hidden h;
     for (int attempt = 0; attempt < 8; ++attempt) {
       h = draw_effect(rng, kind, j, a, tau[static_cast<std::size_t>(j)], w[static_cast<std::size_t>(j)]);
-      if ((h.visible = is_visible(noise_free, clean.record, h, sa, sigma_torque))) break;
+      if ((h.visible = is_visible(noise_free, clean.record, h.fields, sa, sigma_torque))) break;
+    }
+    // Free play that the load keeps closed (a joint whose gravity torque never changes sign) shows only
+    // as its drive's compliance: when the play itself changes nothing the drive without it would not,
+    // drive_compliance@J is right too.
+    if (h.visible && kind == "backlash") {
+      std::vector<std::string> drive = h.fields;
+      const std::string play = drive.back();  // ...drive.backlash=VALUE, drawn last
+      drive.pop_back();
+      TruthArm without = noise_free;
+      apply_fields(without, drive);
+      if (!is_visible(without, truth::run_truth_arm(without).record, {play}, sa, sigma_torque)) {
+        h.accepted.insert("drive_compliance@" + truth::truth_arm_joint_name(j));
+        h.kind += " (play closed by the load)";
+      }
     }
     apply_fields(a, h.fields);
     c.hidden.push_back(h);
