@@ -12,10 +12,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
+
+#include "common/text.hpp"
 
 namespace ff::truth {
 
@@ -137,27 +140,9 @@ void visit_fields(Arm& a, F&& f) {
 }
 
 double parse_double(const std::string& key, const std::string& s) {
-  std::size_t used = 0;
-  double x = 0.0;
-  try {
-    x = std::stod(s, &used);
-  } catch (const std::exception&) {
-    bad_value(key, s, "a number");
-  }
-  if (used != s.size() || !std::isfinite(x)) bad_value(key, s, "a finite number");
-  return x;
-}
-
-long long parse_integer(const std::string& key, const std::string& s) {
-  std::size_t used = 0;
-  long long x = 0;
-  try {
-    x = std::stoll(s, &used);
-  } catch (const std::exception&) {
-    bad_value(key, s, "a whole number");
-  }
-  if (used != s.size()) bad_value(key, s, "a whole number");
-  return x;
+  const std::optional<double> x = parse_finite(s);
+  if (!x) bad_value(key, s, "a finite number");
+  return *x;
 }
 
 std::vector<double> parse_list(const std::string& key, const std::string& s) {
@@ -189,14 +174,10 @@ void parse_into(const std::string& key, const std::string& s, T& x) {
     if (s == "true" || s == "1") x = true;
     else if (s == "false" || s == "0") x = false;
     else bad_value(key, s, "true, false, 1 or 0");
-  } else if constexpr (std::is_same_v<T, std::uint64_t>) {
-    if (s.empty() || s[0] == '-') bad_value(key, s, "a whole number >= 0");
-    x = static_cast<std::uint64_t>(parse_integer(key, s));
   } else if constexpr (std::is_integral_v<T>) {
-    const long long v = parse_integer(key, s);
-    if (v < static_cast<long long>(std::numeric_limits<T>::min()) || v > static_cast<long long>(std::numeric_limits<T>::max()))
-      bad_value(key, s, "in range");
-    x = static_cast<T>(v);
+    const std::optional<T> v = parse_integer<T>(s);
+    if (!v) bad_value(key, s, std::is_unsigned_v<T> ? "a whole number >= 0 (in range)" : "a whole number (in range)");
+    x = *v;
   } else if constexpr (std::is_same_v<T, std::vector<double>>) {
     x = parse_list(key, s);
   } else {
