@@ -26,8 +26,9 @@ void check_run_status(const std::string& status, const std::string& out) {
 }
 
 // An arm model (arm/): trace.csv, metrics.csv, table.md (metric | value) and the arm plots.
-void simulate_arm(const std::string& path, const std::vector<std::string>& sets, const std::string& out) {
-  const ArmModel m = load_arm_with(path, sets);
+void simulate_arm(const std::string& path, const std::vector<std::string>& sets, const std::vector<std::string>& plant_sets,
+                  const std::string& out) {
+  const ArmModel m = load_arm_with(path, sets, plant_sets);
   print_safe(stderr, "simulating %s: %d bodies, %d joints (%zu actuated), %.2f s, %s with %d substeps of %.3g ms\n",
                path.c_str(), m.tree.num_bodies(), m.tree.nv(), m.actuated.size(), m.duration,
                integrator_name(m.integrator), m.substeps, 1e3 * m.control_period / m.substeps);
@@ -63,7 +64,7 @@ void add_simulate_verb(CLI::App& app) {
                                              "DIR/table.md and plots of tip angle, hub angle, tip deflection, torque");
   struct Args {
     std::string model, out;
-    std::vector<std::string> sets;
+    std::vector<std::string> sets, plant_sets;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("model", args->model, "model YAML file: the reference rig's, or an arm's (docs/formats.md)")
@@ -72,9 +73,10 @@ void add_simulate_verb(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "output directory (created)")->required()->check(kPath);
   cmd->add_option("--set", args->sets, "override a model parameter, PATH=VALUE; repeatable");
+  cmd->add_option("--plant-set", args->plant_sets, "override a plant parameter the controller's model does not know (a hidden effect, a true payload), PATH=VALUE; repeatable");
   cmd->callback([args] {
-    if (is_arm_model_file(args->model)) return simulate_arm(args->model, args->sets, args->out);
-    const Model m = load_model_with(args->model, args->sets);
+    if (is_arm_model_file(args->model)) return simulate_arm(args->model, args->sets, args->plant_sets, args->out);
+    const Model m = load_model_with(args->model, args->sets, args->plant_sets);
     print_safe(stderr, "simulating %s: N = %d, %.1f s, integrator %s\n", args->model.c_str(), m.nseg, m.duration,
                  integrator_name(m.spec.simulation.integrator));
     const BatchModel bm = make_batch(std::span<const Model>(&m, 1));

@@ -186,7 +186,7 @@ void add_record_verb(CLI::App& app) {
                                            "(an arm model: the arm record form, noise by --noise-angle ...)");
   struct Args {
     std::string model, out;
-    std::vector<std::string> sets;
+    std::vector<std::string> sets, plant_sets;
     double noise = 0.01;
     std::uint64_t seed = 1;
     int decimate = 1;
@@ -196,6 +196,7 @@ void add_record_verb(CLI::App& app) {
   cmd->add_option("model", a->model, "model YAML file")->required()->check(kPath)->check(CLI::ExistingFile);
   cmd->add_option("--out", a->out, "record CSV to write")->required()->check(kPath);
   cmd->add_option("--set", a->sets, "override a model parameter, PATH=VALUE; repeatable");
+  cmd->add_option("--plant-set", a->plant_sets, "override a plant parameter the controller's model does not know (a hidden effect, a true payload), PATH=VALUE; repeatable");
   auto* noise = cmd->add_option("--noise", a->noise, "noise standard deviation per channel, as a fraction of the channel's")
       ->capture_default_str();
   cmd->add_option("--seed", a->seed, "noise seed")->capture_default_str();
@@ -216,7 +217,7 @@ void add_record_verb(CLI::App& app) {
         throw ExitError(std::string(noise->count() > 0 ? "--noise" : "--decimate") +
                             ": not for an arm model (its noise: --noise-angle, --noise-rate, --noise-torque, --noise-position)",
                         2);
-      const ArmModel m = load_arm_with(a->model, a->sets);
+      const ArmModel m = load_arm_with(a->model, a->sets, a->plant_sets);
       const Record r = make_arm_record(m, a->arm, a->seed);
       write_record_csv(r, arm_record_columns(m), a->out, 17);
       print_safe(stdout, "wrote %s: %zu samples\n", a->out.c_str(), r.size());
@@ -224,7 +225,7 @@ void add_record_verb(CLI::App& app) {
     }
     for (CLI::Option* o : arm_noise)
       if (o->count() > 0) throw ExitError(o->get_name() + ": only for an arm model", 2);
-    const Model m = load_model_with(a->model, a->sets);
+    const Model m = load_model_with(a->model, a->sets, a->plant_sets);
     const Record r = make_synthetic_record(m, a->noise, a->seed, a->decimate);
     write_record_csv(r, {"ref", "hub_torque", "hub_angle", "hub_rate", "tip_deflection"}, a->out);
     print_safe(stdout, "wrote %s: %zu samples\n", a->out.c_str(), r.size());

@@ -358,7 +358,7 @@ std::vector<TreeMode> calc_arm_closed_loop_modes(const ArmModel& m, const Eigen:
   return calc_tree_modes(m.tree, q, make_arm_loop_options(m, q));
 }
 
-ArmModel make_arm(const ArmSpec& spec) {
+ArmModel make_arm(const ArmSpec& spec, std::shared_ptr<const ArmModel> controller) {
   const std::string& src = spec.source;
   ArmModel m;
   m.spec = spec;
@@ -568,6 +568,21 @@ ArmModel make_arm(const ArmSpec& spec) {
     throw ConfigError(src, 0, "simulation.substeps",
                       "the automatic step would need more than 100000 substeps per controller sample: a mode or a "
                       "joint's drive is far too fast for the controller's rate; check the model's values");
+  if (controller) {
+    // The controller's model designed the notches, shapers, trajectory (its IK) and brakes; its
+    // controller-side blocks are this spec's, only plant-side values differ.
+    if (controller->actuated.size() != m.actuated.size())
+      throw ConfigError(src, 0, "joints", "the controller's model has other actuated joints than the plant");
+    for (std::size_t j = 0; j < m.actuated.size(); ++j) {
+      m.actuated[j].shaper = controller->actuated[j].shaper;
+      m.actuated[j].notch = controller->actuated[j].notch;
+      m.actuated[j].notch_on_feedback = controller->actuated[j].notch_on_feedback;
+    }
+    m.trajectory = controller->trajectory;
+    m.brake_gain = controller->brake_gain;
+    m.control = std::move(controller);
+    return m;
+  }
   for (ActuatedJoint& a : m.actuated) {
     const ShaperSpec& sh = a.control.shaper;
     const ShaperKind kind = parse_shaper_kind(sh.type);

@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -115,6 +116,10 @@ struct ArmSpec {
   bool tool_point_given = false;
   std::vector<ToolSpec> tools;       // `tools:` in file order; empty: the one tool of `tool:` (named "tool")
   double rate = 1000.0;              // controller sample rate, Hz
+  // The controller's internal model (`controller.model`): "nominal", the model file with its --set
+  // overrides, which a study's variables and runs, diagnose's candidates and calibrate's fits do not
+  // change (sweep/paths.hpp, Assignment::plant_only); or "plant", the varied model itself.
+  std::string controller_model = "nominal";
   std::vector<JointControlSpec> joints;  // the actuated joints, in file order
   TrajectoryShape shape = TrajectoryShape::kQuintic;
   std::vector<std::pair<std::string, double>> start;  // joint values at t = 0 (others 0), rad (m)
@@ -223,12 +228,21 @@ struct ArmModel {
   // the sample time (in its linear zone a sampled brake kills the joint's rate in about one sample).
   // N·m·s/rad (N·s/m); empty without a brake monitor.
   std::vector<double> brake_gain;
+  // The controller's internal model (make_arm's `controller`: the nominal arm): its rigid tree gives the
+  // feed-forward and gravity compensation; the notches, shapers, trajectory and brake gains above are its
+  // designs. Null: this model is its own.
+  std::shared_ptr<const ArmModel> control;
 };
+
+// The model the arm's controller holds of it: m.control, or m itself.
+inline const ArmModel& arm_controller_model(const ArmModel& m) { return m.control ? *m.control : m; }
 
 // Derives and validates the model. Throws ConfigError naming spec.source and the key: an unknown or
 // passive joint given a controller, a joint controlled twice, a waypoint naming an unknown joint or
 // out of time order, an unreachable tool target (the IK's failure), a notch or shaper it cannot design.
-ArmModel make_arm(const ArmSpec& spec);
+// `controller`: the controller's internal model (the nominal arm, sweep/paths.hpp), whose designs the
+// controller uses instead of this model's (ArmModel::control); nullptr = this model's own.
+ArmModel make_arm(const ArmSpec& spec, std::shared_ptr<const ArmModel> controller = nullptr);
 
 // The static equilibrium of the compliant dofs (flexible links, drive twists) under gravity at `pose`
 // (nv), every other joint held
@@ -253,7 +267,8 @@ std::pair<double, double> calc_initial_pressures(const ActuatedJoint& a);
 void eval_arm_reference(const ArmModel& m, double t, double* r, double* rd, double* rdd, double* scratch);
 
 // The rigid arm's gravity torques G(q) and inverse dynamics ID(q, qd, qdd) at the actuated joints
-// (the flexible links held straight: their dofs 0), scratch in `ws`.
+// (the flexible links held straight: their dofs 0), scratch in `ws` (built on m's tree). The simulation
+// passes the controller's model (arm_controller_model).
 struct ArmFeedforward {
   explicit ArmFeedforward(const Tree& tree);
   TreeWorkspace ws;

@@ -349,7 +349,7 @@ ArmLanes make_arm_lanes(std::span<const ArmModel> lanes, const ArmRunOptions& op
     }
   }
 
-  for (const ArmModel& m : lanes) a.ff.emplace_back(m.tree);
+  for (const ArmModel& m : lanes) a.ff.emplace_back(arm_controller_model(m).tree);  // the controller's rigid arm
   a.poses.resize(static_cast<size_t>(m0.tree.num_bodies()));
   a.q_lane.resize(nv);
   a.q_ref.resize(nv);
@@ -466,8 +466,9 @@ void step_arm_controllers(ArmLanes& a, long k) {
     double* rdl = &a.rd[static_cast<size_t>(l * na)];
     bool need_ff = false;
     for (const ActuatedJoint& aj : m.actuated) need_ff |= aj.control.feedforward != 0.0 || aj.control.gravity_compensation != 0.0;
+    // The feed-forward and gravity compensation from the controller's model of the arm (the nominal one).
     if (need_ff)
-      calc_arm_feedforward(m, rl, rdl, &a.rdd[static_cast<size_t>(l * na)], a.tau_id.data(), a.tau_g.data(),
+      calc_arm_feedforward(arm_controller_model(m), rl, rdl, &a.rdd[static_cast<size_t>(l * na)], a.tau_id.data(), a.tau_g.data(),
                            a.ff[static_cast<size_t>(l)]);
     // PID with clamping anti-windup, saturation, feed-forward; or a monitor's brake, the integral frozen.
     const ArmMonitor* brake = active_brake(a, l, k);

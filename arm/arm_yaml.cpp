@@ -44,8 +44,9 @@ const std::array<Field<ToolSpec>, 2> kToolsFields{{
     {.key = "point", .member = &ToolSpec::point, .unit = "m"},
 }};
 
-const std::array<Field<ArmSpec>, 1> kControllerFields{{
+const std::array<Field<ArmSpec>, 2> kControllerFields{{
     {.key = "rate", .member = &ArmSpec::rate, .unit = "Hz", .bound = Bound::kPositive},
+    {.key = "model", .member = &ArmSpec::controller_model},
 }};
 
 const std::array<Field<JointControlSpec>, 6> kGainFields{{
@@ -333,6 +334,8 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
 
   YamlReader controller = top.child("controller");
   read_present(controller, kControllerFields, s);
+  if (s.controller_model != "nominal" && s.controller_model != "plant")
+    controller.fail("model", "unknown model '" + s.controller_model + "' (nominal, plant)");
   controller.finish();
 
   // joints: a map from joint name to its control, in file order.
@@ -502,7 +505,9 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
   return s;
 }
 
-ArmModel parse_arm(const YAML::Node& doc, const std::string& source) { return make_arm(parse_arm_spec(doc, source)); }
+ArmModel parse_arm(const YAML::Node& doc, const std::string& source, std::shared_ptr<const ArmModel> controller) {
+  return make_arm(parse_arm_spec(doc, source), std::move(controller));
+}
 
 std::vector<KeyDoc> arm_yaml_keys() {
   std::vector<KeyDoc> out;

@@ -21,7 +21,7 @@ bool is_arm_document(const YAML::Node& doc);
 // names it in errors and resolves `urdf` and `sidecar` paths (relative to its folder).
 ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source);
 // parse_arm_spec, then make_arm.
-ArmModel parse_arm(const YAML::Node& doc, const std::string& source);
+ArmModel parse_arm(const YAML::Node& doc, const std::string& source, std::shared_ptr<const ArmModel> controller = nullptr);
 
 // Every key of the format beyond the tree's (tree_yaml_keys), for the docs test.
 std::vector<KeyDoc> arm_yaml_keys();

@@ -170,6 +170,8 @@ void validate(const ModelSpec& s, const std::string& src) {
                                                     std::to_string(s.friction.coulomb));
   if (s.controller.load_signal != "moment" && s.controller.load_signal != "pressure")
     throw ConfigError(src, 0, "controller.load_signal", "unknown signal '" + s.controller.load_signal + "' (moment, pressure)");
+  if (s.controller.model != "nominal" && s.controller.model != "plant")
+    throw ConfigError(src, 0, "controller.model", "unknown model '" + s.controller.model + "' (nominal, plant)");
   if (s.controller.load_signal == "pressure" && !s.hydraulics.enabled)
     throw ConfigError(src, 0, "controller.load_signal", "'pressure' needs hydraulics.enabled: true");
   // The hub drive's values are checked whether its parts are enabled or not (as the recorded sensors').
@@ -210,7 +212,7 @@ BodyInertia make_tip_body(const Model& m, double mass, double inertia) {
   return b;
 }
 
-Model make_model(const ModelSpec& spec, const std::string& source) {
+Model make_model(const ModelSpec& spec, const std::string& source, const Model* controller) {
   validate(spec, source);
   Model m;
   m.spec = spec;
@@ -269,6 +271,16 @@ Model make_model(const ModelSpec& spec, const std::string& source) {
       throw ConfigError(source, 0, "simulation.substeps",
                         "the automatic step would need more than 100000 substeps per controller sample: a mode or "
                         "the drive is far too fast for the controller's rate; check the model's values");
+  }
+  m.control_inertia = m.rigid_inertia;
+  if (controller) {
+    // The controller's model designed the feed-forward, the notch and the shaper (its spec's controller-side
+    // blocks are this spec's: only plant-side values differ).
+    m.control_inertia = controller->control_inertia;
+    m.omega_z[0] = controller->omega_z[0];
+    m.omega_z[1] = controller->omega_z[1];
+    m.shaper = controller->shaper;
+    return m;
   }
   m.omega_z[0] = spec.notch.omega_z[0];
   m.omega_z[1] = spec.notch.omega_z[1];

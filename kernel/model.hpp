@@ -39,6 +39,10 @@ struct ControllerSpec {
                                   // true k1 q1 + k3_1 q1^3 + c1 q1', not a sensor reading (or the pressure signal)
   double feedforward = 0.0;       // gain f on the model-based feed-forward f (J_rigid r'' + kd r') (1 = full)
   std::string load_signal = "moment";  // load compensation from the root bending "moment" or the hydraulic "pressure" (n D dp)
+  // The controller's internal model (feed-forward inertia, notch zeros, shaper design): "nominal", the model
+  // file with its --set overrides, which a study's variables and runs, diagnose's candidates and calibrate's
+  // fits do not change (sweep/paths.hpp, Assignment::plant_only); or "plant", the varied model itself.
+  std::string model = "nominal";
 };
 
 // Robust notch filter of seed eq. 6 acting on the reference, or on the measured hub angle.
@@ -242,13 +246,18 @@ struct Model {
   std::vector<double> resonances;        // closed-loop resonances (oscillatory, zeta < 0.3), ascending, rad/s
   std::vector<Impulse> shaper;           // input-shaper impulses; one of amplitude 1 at 0 when off
   double rigid_inertia = 0.0;            // the straight arm's inertia about the hub axis, M_00(q = 0), kg·m^2
+  // The controller's model's rigid_inertia, for the feed-forward: the nominal model's (make_model's
+  // `controller`), else this model's, kg·m^2. omega_z and shaper above are the controller's too.
+  double control_inertia = 0.0;
 };
 
 // The tip body (last segment with a payload of `mass`, `inertia`; with the hub when N = 1) in its joint frame.
 BodyInertia make_tip_body(const Model& m, double mass, double inertia);
 
 // Derives and validates the model. Throws ConfigError (naming `source`) on non-physical values.
-Model make_model(const ModelSpec& spec, const std::string& source = "<model>");
+// `controller`: the controller's internal model (the nominal one, sweep/paths.hpp), whose rigid inertia,
+// notch zeros and shaper the controller then uses instead of this model's; nullptr = this model's own.
+Model make_model(const ModelSpec& spec, const std::string& source = "<model>", const Model* controller = nullptr);
 
 // Beam mass rho h t L, kg.
 double calc_beam_mass(const BeamSpec& beam);

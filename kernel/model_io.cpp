@@ -108,7 +108,7 @@ const std::array<Field<PayloadEvent>, 3> kEventFields{{
     {.key = "mass", .member = &PayloadEvent::mass, .unit = "kg", .required = true},
     {.key = "inertia", .member = &PayloadEvent::inertia, .unit = "kg·m²", .required = true},
 }};
-const std::array<Field<ControllerSpec>, 8> kControllerFields{{
+const std::array<Field<ControllerSpec>, 9> kControllerFields{{
     {.key = "rate", .member = &ControllerSpec::rate, .unit = "Hz"},
     {.key = "kp", .member = &ControllerSpec::kp, .unit = "N·m/rad"},
     {.key = "ki", .member = &ControllerSpec::ki, .unit = "N·m/(rad·s)"},
@@ -117,6 +117,7 @@ const std::array<Field<ControllerSpec>, 8> kControllerFields{{
     {.key = "load_compensation", .member = &ControllerSpec::load_compensation},
     {.key = "feedforward", .member = &ControllerSpec::feedforward},
     {.key = "load_signal", .member = &ControllerSpec::load_signal},
+    {.key = "model", .member = &ControllerSpec::model},
 }};
 const std::array<Field<NotchSpec>, 3> kNotchFields{{
     {.key = "enabled", .member = &NotchSpec::enabled},
@@ -322,11 +323,11 @@ std::vector<KeyDoc> rig_model_keys() {
   return out;
 }
 
-Model parse_model(const YAML::Node& doc, const std::string& source) {
+Model parse_model(const YAML::Node& doc, const std::string& source, const Model* controller) {
   LineMap lines;
   const ModelSpec spec = parse_spec(doc, source, lines);
   try {
-    return make_model(spec, source);
+    return make_model(spec, source, controller);
   } catch (const ConfigError& e) {
     // Point a range error at the line of its key, or of the nearest block above it that the file has
     // (a key left at its default has no line: friction.coulomb -> friction).

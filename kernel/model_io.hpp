@@ -12,8 +12,9 @@
 
 namespace ff {
 
-// Parses and validates a model document; errors name `source`, the line and the key.
-Model parse_model(const YAML::Node& doc, const std::string& source);
+// Parses and validates a model document; errors name `source`, the line and the key. `controller`: the
+// controller's internal model (make_model), nullptr = the document's own.
+Model parse_model(const YAML::Node& doc, const std::string& source, const Model* controller = nullptr);
 // Loads a model YAML file.
 Model load_model(const std::string& path);
 

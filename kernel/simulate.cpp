@@ -170,10 +170,11 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
     // Controller sample: reference, filter, PID; then record the signals of this instant.
     for (int l = 0; l < W; ++l) {
       ref[l] = calc_shaped_reference(bm.models[l].spec.trajectory, bm.models[l].shaper, s.t);
-      // Feed-forward torque per unit gain: J_rigid r'' + kd r' (what the PD takes away from exact tracking).
+      // Feed-forward torque per unit gain: J_rigid r'' + kd r' (what the PD takes away from exact tracking),
+      // J_rigid the controller's model's (Model::control_inertia: the nominal model's).
       const auto& mdl = bm.models[l];
       ref_ff[l] = bm.ff_gain[l] != 0.0
-                      ? mdl.rigid_inertia * calc_shaped_reference_accel(mdl.spec.trajectory, mdl.shaper, s.t) +
+                      ? mdl.control_inertia * calc_shaped_reference_accel(mdl.spec.trajectory, mdl.shaper, s.t) +
                             bm.kd[l] * calc_shaped_reference_rate(mdl.spec.trajectory, mdl.shaper, s.t)
                       : 0.0;
     }

@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <climits>
+#include <memory>
 #include <vector>
 
 #include "arm/arm_yaml.hpp"
@@ -133,22 +134,38 @@ YAML::Node get_path(const YAML::Node& doc, const std::string& path) {
   return node;
 }
 
-Assignment parse_assignment(const std::string& text) {
+Assignment parse_assignment(const std::string& text, bool plant_only) {
+  const std::string option = plant_only ? "--plant-set" : "--set";
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw ConfigError("--set", 0, text, "expected PATH=VALUE, e.g. payload.mass=400");
+    throw ConfigError(option, 0, text, "expected PATH=VALUE, e.g. payload.mass=400");
   Assignment a;
   a.path = text.substr(0, eq);
-  a.source = "--set";
+  a.source = option;
   a.key = a.path;
+  a.plant_only = plant_only;
   try {
     a.value = YAML::Load(text.substr(eq + 1));
   } catch (const YAML::Exception& e) {
-    throw ConfigError("--set", 0, a.path, "value is not valid YAML: " + yaml_error_message(e));
+    throw ConfigError(option, 0, a.path, "value is not valid YAML: " + yaml_error_message(e));
   }
-  check_unique_keys(a.value, "--set", a.path);
-  split_path(a.path, "--set");  // reject a malformed path now
+  check_unique_keys(a.value, option, a.path);
+  split_path(a.path, option);  // reject a malformed path now
   return a;
+}
+
+bool is_controller_path(const std::string& path) {
+  const auto steps = split_path(path, "<path>");
+  static const char* const top[] = {"controller", "notch", "shaper", "sensors", "trajectory", "simulation", "monitors", "metrics"};
+  for (const char* t : top)
+    if (steps[0].key == t) return true;
+  // An arm joint's own controller blocks: joints.NAME.{controller, notch, shaper, sensors}[...] (the rig's
+  // joints.stiffness ... are its beam's).
+  static const char* const joint[] = {"controller", "notch", "shaper", "sensors"};
+  if (steps[0].key == "joints" && steps.size() >= 3)
+    for (const char* t : joint)
+      if (steps[2].key == t) return true;
+  return false;
 }
 
 namespace {
@@ -166,10 +183,10 @@ std::pair<const Assignment*, std::string> owner_of(const std::string& key, const
 }
 }  // namespace
 
-// Applies the assignments to `doc` and parses it with `parse`, naming an error in an assigned value
-// where it was assigned.
+// Applies the assignments to `doc` and parses it with `parse(doc, source)`, naming an error in an
+// assigned value where it was assigned.
 template <class Parse>
-auto parse_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set, Parse parse) {
+auto parse_set(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set, Parse parse) {
   std::vector<std::string> resolved;
   for (const auto& a : set) {
     try {
@@ -189,18 +206,84 @@ auto parse_with(YAML::Node doc, const std::string& model_source, const std::vect
   }
 }
 
+namespace {
+// The assignments that reach the controller's model: all but the plant-only ones outside its paths.
+std::vector<Assignment> controller_assignments(const std::vector<Assignment>& set) {
+  std::vector<Assignment> out;
+  for (const Assignment& a : set)
+    if (!a.plant_only || is_controller_path(a.path)) out.push_back(a);
+  return out;
+}
+
+// The controller's models of the last documents built, per thread (diagnose's trial builds, a study's
+// variants: the same document and controller-side assignments each time), by document and assignments.
+template <class T>
+struct NominalCache {
+  std::vector<std::pair<std::string, std::shared_ptr<const T>>> entries;  // newest last
+  static constexpr std::size_t kSize = 8;
+  std::shared_ptr<const T> find(const std::string& key) const {
+    for (const auto& [k, v] : entries)
+      if (k == key) return v;
+    return nullptr;
+  }
+  void put(std::string key, std::shared_ptr<const T> v) {
+    if (entries.size() == kSize) entries.erase(entries.begin());
+    entries.emplace_back(std::move(key), std::move(v));
+  }
+};
+
+std::string nominal_key(const YAML::Node& doc, const std::string& model_source, const std::vector<Assignment>& set) {
+  std::string key = model_source + '\n' + YAML::Dump(doc);
+  for (const Assignment& a : set) key += '\n' + a.path + '=' + YAML::Dump(a.value);
+  return key;
+}
+
+// Builds the plant of `doc` with `set` by parse(doc, source, controller): with plant-only assignments
+// outside the controller's paths and the controller's model nominal (not plant_controlled), the
+// controller is the model built without them; else null (the plant's own).
+template <class T, class Parse, class PlantControlled>
+T parse_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set, Parse parse,
+             PlantControlled plant_controlled) {
+  auto with = [&](std::shared_ptr<const T> controller) {
+    return [&parse, controller](const YAML::Node& d, const std::string& source) { return parse(d, source, controller); };
+  };
+  const std::vector<Assignment> control = controller_assignments(set);
+  if (control.size() == set.size()) return parse_set(doc, model_source, set, with(nullptr));
+  thread_local NominalCache<T> cache;
+  std::string key = nominal_key(doc, model_source, control);
+  std::shared_ptr<const T> nominal = cache.find(key);
+  if (!nominal) {
+    try {
+      nominal = std::make_shared<const T>(parse_set(YAML::Clone(doc), model_source, control, with(nullptr)));
+    } catch (const ConfigError&) {
+      parse_set(doc, model_source, set, with(nullptr));  // the same error with its line in the file (a clone has none)
+      throw;
+    }
+    cache.put(std::move(key), nominal);
+  }
+  return parse_set(doc, model_source, set, with(plant_controlled(*nominal) ? nullptr : nominal));
+}
+}  // namespace
+
 Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set) {
-  return parse_with(doc, model_source, set, parse_model);
+  return parse_with<Model>(
+      doc, model_source, set,
+      [](const YAML::Node& d, const std::string& s, const std::shared_ptr<const Model>& c) { return parse_model(d, s, c.get()); },
+      [](const Model& m) { return m.spec.controller.model == "plant"; });
 }
 
 ArmModel make_arm_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set) {
-  return parse_with(doc, model_source, set, parse_arm);
+  return parse_with<ArmModel>(
+      doc, model_source, set,
+      [](const YAML::Node& d, const std::string& s, const std::shared_ptr<const ArmModel>& c) { return parse_arm(d, s, c); },
+      [](const ArmModel& m) { return m.spec.controller_model == "plant"; });
 }
 
 namespace {
-std::vector<Assignment> parse_assignments(const std::vector<std::string>& sets) {
+std::vector<Assignment> parse_assignments(const std::vector<std::string>& sets, const std::vector<std::string>& plant_sets = {}) {
   std::vector<Assignment> out;
   for (const auto& s : sets) out.push_back(parse_assignment(s));
+  for (const auto& s : plant_sets) out.push_back(parse_assignment(s, true));
   return out;
 }
 }  // namespace
@@ -241,8 +324,8 @@ void check_not_model(const YAML::Node& doc, const std::string& path) {
 }
 
 // Not build_model: YAML::Clone drops the line marks an error in the file is reported at.
-Model load_model_with(const std::string& path, const std::vector<std::string>& sets) {
-  return make_model_with(load_model_file(path), path, parse_assignments(sets));
+Model load_model_with(const std::string& path, const std::vector<std::string>& sets, const std::vector<std::string>& plant_sets) {
+  return make_model_with(load_model_file(path), path, parse_assignments(sets, plant_sets));
 }
 
 ModelSource load_model_source(const std::string& path, const std::vector<std::string>& sets) {
@@ -252,8 +335,8 @@ ModelSource load_model_source(const std::string& path, const std::vector<std::st
   return src;
 }
 
-ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets) {
-  return make_arm_with(load_model_file(path), path, parse_assignments(sets));
+ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets, const std::vector<std::string>& plant_sets) {
+  return make_arm_with(load_model_file(path), path, parse_assignments(sets, plant_sets));
 }
 
 ModelSource load_arm_source(const std::string& path, const std::vector<std::string>& sets) {

@@ -20,7 +20,16 @@ struct Assignment {
   std::string source;      // the study file, or "--set"
   int line = 0;            // line in `source`, 0 = none
   std::string key;         // how `source` names it, e.g. "runs[2].set.payload.mass"
+  // Changes the plant only, not the controller's internal model (kernel/model.hpp ControllerSpec::model):
+  // a study's variable or run, a Monte Carlo draw, diagnose's candidate, calibrate's fit, `--plant-set`.
+  // The file and --set (the user's own edits) and a study's `set:` and `cases:` change both.
+  bool plant_only = false;
 };
+
+// Whether an assignment to `path` changes the controller itself even when plant_only: the controller's,
+// notch's, shaper's, sensors', trajectory's, simulation's, monitors' and metrics' blocks, and an arm
+// joint's controller, notch, shaper and sensors (joints.NAME.controller...).
+bool is_controller_path(const std::string& path);
 
 // Replaces (or creates) the value at `path` in `doc` with `value`, and returns the path with each
 // [NAME] as its index (bodies[beam].mass -> bodies[0].mass). Throws ConfigError naming `source` and
@@ -30,17 +39,22 @@ std::string set_path(YAML::Node& doc, const std::string& path, const YAML::Node&
 // The value at `path`, or a null node when absent.
 YAML::Node get_path(const YAML::Node& doc, const std::string& path);
 
-// Parses a command-line "path=value" (value in YAML syntax); source "--set".
-Assignment parse_assignment(const std::string& text);
+// Parses a command-line "path=value" (value in YAML syntax); source "--set" (plant only: "--plant-set").
+Assignment parse_assignment(const std::string& text, bool plant_only = false);
 
 // Applies the assignments to a model document (loaded with line marks) and builds the model.
 // An error in an assigned value is reported where the assignment was written; any other error
-// names `model_source` and its line.
+// names `model_source` and its line. With plant-only assignments (outside the controller's paths) and
+// `controller.model: nominal`, the controller's model is the document with the others alone, built
+// once per thread for the same document and assignments, and the plant carries it (make_model's and
+// make_arm's `controller`).
 Model make_model_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set);
 
-// The one way to load a model file with its --set overrides ("path=value"):
+// The one way to load a model file with its --set overrides ("path=value") and --plant-set ones (the
+// plant's alone, Assignment::plant_only, applied after):
 // the model itself,
-Model load_model_with(const std::string& path, const std::vector<std::string>& sets);
+Model load_model_with(const std::string& path, const std::vector<std::string>& sets,
+                      const std::vector<std::string>& plant_sets = {});
 // or its source: the document, so that more paths can be set on it later (diagnose's candidates,
 // calibrate's additions), and where it came from. The model is built once here, so that a bad file or
 // override fails before any other input is read.
@@ -58,7 +72,8 @@ Model build_model(const ModelSource& src, const std::vector<Assignment>& extra =
 // Arm models (arm/arm_yaml.hpp) the same way: the document with the overrides applied, errors in an
 // assigned value named where it was assigned.
 ArmModel make_arm_with(YAML::Node doc, const std::string& model_source, const std::vector<Assignment>& set);
-ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets);
+ArmModel load_arm_with(const std::string& path, const std::vector<std::string>& sets,
+                       const std::vector<std::string>& plant_sets = {});
 // An arm model's source, checked once as load_model_source checks a rig's, and its model with `extra`
 // assignments after its own overrides.
 ModelSource load_arm_source(const std::string& path, const std::vector<std::string>& sets);

@@ -483,10 +483,14 @@ Study load_study(const std::string& path) {
 }
 
 std::vector<Assignment> make_variant_set(const Study& study, const Variant& v) {
+  // The study's `set:` and its case's are the model the controller knows; a run's and the variables'
+  // values change the plant only (Assignment::plant_only; docs/formats.md, "The controller's model").
   std::vector<Assignment> set = study.set;
   if (study.listed) {
-    const auto& run = study.run_sets[v.eval_id];
-    set.insert(set.end(), run.begin(), run.end());
+    for (Assignment a : study.run_sets[v.eval_id]) {
+      a.plant_only = true;
+      set.push_back(std::move(a));
+    }
     return set;
   }
   std::size_t j0 = 0;  // the first variable's column in v.params
@@ -498,7 +502,7 @@ std::vector<Assignment> make_variant_set(const Study& study, const Variant& v) {
   for (std::size_t j = 0; j < study.variables.size(); ++j) {
     const std::string& path = study.variables[j].path;
     set.push_back({path, value_node(v.params[j0 + j]), study.source, study.variable_lines[j],
-                   "variables[" + std::to_string(j) + "] (" + path + ")"});
+                   "variables[" + std::to_string(j) + "] (" + path + ")", true});
   }
   return set;
 }

@@ -27,6 +27,7 @@ Assignment assign(const std::string& path, const YAML::Node& value) {
   a.value = value;
   a.source = "diagnose";
   a.key = path;
+  a.plant_only = true;  // a candidate effect is the plant's: the controller keeps its model
   return a;
 }
 

@@ -89,7 +89,7 @@ Model make_design_model(const Model& m) {
   s.simulation.substeps = m.substeps;
   s.simulation.duration = m.control_period;
   s.payload_events.clear();
-  return make_model(s, "<observer design>");
+  return make_model(s, "<observer design>", &m);  // the loop closed by m's controller
 }
 
 struct Linearisation {

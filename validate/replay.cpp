@@ -66,7 +66,7 @@ Model make_replay_model(const Model& m, const Record& r) {
   ModelSpec s = m.spec;
   s.simulation.duration = r.t.back() - r.t.front();
   s.payload_events.clear();
-  return make_model(s, "<replay>");
+  return make_model(s, "<replay>", &m);  // m's controller: its feed-forward inertia, notch and shaper
 }
 
 namespace {
@@ -131,7 +131,7 @@ Prediction inverse_dynamics(const Model& model, const Record& r) {
   s.hydraulics.enabled = false;
   s.drive.enabled = false;
   s.controller.load_signal = "moment";
-  const Model m = make_replay_model(make_model(s, "<inverse>"), r);
+  const Model m = make_replay_model(make_model(s, "<inverse>", &model), r);
   const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
   Workspace ws = make_workspace(bm);
   BatchState st = make_state(bm);

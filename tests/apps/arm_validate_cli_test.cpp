@@ -207,6 +207,27 @@ TEST_F(ArmCli, ARecordMissingAJointColumnOrNamingAnUnknownJointIsOneErrorAndWrit
 
 // Friction hidden at the elbow: diagnose names it, calibrate adds it with its level, and the ledger
 // shows the error falling on every channel that moved.
+TEST_F(ArmCli, DiagnoseFindsAPayloadTheControllerDoesNotKnow) {
+  // The record of an arm whose forearm carries 0.3 kg while its controller's inverse dynamics keeps the
+  // nominal 0.2 kg (--plant-set): diagnose's payload candidate changes the plant only, so it fits 0.3 kg
+  // and explains the record (docs/formats.md, "The controller's model"). With --set the controller knows
+  // the payload: the recorded torques differ.
+  const std::string payload = "'bodies[forearm].flexible.payload.mass=0.3'";
+  ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 2e-4 --noise-torque 0.01 --seed 3 --plant-set " + payload +
+                kShort).exit_code, 0);
+  ASSERT_EQ(run("record configs/arm.yaml --out known.csv --noise-angle 2e-4 --noise-torque 0.01 --seed 3 --set " + payload +
+                kShort).exit_code, 0);
+  EXPECT_NE(read_text(work / "rec.csv"), read_text(work / "known.csv"));
+  const auto d = run("diagnose --model configs/arm.yaml --data rec.csv --json d.json --iterations 10 --effects payload@forearm" +
+                     kShort);
+  ASSERT_EQ(d.exit_code, 0) << d.output;
+  EXPECT_NE(d.output.find("verdict: payload@forearm is missing"), std::string::npos) << d.output;
+  const std::string json = read_text(work / "d.json");
+  const auto at = json.find("\"bodies[forearm].flexible.payload.mass\": ");
+  ASSERT_NE(at, std::string::npos) << json;
+  EXPECT_NEAR(std::strtod(json.c_str() + at + 41, nullptr), 0.3, 0.003) << json;
+}
+
 TEST_F(ArmCli, DiagnoseFindsFrictionHiddenAtTheElbowAndCalibrateAddsIt) {
   const std::string hidden = " --set joints.elbow.friction.coulomb=0.15";
   ASSERT_EQ(run("record configs/arm.yaml --out rec.csv --noise-angle 2e-4 --noise-torque 0.01 --seed 3" + kShort + hidden)

@@ -9,9 +9,14 @@
 #include <string>
 #include <vector>
 
+#include "arm/arm_simulate.hpp"
+#include "kernel/batch.hpp"
 #include "kernel/drive.hpp"
 #include "common/errors.hpp"
+#include "common/yaml_reader.hpp"
 #include "kernel/model_io.hpp"
+#include "kernel/simulate.hpp"
+#include "tests/arm/test_support.hpp"
 
 namespace {
 
@@ -450,4 +455,141 @@ TEST(ApplyAssignment, ABadValueSetByABodysNameIsNamedWhereItWasSet) {
     EXPECT_EQ(e.file(), "study.yaml");
     EXPECT_EQ(e.key(), "set.bodies[beam].flexible.section.E") << e.what();
   }
+}
+
+// ---- The controller's model: plant-only assignments (a study's variable or run, diagnose's candidate)
+// change the plant, not the feed-forward, gravity compensation or notch (docs/formats.md, "The
+// controller's model").
+namespace {
+
+// The reference rig (configs/fbtb.yaml) with one 0.5 rad move held 1 s and the feed-forward on.
+YAML::Node short_rig(const std::string& controller_model = "nominal") {
+  YAML::Node d = ff::load_yaml_file(std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yaml");
+  ff::set_path(d, "trajectory.moves", YAML::Load("[{target: 0.5, hold: 1.0}]"), "test");
+  ff::set_path(d, "controller.feedforward", YAML::Node(1.0), "test");
+  ff::set_path(d, "controller.model", YAML::Node(controller_model), "test");
+  return d;
+}
+
+// PATH=VALUE as a study's variable sets it (the plant's alone) or as --set does (the model's).
+ff::Assignment plant_set(const std::string& text) { return ff::parse_assignment(text, true); }
+ff::Assignment model_set(const std::string& text) { return ff::parse_assignment(text); }
+
+ff::Model rig(const std::vector<ff::Assignment>& set, const std::string& controller_model = "nominal") {
+  return ff::make_model_with(short_rig(controller_model), "fbtb.yaml", set);
+}
+
+ff::Trace run(const ff::Model& m) { return ff::simulate(ff::make_batch(std::span<const ff::Model>(&m, 1))).traces[0]; }
+
+double max_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double d = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) d = std::max(d, std::abs(a[k] - b[k]));
+  return d;
+}
+
+}  // namespace
+
+TEST(ControllerModel, AVariantsPayloadLeavesTheFeedForwardAtTheNominalInertia) {
+  // With the loop open (kp = kd = 0) the torque is the feed-forward alone, J r'' (the plant cannot move it):
+  // a payload the plant only has gives the nominal model's torque bit for bit, a payload set in the file
+  // (--set) J_400 / J_nominal times it.
+  const ff::Assignment open[] = {model_set("controller.kp=0"), model_set("controller.kd=0")};
+  const ff::Model nominal = rig({open[0], open[1]});
+  const ff::Model variant = rig({open[0], open[1], plant_set("payload.mass=400")});
+  const ff::Model known = rig({open[0], open[1], model_set("payload.mass=400")});
+  EXPECT_EQ(variant.control_inertia, nominal.rigid_inertia);
+  EXPECT_EQ(variant.rigid_inertia, known.rigid_inertia);
+  EXPECT_GT(known.rigid_inertia, nominal.rigid_inertia + 1000.0);  // kg m^2: 71.3 kg more at 4.17 m
+  const ff::Trace a = run(nominal), b = run(variant), c = run(known);
+  EXPECT_EQ(a.torque, b.torque);
+  double peak = 0.0;
+  for (std::size_t k = 0; k < a.torque.size(); ++k) {
+    peak = std::max(peak, std::abs(a.torque[k]));
+    EXPECT_NEAR(c.torque[k], a.torque[k] * known.rigid_inertia / nominal.rigid_inertia, 1e-9 * std::abs(c.torque[k]) + 1e-9);
+  }
+  EXPECT_GT(peak, 1000.0);  // N m: the move's feed-forward is no detail
+}
+
+TEST(ControllerModel, AControllerThatDoesNotKnowThePayloadTracksWorseThanOneThatDoes) {
+  // Closed loop: the hub's response to a payload the controller does not know differs from the one it
+  // does know, and `controller.model: plant` (the controller knows the truth) makes the two one run.
+  const ff::Trace unknown = run(rig({plant_set("payload.mass=400")}));
+  const ff::Trace known = run(rig({model_set("payload.mass=400")}));
+  const double apart = max_difference(unknown.hub_angle, known.hub_angle);
+  RecordProperty("hub_angle_difference_rad", std::to_string(apart));
+  EXPECT_GT(apart, 1e-4);
+  const ff::Trace told = run(rig({plant_set("payload.mass=400")}, "plant"));
+  EXPECT_EQ(told.hub_angle, known.hub_angle);
+  EXPECT_EQ(told.torque, known.torque);
+}
+
+TEST(ControllerModel, TheNotchStaysAtTheNominalResonancesUnderAStiffnessVariant) {
+  // The notch's zeros (omega_z 0: at the closed-loop resonances) are the nominal model's when the plant's
+  // joints are 25 % softer, and the plant's own with `controller.model: plant`.
+  const ff::Assignment notch = model_set("notch.enabled=true");
+  const ff::Model nominal = rig({notch});
+  const ff::Model softer = rig({notch, plant_set("joints.stiffness=29.6e3")});
+  ASSERT_GE(nominal.resonances.size(), 2u);
+  ASSERT_GE(softer.resonances.size(), 2u);
+  EXPECT_EQ(softer.omega_z[0], nominal.resonances[0]);
+  EXPECT_EQ(softer.omega_z[1], nominal.resonances[1]);
+  EXPECT_LT(softer.resonances[0], 0.95 * nominal.resonances[0]);  // the plant's own mode is lower (sqrt(0.75) k)
+  const ff::Model told = rig({notch, plant_set("joints.stiffness=29.6e3")}, "plant");
+  EXPECT_EQ(told.omega_z[0], softer.resonances[0]);
+  EXPECT_EQ(told.omega_z[1], softer.resonances[1]);
+}
+
+TEST(ControllerModel, AssignmentsToTheControllersOwnPathsChangeTheController) {
+  // A plant-only kp is still the controller's kp: the notch sits at the resonances of the loop with it.
+  const ff::Model with_kp = rig({model_set("notch.enabled=true"), plant_set("controller.kp=2e5")});
+  const ff::Model known_kp = rig({model_set("notch.enabled=true"), model_set("controller.kp=2e5")});
+  EXPECT_EQ(with_kp.omega_z[0], known_kp.omega_z[0]);
+  EXPECT_EQ(with_kp.spec.controller.kp, 2e5);
+  EXPECT_TRUE(ff::is_controller_path("joints.elbow.controller.kp"));
+  EXPECT_TRUE(ff::is_controller_path("trajectory.moves[0].target"));
+  EXPECT_FALSE(ff::is_controller_path("joints.stiffness"));
+  EXPECT_FALSE(ff::is_controller_path("bodies[tool].mass"));
+  EXPECT_FALSE(ff::is_controller_path("joints.elbow.friction.coulomb"));
+}
+
+TEST(ControllerModel, AnUnknownControllerModelIsNamedAtItsKey) {
+  try {
+    rig({}, "truth");
+    ADD_FAILURE() << "controller.model: truth was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.key(), "controller.model");
+    EXPECT_NE(std::string(e.what()).find("nominal, plant"), std::string::npos) << e.what();
+  }
+  try {
+    ff::make_arm_with(ff::load_yaml_text(ff::test::pendulum_arm("controller: {model: truth}\n"), "arm.yaml"), "arm.yaml", {});
+    ADD_FAILURE() << "an arm's controller.model: truth was accepted";
+  } catch (const ff::ConfigError& e) {
+    EXPECT_EQ(e.key(), "controller.model");
+    EXPECT_EQ(e.line(), 9);
+  }
+}
+
+TEST(ControllerModel, AnArmsGravityCompensationUsesTheNominalMassAndDroopsByTheRest) {
+  // The 2 kg pendulum held at q = 0 by PD and gravity compensation at the reference, its bob 3 kg in the
+  // plant only: the controller compensates 2 kg, so the arm droops until kp q = (3 cos q - 2) g l
+  // (about (m - m_nominal) g l / kp = 0.0123 rad). Told the truth (controller.model: plant), it holds 0.
+  const double kp = 400.0, g = 9.81, l = 0.5;
+  auto arm = [&](const std::string& controller_model, const ff::Assignment& mass) {
+    const std::string text = ff::test::pendulum_arm("tool: {body: arm, point: [0.5, 0, 0]}\ncontroller: {rate: 1000, model: " +
+                                                    controller_model + "}\njoints:\n  arm:\n    controller: {kp: 400, kd: 40, "
+                                                    "gravity_compensation: 1}\nsimulation: {duration: 6.0}\n");
+    return ff::make_arm_with(ff::load_yaml_text(text, "arm.yaml"), "arm.yaml", {mass});
+  };
+  const ff::ArmModel unknown = arm("nominal", plant_set("bodies[arm].mass=3.0"));
+  ASSERT_TRUE(unknown.control);
+  EXPECT_EQ(unknown.control->tree.body(0).mass, 2.0);
+  EXPECT_EQ(unknown.tree.body(0).mass, 3.0);
+  const ff::ArmRun a = ff::simulate_arms(std::span<const ff::ArmModel>(&unknown, 1));
+  const double q = a.traces[0].column("arm.q").back();
+  EXPECT_GT(q, 0.01);
+  EXPECT_NEAR(-kp * q + (3.0 * std::cos(q) - 2.0) * g * l, 0.0, 1e-6 * g * l);
+  const ff::ArmModel told = arm("plant", plant_set("bodies[arm].mass=3.0"));
+  EXPECT_FALSE(told.control);
+  const ff::ArmRun b = ff::simulate_arms(std::span<const ff::ArmModel>(&told, 1));
+  EXPECT_NEAR(b.traces[0].column("arm.q").back(), 0.0, 1e-9);
 }

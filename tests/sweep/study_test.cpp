@@ -12,6 +12,7 @@
 
 #include "common/errors.hpp"
 #include "arm/arm_simulate.hpp"
+#include "kernel/model_io.hpp"
 #include "tests/temp_dir.hpp"
 
 namespace {
@@ -133,6 +134,31 @@ TEST_F(StudyFiles, ModelPathIsRelativeToTheStudyFile) {
   ASSERT_EQ(st.variants.size(), 1u);
   EXPECT_EQ(st.variants[0].label, "run 0");
   EXPECT_DOUBLE_EQ(ff::make_variant_model(st, st.variants[0]).spec.payload_mass, 400.0);
+}
+
+TEST_F(StudyFiles, AVariablesOrARunsPayloadIsThePlantsAloneAndTheStudysSetAndCasesTheControllers) {
+  // The feed-forward's inertia (Model::control_inertia) follows the study's `set:` and its case's, not a
+  // variable's or a run's value: those change the plant only (docs/formats.md, "The controller's model").
+  const double J_nominal = ff::load_model(kModel).rigid_inertia;
+  const auto grid = write("g.yaml", "model: " + kModel + "\nset: {controller.feedforward: 1}\ncases:\n  - label: nominal\n" +
+                                         "  - label: heavy\n    set: {payload.mass: 500}\nvariables:\n" +
+                                         "  - {path: payload.mass, levels: [300, 400]}\ndesign: {type: grid}\n");
+  const ff::Study g = ff::load_study(grid);
+  ASSERT_EQ(g.variants.size(), 4u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const ff::Model m = ff::make_variant_model(g, g.variants[i]);
+    EXPECT_EQ(m.control_inertia, J_nominal) << g.variants[i].label;
+    EXPECT_NE(m.rigid_inertia, J_nominal) << g.variants[i].label;
+  }
+  // The heavy case: the controller knows its 500 kg, the plant has the variable's payload.
+  const ff::Model heavy = ff::make_variant_model(g, g.variants[2]);
+  EXPECT_DOUBLE_EQ(heavy.spec.payload_mass, 300.0);
+  EXPECT_GT(heavy.control_inertia, J_nominal + 2000.0);  // kg m^2: 171 kg more at the tip, 4.17 m out
+  const auto runs = write("r.yaml", "model: " + kModel + "\nset: {payload.mass: 400}\nruns:\n  - set: {payload.mass: 300}\n");
+  const ff::Study r = ff::load_study(runs);
+  const ff::Model run = ff::make_variant_model(r, r.variants[0]);
+  EXPECT_DOUBLE_EQ(run.spec.payload_mass, 300.0);
+  EXPECT_GT(run.control_inertia, run.rigid_inertia + 1000.0);  // the controller's is the study's 400 kg
 }
 
 TEST_F(StudyFiles, StudyWideSetAppliesToEveryRun) {

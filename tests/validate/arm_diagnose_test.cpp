@@ -28,13 +28,12 @@ ArmRecordNoise rig_noise() {
   return n;
 }
 
-// The diagnosis, over `effects`, of the model `path` (with `base`) on a record of it with `hidden` set too.
+// The diagnosis, over `effects`, of the model `path` (with `base`) on a record of it with `hidden` set too,
+// in the plant only (a real arm's controller keeps its nominal model: docs/formats.md, "The controller's model").
 Diagnosis diagnose_hidden(const std::string& path, const std::vector<std::string>& base,
                           const std::vector<std::string>& hidden, const std::vector<std::string>& effects,
                           std::uint64_t seed, int iterations = 12) {
-  std::vector<std::string> truth = base;
-  truth.insert(truth.end(), hidden.begin(), hidden.end());
-  const Record r = make_arm_record(load_arm_with(path, truth), rig_noise(), seed);
+  const Record r = make_arm_record(load_arm_with(path, base, hidden), rig_noise(), seed);
   DiagnoseOptions opt;
   opt.max_iterations = iterations;
   opt.only = effects;

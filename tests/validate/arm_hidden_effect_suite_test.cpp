@@ -129,9 +129,9 @@ struct Outcome {
 Outcome run_case(const Case& c, bool print) {
   const SuiteArm& a = kArms[c.arm];
   const std::string path = std::string(FLEXFARM_SOURCE_DIR) + "/" + a.file;
-  std::vector<std::string> truth = a.set;
-  truth.insert(truth.end(), c.hidden.begin(), c.hidden.end());
-  const Record r = make_arm_record(load_arm_with(path, truth), c.noise, c.seed);
+  // The hidden effect in the plant only: the truth's controller keeps its nominal model (docs/formats.md,
+  // "The controller's model").
+  const Record r = make_arm_record(load_arm_with(path, a.set, c.hidden), c.noise, c.seed);
   const Diagnosis d = diagnose_arm(load_arm_source(path, a.set), r, DiagnoseOptions{});
   Outcome o;
   o.verdict = d.verdict;

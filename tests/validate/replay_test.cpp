@@ -30,6 +30,31 @@ TEST(Replay, ClosedLoopReplayOfTheModelsOwnRunIsExact) {
     EXPECT_GT(calc_fit(r.at(c), p[0].channels.at(c)).percent, 99.999) << c;
 }
 
+TEST(Replay, AClosedLoopReplayKeepsTheControllersModel) {
+  // A rig carrying 400 kg whose notch sits at the nominal 328.7 kg rig's resonances (make_model's
+  // `controller`, as a plant-only payload builds it) replays its own run exactly: the replay model keeps
+  // that notch, not one at the 400 kg rig's resonances (which fits the record worse).
+  ModelSpec nominal_spec = rig();
+  nominal_spec.notch.enabled = true;
+  const Model nominal = make_model(nominal_spec);
+  ModelSpec heavy = nominal_spec;
+  heavy.payload_mass = 400.0;
+  const Model plant = make_model(heavy, "<plant>", &nominal);
+  const Record r = record_of(plant);
+  const Model replayed = make_replay_model(plant, r);
+  EXPECT_EQ(replayed.omega_z[0], nominal.resonances[0]);
+  EXPECT_EQ(replayed.omega_z[1], nominal.resonances[1]);
+  EXPECT_EQ(replayed.control_inertia, nominal.rigid_inertia);
+  const auto p = replay(std::span<const Model>(&plant, 1), r, ReplayMode::kClosedLoop);
+  ASSERT_TRUE(p[0].ok);
+  for (const auto& c : scored_channels(ReplayMode::kClosedLoop, r))
+    EXPECT_GT(calc_fit(r.at(c), p[0].channels.at(c)).percent, 99.999) << c;
+  const Model knows = make_model(heavy);  // the controller told the payload: another notch
+  EXPECT_GT(std::abs(knows.omega_z[0] - nominal.omega_z[0]), 0.05 * nominal.omega_z[0]);
+  const auto q = replay(std::span<const Model>(&knows, 1), r, ReplayMode::kClosedLoop);
+  EXPECT_LT(calc_fit(r.at("hub_torque"), q[0].channels.at("hub_torque")).percent, 99.0);
+}
+
 TEST(Replay, OpenLoopReplayOfItsTorqueReproducesTheMotion) {
   const Model m = make_model(rig());
   const Record r = record_of(m);
