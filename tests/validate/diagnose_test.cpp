@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "validate/diagnose.hpp"
+#include "validate/effects.hpp"
 #include "tests/validate/truth/truth_sim.hpp"
 #include "validate/synthetic.hpp"
 
@@ -164,6 +165,25 @@ TEST(Diagnose, ALateHubAngleLoggedAsReadIsTheInLoopDelayToTheSample) {
   ASSERT_EQ(d.verdict, "sensor_delay.hub_angle") << format_diagnosis_text(d);
   EXPECT_EQ(d.ranking[0].params.at("sensors.hub_angle.delay"), 2.0);
   EXPECT_TRUE(d.ranking[0].explained) << format_diagnosis_text(d);
+}
+
+// An on-time hub angle (logged: true) stamped 12 samples late by its logger, the loop untouched: the
+// logger's delay, found to the sample, and not the loop's (which would change the tip and torque too).
+TEST(Diagnose, AnOnTimeAngleStampedLateIsTheLoggersDelay) {
+  std::vector<std::string> base = kShortRun;
+  base.push_back("sensors.hub_angle.logged=true");
+  std::vector<std::string> truth = base;
+  truth.push_back("sensors.hub_angle.logged_delay=12");
+  const Record r = make_synthetic_record(build_model(load_model_source(kModel, truth)), 0.01, 31, 2);
+  DiagnoseOptions opt;
+  opt.only = {"logger_delay.hub_angle", "sensor_delay.hub_angle"};
+  const Diagnosis d = diagnose(load_model_source(kModel, base), r, opt);
+  ASSERT_EQ(d.verdict, "logger_delay.hub_angle") << format_diagnosis_text(d);
+  EXPECT_EQ(d.ranking[0].params.at("sensors.hub_angle.logged_delay"), 12.0);
+  // Logged as read (the default) there is no on-time column to be late: not a candidate.
+  const auto names = make_candidate_effects(build_model(load_model_source(kModel, kShortRun)), ReplayMode::kClosedLoop,
+                                            EffectScales{}, {"hub_angle"});
+  EXPECT_TRUE(std::none_of(names.begin(), names.end(), [](const Effect& e) { return e.name == "logger_delay.hub_angle"; }));
 }
 
 // A 16-bit encoder quantised in the loop and logged as read, tachometer noise in the loop, nothing else
