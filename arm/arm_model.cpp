@@ -196,6 +196,11 @@ void check_joint_blocks(const ArmSpec& spec, const JointControlSpec& c) {
     if (ch->delay < 0 || ch->delay > 10000)
       throw ConfigError(src, 0, key + k + ".delay", "must be between 0 and 10000 samples");
     non_negative(ch->rate, k + ".rate");
+    if (!is_logged_name(ch->logged))
+      throw ConfigError(src, 0, key + k + ".logged",
+                        "unknown value '" + ch->logged + "' (read: what the controller read, true: on time)");
+    if (ch->logged_delay < 0 || ch->logged_delay > 10000)
+      throw ConfigError(src, 0, key + k + ".logged_delay", "must be between 0 and 10000 samples");
     if (ch->rate > 0) {
       const double ratio = spec.rate / ch->rate;
       if (!(ratio >= 1.0 - 1e-9) || std::fabs(ratio - std::round(ratio)) > 1e-9 * ratio || ratio > 1e6)

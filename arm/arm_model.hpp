@@ -52,12 +52,13 @@ struct JointControlSpec {
                                // by default
   double torque_offset = 0.0;  // a constant load torque the drive must supply, N·m (N): the joint gets
                                // tau - torque_offset (the rig's hub_torque_offset)
-  ChannelSpec angle_sensor;    // what the controller measures of q (sensors.angle), rad (m)
+  LoopChannelSpec angle_sensor;  // what the controller measures of q (sensors.angle), rad (m); its `logged`:
+                                 // what a record's <joint>.angle holds (validate/arm_record.hpp)
   // A slipped encoder (sensors.angle.fault_time, fault_offset): from the first controller sample at or
   // after fault_time the measured angle is off by fault_offset (added to what the channel gives).
   double angle_fault_time = std::numeric_limits<double>::infinity();  // s; infinity = never
   double angle_fault_offset = 0.0;                                    // rad (m)
-  ChannelSpec rate_sensor;     // and of qd (sensors.rate), rad/s (m/s)
+  LoopChannelSpec rate_sensor;   // and of qd (sensors.rate), rad/s (m/s); `logged`: what <joint>.rate holds
   bool drive = false;          // a compliant drive train (`drive:`): the tree holds the joint's rotor and
                                // its twist "<joint>.twist" (insert_drive_train); the joint is the rotor's
   DriveTrain train;            // with `drive:`, its values; the lanes apply its nonlinear law at the twist

@@ -116,6 +116,13 @@ const std::array<Field<ChannelSpec>, 4> kRateSensorFields{{
      .fallback = "0: controller.rate"},
 }};
 
+// Both sensors: what a record's column of the channel holds (read: what the controller read; true: on time).
+const std::array<Field<LoopChannelSpec>, 2> kLoggedFields{{
+    {.key = "logged", .member = &LoopChannelSpec::logged},
+    {.key = "logged_delay", .member = &LoopChannelSpec::logged_delay, .unit = "controller samples",
+     .bound = Bound::kNonNegative},
+}};
+
 // A drive train on the joint (description/tree_description.hpp, DriveTrain), output-side units.
 const std::array<Field<DriveTrain>, 7> kDriveFields{{
     {.key = "rotor_inertia", .member = &DriveTrain::rotor_inertia, .unit = "kg·m² (kg)", .bound = Bound::kNonNegative},
@@ -369,11 +376,13 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
       friction.finish();
       YamlReader sensors = one.child("sensors");
       YamlReader angle = sensors.child("angle");
-      read_present(angle, kAngleSensorFields, c.angle_sensor);
+      read_present(angle, kAngleSensorFields, static_cast<ChannelSpec&>(c.angle_sensor));
       read_present(angle, kAngleFaultFields, c);
+      read_present(angle, kLoggedFields, c.angle_sensor);
       angle.finish();
       YamlReader rate = sensors.child("rate");
-      read_present(rate, kRateSensorFields, c.rate_sensor);
+      read_present(rate, kRateSensorFields, static_cast<ChannelSpec&>(c.rate_sensor));
+      read_present(rate, kLoggedFields, c.rate_sensor);
       rate.finish();
       sensors.finish();
       YamlReader drive = one.child("drive");
@@ -527,7 +536,9 @@ std::vector<KeyDoc> arm_yaml_keys() {
   add_keys(out, "joints.NAME.friction.", kFrictionFields);
   add_keys(out, "joints.NAME.sensors.angle.", kAngleSensorFields);
   add_keys(out, "joints.NAME.sensors.angle.", kAngleFaultFields);
+  add_keys(out, "joints.NAME.sensors.angle.", kLoggedFields);
   add_keys(out, "joints.NAME.sensors.rate.", kRateSensorFields);
+  add_keys(out, "joints.NAME.sensors.rate.", kLoggedFields);
   add_keys(out, "joints.NAME.drive.", kDriveFields);
   add_keys(out, "joints.NAME.hydraulics.", hydraulic_fields());
   add_keys(out, "trajectory.", kTrajectoryFields);

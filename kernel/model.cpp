@@ -156,6 +156,13 @@ void validate(const ModelSpec& s, const std::string& src) {
       }
     }
   }
+  for (const auto& [ch, key] : {std::pair{&s.sensors.hub_angle, "sensors.hub_angle"},
+                                std::pair{&s.sensors.hub_rate, "sensors.hub_rate"}})
+    if (!is_logged_name(ch->logged))
+      throw ConfigError(src, 0, std::string(key) + ".logged",
+                        "unknown value '" + ch->logged + "' (read: what the controller read, true: on time)");
+    else if (ch->logged_delay < 0 || ch->logged_delay > 10000)
+      throw ConfigError(src, 0, std::string(key) + ".logged_delay", "must be between 0 and 10000 samples");
   const int joint = s.sensors.strain_gauge.joint;
   if ((joint < 1 || joint > s.segments - 1) && (s.segments > 1 || s.sensors.strain_gauge.enabled))
     throw ConfigError(src, 0, "sensors.strain_gauge.joint",

@@ -66,6 +66,18 @@ struct ChannelSpec {
   double rate = 0.0;              // sample rate, Hz; must divide controller.rate; 0 = controller.rate
 };
 
+// A channel the controller reads (sensors.hub_angle, .hub_rate; an arm joint's sensors.angle, .rate) and what a
+// record's column of it holds (docs/formats.md, "Logged columns"): "read", what the controller read (late,
+// held, quantised and noisy as the loop saw it: what real loggers record, the default), or "true", an
+// on-time measurement of the true signal (its noise only), kernel/sensors.hpp log_loop_channel.
+struct LoopChannelSpec : ChannelSpec {
+  std::string logged = "read";    // read, true
+  int logged_delay = 0;           // the logged column's own latency (a logger that stamps late), controller samples
+};
+// Whether `name` is a value of `logged` (read, true); a logged: true channel's column is on time.
+inline bool is_logged_name(const std::string& name) { return name == "read" || name == "true"; }
+inline bool is_logged_on_time(const LoopChannelSpec& ch) { return ch.logged == "true"; }
+
 // A recorded channel (off by default): written to the trace at every controller sample, not fed back.
 struct RecordedChannelSpec : ChannelSpec {
   bool enabled = false;
@@ -82,8 +94,8 @@ struct StrainGaugeSpec : RecordedChannelSpec {
 // truths (hub_torque, tip_deflection, pressure_a, pressure_b) were measured (kernel/sensors.hpp,
 // measure_output). Their delay shifts the recorded signal only; no controller reads them.
 struct SensorSpec {
-  ChannelSpec hub_angle;          // encoder, rad
-  ChannelSpec hub_rate;           // tachometer, rad/s
+  LoopChannelSpec hub_angle;      // encoder, rad
+  LoopChannelSpec hub_rate;       // tachometer, rad/s
   StrainGaugeSpec strain_gauge;   // N·m (and m)
   RecordedChannelSpec tip_accelerometer;  // lateral tip acceleration in the hub frame, m/s^2
   RecordedChannelSpec tip_position;       // tip deflection (camera, laser tracker), m

@@ -149,18 +149,25 @@ std::array<Field<ChannelSpec>, 4> channel_fields(const char* unit) {
 const std::array<Field<RecordedChannelSpec>, 1> kRecordedFields{{
     {.key = "enabled", .member = &RecordedChannelSpec::enabled},
 }};
+// The channels the controller reads: what a record's column of them holds.
+const std::array<Field<LoopChannelSpec>, 2> kLoggedFields{{
+    {.key = "logged", .member = &LoopChannelSpec::logged},
+    {.key = "logged_delay", .member = &LoopChannelSpec::logged_delay, .unit = "controller samples"},
+}};
 const std::array<Field<StrainGaugeSpec>, 1> kStrainGaugeFields{{{.key = "joint", .member = &StrainGaugeSpec::joint}}};
-struct Channel { const char* name; const char* unit; ChannelSpec* channel; RecordedChannelSpec* recorded; };
+struct Channel {
+  const char* name; const char* unit; ChannelSpec* channel; RecordedChannelSpec* recorded; LoopChannelSpec* loop;
+};
 std::array<Channel, 9> channels(SensorSpec& ss) {
-  return {{{"hub_angle", "rad", &ss.hub_angle, nullptr},
-           {"hub_rate", "rad/s", &ss.hub_rate, nullptr},
-           {"strain_gauge", "N·m", &ss.strain_gauge, &ss.strain_gauge},
-           {"tip_accelerometer", "m/s²", &ss.tip_accelerometer, &ss.tip_accelerometer},
-           {"tip_position", "m", &ss.tip_position, &ss.tip_position},
-           {"hub_torque", "N·m", &ss.hub_torque, nullptr},
-           {"tip_deflection", "m", &ss.tip_deflection, nullptr},
-           {"pressure_a", "Pa", &ss.pressure_a, nullptr},
-           {"pressure_b", "Pa", &ss.pressure_b, nullptr}}};
+  return {{{"hub_angle", "rad", &ss.hub_angle, nullptr, &ss.hub_angle},
+           {"hub_rate", "rad/s", &ss.hub_rate, nullptr, &ss.hub_rate},
+           {"strain_gauge", "N·m", &ss.strain_gauge, &ss.strain_gauge, nullptr},
+           {"tip_accelerometer", "m/s²", &ss.tip_accelerometer, &ss.tip_accelerometer, nullptr},
+           {"tip_position", "m", &ss.tip_position, &ss.tip_position, nullptr},
+           {"hub_torque", "N·m", &ss.hub_torque, nullptr, nullptr},
+           {"tip_deflection", "m", &ss.tip_deflection, nullptr, nullptr},
+           {"pressure_a", "Pa", &ss.pressure_a, nullptr, nullptr},
+           {"pressure_b", "Pa", &ss.pressure_b, nullptr, nullptr}}};
 }
 
 const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
@@ -243,9 +250,10 @@ ModelSpec parse_spec(const YAML::Node& doc, const std::string& src, LineMap& lin
   read_block(top, "shaper", kShaperFields, s.shaper).finish();
 
   auto sensors = top.child("sensors");
-  for (const auto& [name, unit, ch, recorded] : channels(s.sensors)) {
+  for (const auto& [name, unit, ch, recorded, loop] : channels(s.sensors)) {
     auto c = read_block(sensors, name, channel_fields(unit), *ch);
     if (recorded) read_unchecked(c, kRecordedFields, *recorded);
+    if (loop) read_unchecked(c, kLoggedFields, *loop);
     if (ch == &s.sensors.strain_gauge) read_unchecked(c, kStrainGaugeFields, s.sensors.strain_gauge);
     c.finish();
   }
@@ -307,10 +315,11 @@ std::vector<KeyDoc> rig_model_keys() {
   }
   add_keys(out, "shaper.", kShaperFields);
   SensorSpec sensors;
-  for (const auto& [name, unit, ch, recorded] : channels(sensors)) {
+  for (const auto& [name, unit, ch, recorded, loop] : channels(sensors)) {
     const std::string prefix = std::string("sensors.") + name + ".";
     add_keys(out, prefix, channel_fields(unit));
     if (recorded) add_keys(out, prefix, kRecordedFields);
+    if (loop) add_keys(out, prefix, kLoggedFields);
     if (ch == &sensors.strain_gauge) add_keys(out, prefix, kStrainGaugeFields);
   }
   add_keys(out, "friction.", kFrictionFields);

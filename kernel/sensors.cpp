@@ -29,6 +29,47 @@ void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle
                                  bm.sensor_delay[c][l], bm.sensor_hold[c][l], k, H, W, l, s.measured[c].data());
 }
 
+const char* loop_channel_name(LoopChannel c) { return c == kLoopHubAngle ? "hub_angle" : "hub_rate"; }
+
+const LoopChannelSpec& loop_channel_spec(const SensorSpec& s, LoopChannel c) {
+  return c == kLoopHubAngle ? s.hub_angle : s.hub_rate;
+}
+
+std::vector<double> log_channel(const LoopChannelSpec& ch, double controller_rate, std::uint64_t key,
+                                const std::vector<double>& x, bool noisy) {
+  const bool read = !is_logged_on_time(ch);
+  const long n = read ? calc_sensor_hold(ch, controller_rate) : 1, d = read ? ch.delay : 0;
+  std::vector<double> y(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const long kk = static_cast<long>(k);
+    const std::size_t j = std::min(static_cast<std::size_t>(kk >= d ? (kk - d) / n * n : 0), x.size() - 1);
+    double v = x[j];
+    if (noisy && ch.noise > 0.0) v += ch.noise * CounterRng(key, j).normal();
+    if (read && ch.resolution > 0.0) v = ch.resolution * std::nearbyint(v / ch.resolution);  // as sample_channel
+    y[k] = v;
+  }
+  // The logger's own latency L: the column holds at k what was logged at max(k - L, 0).
+  if (const std::size_t L = static_cast<std::size_t>(ch.logged_delay); L > 0)
+    for (std::size_t k = y.size(); k-- > 0;) y[k] = y[k >= L ? k - L : 0];
+  return y;
+}
+
+std::vector<double> log_loop_channel(const Model& m, LoopChannel c, const std::vector<double>& x, bool noisy) {
+  return log_channel(loop_channel_spec(m.spec.sensors, c), m.spec.controller.rate,
+                     calc_variant_seed(m.spec.simulation.seed, static_cast<std::uint64_t>(c)), x, noisy);
+}
+
+std::vector<double> unlog_channel(const LoopChannelSpec& ch, const std::vector<double>& y) {
+  const std::size_t d = static_cast<std::size_t>((is_logged_on_time(ch) ? 0 : ch.delay) + ch.logged_delay);
+  std::vector<double> x(y.size());
+  for (std::size_t k = 0; k < y.size(); ++k) x[k] = y[std::min(k + d, y.size() - 1)];
+  return x;
+}
+
+std::vector<double> unlog_loop_channel(const Model& m, LoopChannel c, const std::vector<double>& y) {
+  return unlog_channel(loop_channel_spec(m.spec.sensors, c), y);
+}
+
 const char* recorded_column_name(RecordedColumn c) {
   switch (c) {
     case kStrainMoment: return "strain_moment";

@@ -27,6 +27,32 @@ double sample_channel(double x, double sigma, std::uint64_t key, double quantum,
 // the run is younger than the delay; as the recorded sensors below.
 void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle, double* hub_rate);
 
+// The channels the controller reads (sensors.hub_angle, .hub_rate; noise streams 0 and 1, as
+// compute_measurements') and what a record's column of each holds (LoopChannelSpec::logged).
+enum LoopChannel { kLoopHubAngle = 0, kLoopHubRate, kLoopChannels };
+// The record column (and model path sensors.<name>) of a channel.
+const char* loop_channel_name(LoopChannel c);
+const LoopChannelSpec& loop_channel_spec(const SensorSpec& s, LoopChannel c);
+
+// The logged column of an in-loop channel from its truth x at every controller sample (x_k at t = k T):
+//   logged: read  y_k = Q(x_j + sigma n_j), j = n floor((k - d) / n) for k >= d, else j = 0 (delay d, hold n):
+//                 what the controller read at sample k, bit for bit compute_measurements' (the same
+//                 stream (seed, c) at sample j); noisy = false (a prediction) leaves out the noise and
+//                 keeps the quantisation: the loop's reading of the noise-free signal.
+//   logged: true  y_k = x_k + sigma n_k: an on-time measurement, noise only (the channel's stream at
+//                 sample k; no delay, hold or quantisation); noisy = false gives x.
+// Either then shifted by the logger's own latency L = logged_delay: the column at k holds y_max(k - L, 0).
+std::vector<double> log_loop_channel(const Model& m, LoopChannel c, const std::vector<double>& x, bool noisy);
+// The same rule for any in-loop channel `ch` (an arm joint's too) sampled by a controller at `controller_rate`
+// (Hz), its noise stream `key`.
+std::vector<double> log_channel(const LoopChannelSpec& ch, double controller_rate, std::uint64_t key,
+                                const std::vector<double>& x, bool noisy);
+// The channel's truth at controller sample k from its logged column y (a record's): y_(k + d + L) (d the
+// loop's delay when logged as read, else 0; L = logged_delay; the hold's staircase kept), the last value
+// beyond the end.
+std::vector<double> unlog_loop_channel(const Model& m, LoopChannel c, const std::vector<double>& y);
+std::vector<double> unlog_channel(const LoopChannelSpec& ch, const std::vector<double>& y);
+
 // Trace columns of the recorded sensors (rows of compute_recorded_sensors' output), in order.
 enum RecordedColumn { kStrainMoment = 0, kStrainTipEstimate, kTipAccel, kTipPosition, kRecordedColumns };
 // Their names in Trace::extra and the trace CSV.

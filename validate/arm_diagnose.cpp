@@ -177,6 +177,10 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   if (a.control.kd > 0)
     out.push_back({"sensor_delay." + a.name + "_rate", "delay of " + a.name + "'s rate measurement (in the loop)", {}, {},
                    j + "sensors.rate.delay", make_delay_grid(last), true, ""});
+  // A logger that stamps the on-time angle late (logged: true): the scored column shifted, the loop untouched.
+  if (is_logged_on_time(a.control.angle_sensor))
+    out.push_back({"logger_delay." + a.name + "_angle", "latency of the logged " + a.name + " angle (output only)", {}, {},
+                   j + "sensors.angle.logged_delay", make_delay_grid(last), true, ""});
   if (base.tree.body(a.body).joint == JointType::kRevolute)
     out.push_back({"sensor_quantization@" + a.name, "quantisation of " + a.name + "'s angle encoder", {}, {},
                    j + "sensors.angle.resolution", make_encoder_quanta(), false, ""});

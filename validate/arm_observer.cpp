@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "kernel/sensors.hpp"
 #include "validate/arm_record.hpp"
 
 namespace ff {
@@ -176,6 +177,21 @@ ArmObserverRun run_arm_observer(std::span<const ArmModel> models, const Record& 
     record_column.push_back(&r.at(c));
   }
   if (ny == 0) base.message = "the record has no measured channel that varies";
+  // The joints' angles and rates as each lane's model logs them, brought back on time (a column logged as
+  // read is d + L controller samples late, kernel/sensors.hpp unlog_channel): the correction compares them
+  // with the state now. Empty: the record's own column.
+  std::vector<std::vector<std::vector<double>>> on_time(static_cast<size_t>(M), std::vector<std::vector<double>>(static_cast<size_t>(ny)));
+  for (size_t l = 0; l < on_time.size(); ++l)
+    for (size_t c = 0; c < on_time[l].size(); ++c)
+      for (const ActuatedJoint& a : models[l].actuated) {
+        const std::string& name = base.channels[c];
+        const bool angle = name == a.name + ".angle";
+        if (!angle && name != a.name + ".rate") continue;
+        const LoopChannelSpec& ch = angle ? a.control.angle_sensor : a.control.rate_sensor;
+        const int late = (is_logged_on_time(ch) ? 0 : ch.delay) + ch.logged_delay;
+        if (late > 0)
+          for (double t : r.t) on_time[l][c].push_back(interpolate(r.t, *record_column[c], t + late * T));
+      }
   out.design.assign(static_cast<size_t>(M), base);
   std::vector<ObserverDesign> gains(static_cast<size_t>(M), gain);
   std::vector<char> have_gain(static_cast<size_t>(M), 0);
@@ -228,7 +244,9 @@ ArmObserverRun run_arm_observer(std::span<const ArmModel> models, const Record& 
         if (!have_gain[static_cast<size_t>(l)] || obs.status[static_cast<size_t>(l)] != LaneStatus::kOk) continue;
         const Eigen::MatrixXd& L = gains[static_cast<size_t>(l)].L;
         for (int c = 0; c < ny; ++c)
-          e[static_cast<size_t>(c)] = (*record_column[static_cast<size_t>(c)])[static_cast<size_t>(j)] -
+          e[static_cast<size_t>(c)] = (on_time[static_cast<size_t>(l)][static_cast<size_t>(c)].empty()
+                                           ? (*record_column[static_cast<size_t>(c)])[static_cast<size_t>(j)]
+                                           : on_time[static_cast<size_t>(l)][static_cast<size_t>(c)][static_cast<size_t>(j)]) -
                                       obs.row[columns[static_cast<size_t>(c)] * static_cast<size_t>(W) + static_cast<size_t>(l)];
         get_arm_state(obs, l, x.data());
         for (int i = 0; i < nx; ++i)

@@ -6,6 +6,7 @@
 
 #include "common/errors.hpp"
 #include "common/random.hpp"
+#include "kernel/sensors.hpp"
 
 namespace ff {
 
@@ -40,6 +41,31 @@ std::string link_list(const ArmModel& m) {
   std::string s;
   for (std::size_t j = 0; j < m.links.size(); ++j) s += (j ? ", " : "") + m.links[j].name;
   return s.empty() ? "none" : s;
+}
+
+// A joint's in-loop column (.angle when `angle`, else .rate) of a trace as logged (LoopChannelSpec::logged,
+// kernel/sensors.hpp log_channel). noisy: what a record holds (logged as read: the trace's own .q_measured or
+// .qd_measured, what the controller read, bit for bit); else the prediction, the controller's reading without
+// its noise (the slipped encoder's offset kept) or, on time, the joint's coordinate itself.
+std::vector<double> log_arm_column(const ArmTrace& tr, const ArmModel& m, const ActuatedJoint& a, bool angle, bool noisy) {
+  const LoopChannelSpec& ch = angle ? a.control.angle_sensor : a.control.rate_sensor;
+  const bool read = !is_logged_on_time(ch);
+  if (noisy && read) return tr.column(a.name + (angle ? ".q_measured" : ".qd_measured"));
+  std::vector<double> y = log_channel(ch, m.spec.rate, angle ? a.angle_key : a.rate_key,
+                                      tr.column(a.name + (angle ? ".q" : ".qd")), noisy);
+  if (angle && read)  // a slipped encoder, from the first sample at or after its fault time (arm_simulate.cpp)
+    for (std::size_t k = 0; k < y.size(); ++k)
+      if (static_cast<double>(k) >= a.control.angle_fault_time / m.control_period - 1e-9) y[k] += a.control.angle_fault_offset;
+  return y;
+}
+
+// The model's column c of a trace: the in-loop ones as logged, the others as the trace has them.
+std::vector<double> arm_trace_column(const ArmTrace& tr, const ArmModel& m, const std::string& c, bool noisy) {
+  for (const ActuatedJoint& a : m.actuated) {
+    if (c == a.name + ".angle") return log_arm_column(tr, m, a, true, noisy);
+    if (c == a.name + ".rate") return log_arm_column(tr, m, a, false, noisy);
+  }
+  return tr.column(arm_trace_name(c));
 }
 
 }  // namespace
@@ -168,7 +194,7 @@ Record make_arm_record(const ArmModel& m, const ArmRecordNoise& noise, std::uint
   r.t = tr.t();
   const std::vector<std::string> cols = arm_record_columns(m);
   for (std::size_t c = 0; c < cols.size(); ++c) {
-    std::vector<double> y = tr.column(arm_trace_name(cols[c]));
+    std::vector<double> y = arm_trace_column(tr, m, cols[c], true);
     const std::string& n = cols[c];
     const double sd = ends_with(n, ".angle") ? noise.angle
                       : ends_with(n, ".rate") ? noise.rate
@@ -225,9 +251,9 @@ std::map<std::string, std::vector<double>> sample_arm_trace_at_record(const ArmT
   std::map<std::string, std::vector<double>> out;
   const std::vector<double>& tm = tr.t();
   for (const std::string& c : arm_record_columns(m)) {
-    const std::vector<double>& y = tr.column(arm_trace_name(c));
+    std::vector<double> y = arm_trace_column(tr, m, c, false);
     if (!resampled) {
-      out[c] = y;
+      out[c] = std::move(y);
       continue;
     }
     std::vector<double> v(r.size());

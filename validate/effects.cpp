@@ -9,8 +9,8 @@ std::vector<std::string> effect_names() {
   return {"coulomb_friction",      "viscous_friction",       "stribeck_friction",        "torque_offset",
           "backlash",              "drive_compliance",       "hydraulic_compressibility", "torque_saturation",
           "joint_stiffening",      "sensor_delay.hub_angle", "sensor_delay.hub_rate",    "sensor_delay.hub_torque",
-          "sensor_delay.tip_deflection", "sensor_quantization", "extra_mode",             "payload",
-          "hub_inertia"};
+          "sensor_delay.tip_deflection", "logger_delay.hub_angle", "sensor_quantization", "extra_mode",
+          "payload",               "hub_inertia"};
 }
 
 std::vector<std::string> effect_paths(const Effect& e) {
@@ -125,6 +125,11 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
     if (std::find(scored.begin(), scored.end(), c) != scored.end())
       out.push_back({std::string("sensor_delay.") + c, std::string("latency of the recorded ") + c + " (output only)",
                      {}, {}, std::string("sensors.") + c + ".delay", delays, true, ""});
+  // A logger that stamps the on-time hub angle late (sensors.hub_angle.logged: true): the scored column
+  // shifted, the loop untouched (with logged: read the column is as late as the loop's reading).
+  if (!inverse && is_logged_on_time(s.sensors.hub_angle))
+    out.push_back({"logger_delay.hub_angle", "latency of the logged hub angle (output only)", {}, {},
+                   "sensors.hub_angle.logged_delay", delays, true, ""});
   if (closed) {
     // Binary encoders of 9 to 22 bits a turn (12 to 0.0015 mrad): a count is 2 pi / 2^b rad.
     out.push_back({"sensor_quantization", "quantisation of the hub angle encoder", {}, {},

@@ -7,6 +7,7 @@
 
 #include "kernel/drive.hpp"
 #include "kernel/dynamics.hpp"
+#include "kernel/sensors.hpp"
 
 namespace ff {
 
@@ -353,6 +354,19 @@ ObserverRun run_observer(std::span<const Model> models, const Record& r, ReplayM
     need_torque |= channels.back() == Channel::kHubTorque;
   }
   const int ny = static_cast<int>(channels.size());
+  // The hub angle and rate as each lane's model logs them, brought back on time: a column logged as read is
+  // d + L controller samples late (kernel/sensors.hpp unlog_channel), and the observer compares it with the
+  // state now. Empty: the record's own column (on time).
+  std::vector<std::vector<std::vector<double>>> on_time(M, std::vector<std::vector<double>>(ny));
+  for (int l = 0; l < M; ++l)
+    for (int c = 0; c < ny; ++c) {
+      if (channels[c] != Channel::kHubAngle && channels[c] != Channel::kHubRate) continue;
+      const LoopChannelSpec& ch =
+          loop_channel_spec(models[l].spec.sensors, channels[c] == Channel::kHubAngle ? kLoopHubAngle : kLoopHubRate);
+      const int late = (is_logged_on_time(ch) ? 0 : ch.delay) + ch.logged_delay;
+      if (late == 0) continue;
+      for (double t : r.t) on_time[l][c].push_back(interpolate(r.t, *column[c], t + late * T));
+    }
   out.state.assign(M, std::vector<double>(static_cast<std::size_t>(ns) * nx));
   // Scratch for the hook, made once: nothing is allocated while the batch steps.
   Workspace ws = make_workspace(bm);
@@ -379,7 +393,7 @@ ObserverRun run_observer(std::span<const Model> models, const Record& r, ReplayM
             case Channel::kTipDeflection: yhat = defl[l]; break;
             case Channel::kHubTorque: yhat = torque[l]; break;
           }
-          e[c] = (*column[c])[j] - yhat;  // innovation
+          e[c] = (on_time[l][c].empty() ? (*column[c])[j] : on_time[l][c][j]) - yhat;  // innovation
         }
         get_state(bm, s, l, x.data());
         for (int i = 0; i < nx; ++i)

@@ -70,7 +70,18 @@ Record read_record_csv(const std::string& path, const std::vector<std::string>& 
       const char* s = cells[c].c_str();
       char* end = nullptr;
       const double x = std::strtod(s, &end);
-      if (cells[c].empty()) throw ConfigError(path, line_no, header[c], "empty cell");
+      // An empty cell: the channel was not sampled at this row (a slower logger channel); it holds its last
+      // value (sample and hold, as the model's sensors.<channel>.rate predicts it). Time and the first row
+      // must be complete.
+      if (cells[c].empty()) {
+        if (static_cast<int>(c) == tcol) throw ConfigError(path, line_no, header[c], "empty cell (every row needs its time)");
+        if (cols[c].empty())
+          throw ConfigError(path, line_no, header[c],
+                            "empty cell in the first row (a channel logged at a slower rate needs its first value here)");
+        cols[c].push_back(cols[c].back());
+        ++r.held[header[c]];
+        continue;
+      }
       if (end == s || *end != '\0') throw ConfigError(path, line_no, header[c], "'" + cells[c] + "' is not a number");
       if (!std::isfinite(x)) throw ConfigError(path, line_no, header[c], "'" + cells[c] + "' is not finite");
       cols[c].push_back(x);

@@ -13,6 +13,9 @@ struct Record {
   std::string source;                                   // the file
   std::vector<double> t;                                // s, strictly increasing
   std::map<std::string, std::vector<double>> columns;   // every other column, by its header name
+  // Cells a slower logger channel left empty (not sampled at that row), by column: each holds the column's
+  // last value (sample and hold). Columns without empty cells are not listed.
+  std::map<std::string, std::size_t> held;
 
   bool has(const std::string& name) const { return columns.count(name) > 0; }
   const std::vector<double>& at(const std::string& name) const { return columns.at(name); }
@@ -22,7 +25,8 @@ struct Record {
 // The fewest samples a record may have.
 inline constexpr std::size_t kMinRecordSamples = 20;
 
-// Reads a record and checks it: the `required` columns exist; every cell is a finite number;
+// Reads a record and checks it: the `required` columns exist; every cell is a finite number or empty
+// (not sampled there: the column's last value held, Record::held; not in `t` nor in the first row);
 // time strictly increases; at least kMinRecordSamples rows; angle columns (ref, hub_angle,
 // tip_angle) that look like degrees (a swing beyond 2 pi) are refused. Throws ConfigError naming
 // the file, the line and the column, with one clear message.

@@ -89,13 +89,15 @@ std::vector<double> derivative(const std::vector<double>& x, double T) {
   return d;
 }
 
-// Simulated channels of one trace at the record's times; the output channels (hub torque, tip
-// deflection, pressures) as the model's sensors measure them, without noise.
+// Simulated channels of one trace at the record's times: the in-loop channels (hub angle and rate) as
+// logged (sensors.*.logged: read, what the controller read; true, on time), the output channels (hub
+// torque, tip deflection, pressures) as the model's sensors measure them; without noise.
 Prediction sample_trace(const Model& m, const Trace& tr, const Record& r, bool ok) {
   Prediction p;
   p.ok = ok;
   std::vector<std::pair<std::string, std::vector<double>>> ch = {
-      {"hub_angle", tr.hub_angle}, {"hub_rate", tr.hub_rate},
+      {"hub_angle", log_loop_channel(m, kLoopHubAngle, tr.hub_angle, false)},
+      {"hub_rate", log_loop_channel(m, kLoopHubRate, tr.hub_rate, false)},
       {"tip_deflection", measure_output(m, kOutTipDeflection, tr.tip_deflection, false)},
       {"hub_torque", measure_output(m, kOutHubTorque, tr.torque, false)}};
   for (const auto& [name, x] : tr.extra)
@@ -138,8 +140,10 @@ Prediction inverse_dynamics(const Model& model, const Record& r) {
   const int n = m.nseg, nz = bm.layout.nz;
   const double T = m.control_period;
   const long ns = std::lround(m.duration / T) + 1;
-  const auto theta = at_samples(r, r.at("hub_angle"), T, ns);
-  const auto omega = r.has("hub_rate") ? at_samples(r, r.at("hub_rate"), T, ns) : derivative(theta, T);
+  // The hub's motion: the logged columns brought back on time (a column logged as read is d samples late).
+  const auto theta = unlog_loop_channel(model, kLoopHubAngle, at_samples(r, r.at("hub_angle"), T, ns));
+  const auto omega = r.has("hub_rate") ? unlog_loop_channel(model, kLoopHubRate, at_samples(r, r.at("hub_rate"), T, ns))
+                                       : derivative(theta, T);
   const auto alpha = derivative(omega, T);
   // State of the free part: beam joints (q_b, v_b) and drive states z; the hub is prescribed.
   Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n), qdd(n);

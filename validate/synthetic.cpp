@@ -21,8 +21,12 @@ Record make_synthetic_record(const Model& truth, double noise, std::uint64_t see
   // The output channels as their sensors (sensors.hub_torque ...) measured them.
   const std::vector<double> torque = measure_output(truth, kOutHubTorque, tr.torque, true);
   const std::vector<double> tip = measure_output(truth, kOutTipDeflection, tr.tip_deflection, true);
+  // The in-loop channels as logged (sensors.*.logged): what the controller read, or on time.
   std::vector<std::pair<const char*, std::vector<double>>> cols = {
-      {"ref", tr.ref}, {"hub_torque", torque}, {"hub_angle", tr.hub_angle}, {"hub_rate", tr.hub_rate},
+      {"ref", tr.ref},
+      {"hub_torque", torque},
+      {"hub_angle", log_loop_channel(truth, kLoopHubAngle, tr.hub_angle, true)},
+      {"hub_rate", log_loop_channel(truth, kLoopHubRate, tr.hub_rate, true)},
       {"tip_deflection", tip}};
   for (const auto& [name, x] : tr.extra)
     if (const OutputChannel c = find_output_channel(name); c != kOutputChannels)

@@ -11,7 +11,8 @@
 namespace ff {
 
 // Columns t, ref, hub_torque, hub_angle, hub_rate, tip_deflection (and pressure_a, pressure_b with
-// hydraulics; the output channels as their sensors measure them, kernel/sensors.hpp measure_output)
+// hydraulics; the output channels as their sensors measure them, kernel/sensors.hpp measure_output; the
+// hub angle and rate as logged, log_loop_channel: by default what the controller read)
 // at every `decimate`-th controller
 // sample; each measured channel (all but t and ref) gets noise of standard deviation
 // noise x (its standard deviation over the run), from the counter-based stream of (seed, channel).

@@ -426,6 +426,19 @@ TEST(ModelIo, ControllerSensorRateNotDividingTheControllerRateIsRejected) {
   expect_rejected(with_sensors("{hub_rate: {rate: -250}}"), 12, "sensors.hub_rate.rate", ">= 0");
 }
 
+TEST(ModelIo, LoggedSaysWhatTheRecordsColumnOfAnInLoopChannelIs) {
+  const ff::Model m = ff::parse_model(YAML::Load(with_sensors("{hub_angle: {logged: true, logged_delay: 4}}")), "good.yaml");
+  EXPECT_EQ(m.spec.sensors.hub_angle.logged, "true");
+  EXPECT_EQ(m.spec.sensors.hub_angle.logged_delay, 4);
+  EXPECT_EQ(m.spec.sensors.hub_rate.logged, "read");  // the default: what the controller read
+  expect_rejected(with_sensors("{hub_rate: {logged: late}}"), 12, "sensors.hub_rate.logged",
+                  "unknown value 'late' (read: what the controller read, true: on time)");
+  expect_rejected(with_sensors("{hub_angle: {logged_delay: -1}}"), 12, "sensors.hub_angle.logged_delay",
+                  "must be between 0 and 10000 samples");
+  // Only the channels the controller reads have a logged column to describe.
+  expect_rejected(with_sensors("{hub_torque: {logged: true}}"), 12, "sensors.hub_torque.logged", "unknown key");
+}
+
 TEST(ModelIo, EnabledKeyBelongsToTheRecordedSensorsOnly) {
   expect_rejected(with_sensors("{hub_angle: {enabled: true}}"), 12, "sensors.hub_angle.enabled", "unknown key");
 }

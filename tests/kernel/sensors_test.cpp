@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "common/errors.hpp"
 #include "kernel/controller.hpp"
 #include "kernel/dynamics.hpp"
 #include "tests/kernel/test_support.hpp"
@@ -365,6 +366,95 @@ TEST(OutputChannels, NoiseAndQuantumOnlyWhenMeasuredNotPredicted) {
   EXPECT_NEAR(std::sqrt(s2 / y.size()), std::sqrt(4.0 + 0.25 / 12.0), 0.05);  // noise and the quantum's share
   EXPECT_EQ(measure_output(m, kOutHubTorque, x, true), y);                    // repeats (seed, channel)
   EXPECT_EQ(measure_output(m, kOutHubTorque, x, false), x);                   // a prediction: neither
+}
+
+// ---- what a record's column of an in-loop channel holds (sensors.hub_angle.logged) -----------------
+
+// A real logger records what the controller read: the logged column (logged: read, the default) is the
+// controller's input sample for sample, late, held, quantised and with the loop's own noise.
+TEST(LoggedChannels, ReadIsTheControllersInputSampleForSample) {
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.hub_angle.delay = 2;
+  spec.sensors.hub_angle.rate = 250.0;  // held 4 samples
+  spec.sensors.hub_angle.resolution = 1e-3;
+  spec.sensors.hub_angle.noise = 3e-4;
+  Rig rig(spec);
+  std::vector<double> x(200), seen(200);
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    x[k] = 0.3 * std::sin(0.05 * static_cast<double>(k));
+    seen[k] = rig.see(static_cast<long>(k), x[k]);
+  }
+  EXPECT_EQ(rig.m.spec.sensors.hub_angle.logged, "read");
+  EXPECT_EQ(log_loop_channel(rig.m, kLoopHubAngle, x, true), seen);
+  // A prediction: the same reading without the noise, Q(x_j), j = 4 floor((k - 2) / 4).
+  const auto p = log_loop_channel(rig.m, kLoopHubAngle, x, false);
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const std::size_t j = k >= 2 ? (k - 2) / 4 * 4 : 0;
+    ASSERT_EQ(p[k], 1e-3 * std::nearbyint(x[j] / 1e-3)) << k;
+  }
+}
+
+// The same in a closed-loop run: the PD's torque is kp (r_k - y_k) - kd w_k with y and w the trace's true
+// hub angle and rate as logged (read), so the logged columns are exactly what the controller acted on.
+TEST(LoggedChannels, ThePdActsOnTheLoggedColumns) {
+  ModelSpec spec = test::rig_spec(0.5, 1.0);
+  spec.sensors.hub_angle.delay = 3;
+  spec.sensors.hub_angle.resolution = 2.0 * M_PI / 65536.0;  // a 16-bit encoder
+  spec.sensors.hub_angle.noise = 2e-5;
+  spec.sensors.hub_rate.delay = 1;
+  spec.sensors.hub_rate.noise = 1e-3;
+  const Model m = make_model(spec);
+  const auto tr = test::run_one(m).traces[0];
+  const auto y = log_loop_channel(m, kLoopHubAngle, tr.hub_angle, true);
+  const auto w = log_loop_channel(m, kLoopHubRate, tr.hub_rate, true);
+  for (std::size_t k = 0; k < tr.t.size(); ++k)
+    ASSERT_NEAR(tr.torque[k], spec.controller.kp * (tr.ref[k] - y[k]) - spec.controller.kd * w[k], 1e-9 * spec.controller.kp)
+        << k;
+}
+
+// logged: true, an on-time measurement: the true angle plus the channel's noise (sd sigma, mean 0), no
+// delay, hold or quantisation; a prediction is the true angle itself.
+TEST(LoggedChannels, TrueIsTheOnTimeAngleWithNoiseOnly) {
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.hub_angle.delay = 5;
+  spec.sensors.hub_angle.rate = 250.0;
+  spec.sensors.hub_angle.resolution = 1e-2;
+  spec.sensors.hub_angle.noise = 1e-4;
+  spec.sensors.hub_angle.logged = "true";
+  const Model m = make_model(spec);
+  std::vector<double> x(20000);
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = 0.3 * std::sin(1e-3 * static_cast<double>(k));
+  const auto y = log_loop_channel(m, kLoopHubAngle, x, true);
+  double s1 = 0, s2 = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    s1 += y[k] - x[k];
+    s2 += (y[k] - x[k]) * (y[k] - x[k]);
+  }
+  const double n = static_cast<double>(x.size());
+  EXPECT_NEAR(s1 / n, 0.0, 5.0 * 1e-4 / std::sqrt(n));
+  EXPECT_NEAR(std::sqrt(s2 / n), 1e-4, 3e-6);  // the noise's, not the 10 mrad quantum's (2.9 mrad RMS)
+  EXPECT_EQ(log_loop_channel(m, kLoopHubAngle, x, false), x);
+}
+
+// A logger that stamps late (logged_delay L) shifts the column, either way it is logged; unlog_loop_channel
+// brings a read column back on time (the loop's delay and L).
+TEST(LoggedChannels, LoggerLatencyShiftsTheColumnAndUnlogUndoesIt) {
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.hub_angle.delay = 2;
+  spec.sensors.hub_angle.logged_delay = 5;
+  std::vector<double> x(50);
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = static_cast<double>(k);
+  for (const char* logged : {"read", "true"}) {
+    spec.sensors.hub_angle.logged = logged;
+    const Model m = make_model(spec);
+    const auto y = log_loop_channel(m, kLoopHubAngle, x, false);
+    const std::size_t d = std::string(logged) == "read" ? 7 : 5;
+    for (std::size_t k = 0; k < x.size(); ++k) ASSERT_EQ(y[k], k >= d ? x[k - d] : 0.0) << logged << " " << k;
+    const auto back = unlog_loop_channel(m, kLoopHubAngle, y);
+    for (std::size_t k = 0; k + d < x.size(); ++k) ASSERT_EQ(back[k], x[k]) << logged << " " << k;
+  }
+  spec.sensors.hub_angle.logged = "late";
+  EXPECT_THROW(make_model(spec), ConfigError);
 }
 
 TEST(OutputChannels, NamesAreTheRecordColumns) {

@@ -86,6 +86,16 @@ TEST(ArmHiddenEffect, ALateShoulderEncoderIsTheShoulderAngleDelayOfItsSamples) {
   EXPECT_EQ(ranked(d, "sensor_delay.shoulder_angle").params.at("joints.shoulder.sensors.angle.delay"), 6.0);
 }
 
+// A shoulder angle logged on time by a logger that stamps it 5 samples late (the loop untouched): with the
+// model saying the column is on time (logged: true) that is the logger's delay, not the loop's.
+TEST(ArmHiddenEffect, AnOnTimeShoulderAngleStampedLateIsTheLoggersDelay) {
+  const std::vector<std::string> on_time = {"simulation.duration=3.0", "joints.shoulder.sensors.angle.logged=true"};
+  const Diagnosis d = diagnose_hidden(kTwoLink, on_time, {"joints.shoulder.sensors.angle.logged_delay=5"},
+                                      {"logger_delay.shoulder_angle", "sensor_delay.shoulder_angle"}, 14);
+  EXPECT_EQ(d.verdict, "logger_delay.shoulder_angle") << format_diagnosis_text(d);
+  EXPECT_EQ(ranked(d, "logger_delay.shoulder_angle").params.at("joints.shoulder.sensors.angle.logged_delay"), 5.0);
+}
+
 TEST(ArmHiddenEffect, AStifferForearmThanModelledIsTheForearmsStiffness) {
   const Diagnosis d = diagnose_hidden(kTwoLink, kShort, {"bodies[forearm].flexible.stiffness_factor=1.6"},
                                       {"link_stiffness@forearm", "link_stiffness@upper_arm", "armature@elbow",
@@ -139,6 +149,13 @@ TEST(ArmDiagnose, CandidatesAreNamedAfterTheJointOrLinkTheyActAt) {
                         "armature@shoulder", "link_stiffness@upper_arm", "link_damping@forearm", "extra_mode@forearm",
                         "payload@upper_arm", "payload@forearm"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+  // A logger's own delay only where the model says the column is on time.
+  EXPECT_EQ(std::find(names.begin(), names.end(), "logger_delay.shoulder_angle"), names.end());
+  const ModelSource on_time = load_arm_source(kTwoLink, {"simulation.duration=3.0", "joints.shoulder.sensors.angle.logged=true"});
+  names.clear();
+  for (const Effect& e : make_arm_candidate_effects(build_arm(on_time), apply_overrides(on_time), r)) names.push_back(e.name);
+  EXPECT_NE(std::find(names.begin(), names.end(), "logger_delay.shoulder_angle"), names.end());
+  EXPECT_EQ(std::find(names.begin(), names.end(), "logger_delay.elbow_angle"), names.end());
   // The URDF arm: no inline bodies, so no armature or link effects; its joints' effects all there.
   const ModelSource urdf = load_arm_source(kArm6, {"simulation.settle=0.5"});
   const ArmModel m6 = build_arm(urdf);

@@ -111,6 +111,22 @@ TEST(ArmObserver, TheTrueModelOnItsNoiselessRecordIsEstimatedExactlyAndItsKStepF
   }
 }
 
+TEST(ArmObserver, AShoulderAngleLoggedFourSamplesLateIsComparedOnTimeAndLeavesNoInnovation) {
+  // The shoulder's encoder 4 samples late, its record logging what the controller read (the default): the
+  // correction brings the column back on time, so every innovation but the last four samples' is zero (to
+  // the interpolation's rounding at t + 4 T: 2e-13 rad) and the estimate is the record's run until then.
+  const ArmModel m = two_link({"joints.shoulder.sensors.angle.delay=4"});
+  const Record r = make_arm_record(m, {}, 1);
+  const ArmObserverRun o = run_arm_observer(std::span<const ArmModel>(&m, 1), r, 0);
+  ASSERT_TRUE(o.ok(0)) << o.design[0].message;
+  const auto truth = true_states(m, r);
+  double worst = 0.0;
+  for (std::size_t k = 0; k + 4 < truth.size(); ++k)
+    for (int i = 0; i < o.nx; ++i)
+      worst = std::max(worst, std::abs(o.state[0][k * static_cast<std::size_t>(o.nx) + static_cast<std::size_t>(i)] - truth[k][static_cast<std::size_t>(i)]));
+  EXPECT_LT(worst, 1e-9);
+}
+
 TEST(ArmObserver, WithNoiseTheEstimateTracksTheFlexibleArmsTrueStateToBelowTheNoise) {
   // 0.2 mrad on the angles, 2 mrad/s on the rates, 20 um on the tool and the deflections.
   const ArmModel m = two_link();

@@ -191,6 +191,33 @@ TEST(ArmCompare, TheReplayStartsAtTheRecordsFirstReferencesAndTheSagThere) {
   }
 }
 
+// joints.NAME.sensors.angle.logged: a late, quantised shoulder encoder. Logged as read (the default) the
+// record's .angle is the controller's input (the trace's .q_measured) and the model predicts it so, exactly;
+// logged on time it is the joint's coordinate itself.
+TEST(ArmRecord, AnAngleLoggedAsReadIsTheControllersInputAndIsPredictedSo) {
+  const std::vector<std::string> late = {"joints.shoulder.sensors.angle.delay=4",
+                                         "joints.shoulder.sensors.angle.resolution=1e-4"};
+  const ArmModel m = two_link(late);
+  const Record r = make_arm_record(m, ArmRecordNoise{}, 1);
+  ArmRunOptions o;
+  const std::vector<std::vector<double>> ref = sample_arm_reference(m);
+  o.reference = &ref;
+  const ArmTrace tr = simulate_arms(std::span<const ArmModel>(&m, 1), o).traces[0];
+  EXPECT_EQ(r.at("shoulder.angle"), tr.column("shoulder.q_measured"));
+  const std::vector<double>& q = tr.column("shoulder.q");
+  for (std::size_t k = 0; k < q.size(); ++k)
+    ASSERT_EQ(r.at("shoulder.angle")[k], 1e-4 * std::nearbyint(q[k >= 4 ? k - 4 : 0] / 1e-4)) << k;
+  const ArmReplay p = replay_arm_record(m, r);
+  ASSERT_TRUE(p.ok);
+  EXPECT_EQ(p.at_record.at("shoulder.angle"), r.at("shoulder.angle"));
+  // The same arm logged on time: the column is the coordinate, and the late record is missed by the delay.
+  std::vector<std::string> on_time = late;
+  on_time.push_back("joints.shoulder.sensors.angle.logged=true");
+  const ArmModel t = two_link(on_time);
+  EXPECT_EQ(make_arm_record(t, ArmRecordNoise{}, 1).at("shoulder.angle"), q);
+  EXPECT_EQ(replay_arm_record(t, r).at_record.at("shoulder.angle"), q);
+}
+
 TEST(ArmRecordCheck, AMissingOrUnknownJointColumnIsNamedWithTheFileLineOneAndTheColumn) {
   const ArmModel m = two_link();
   Record r = make_arm_record(m, {}, 1);

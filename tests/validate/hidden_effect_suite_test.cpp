@@ -320,6 +320,8 @@ Outcome run_case(const Case& c, bool print) {
   // The model the rig's owner would write: the independent rig's data sheet gives its 16-bit encoder.
   std::vector<std::string> set = c.trajectory;
   if (c.independent) set.push_back("sensors.hub_angle.resolution=9.587379924285257e-05");  // 2 pi / 2^16 rad
+  // The independent rig logs its hub angle and rate on time (the truth's record.as_seen is false).
+  if (c.independent) set.insert(set.end(), {"sensors.hub_angle.logged=true", "sensors.hub_rate.logged=true"});
   ModelSource model = load_model_source(kModel, set);
   DiagnoseOptions opt;
   opt.max_iterations = 15;

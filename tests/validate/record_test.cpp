@@ -90,10 +90,33 @@ TEST_F(Records, NanAndEmptyCellsNameLineAndColumn) {
   auto e = error_of(write(50, "t,hub_angle,hub_torque", 8, "0.08,nan,1"));
   EXPECT_EQ(e.line(), 10);
   EXPECT_EQ(e.key(), "hub_angle");
-  e = error_of(write(50, "t,hub_angle,hub_torque", 8, "0.08,0.08,"));
-  EXPECT_EQ(e.line(), 10);
+  // An empty cell in the first row: a channel logged slower still needs its first value.
+  e = error_of(write(50, "t,hub_angle,hub_torque", 0, "0,0,"));
+  EXPECT_EQ(e.line(), 2);
   EXPECT_EQ(e.key(), "hub_torque");
-  EXPECT_NE(e.message().find("empty"), std::string::npos);
+  EXPECT_NE(e.message().find("empty cell in the first row"), std::string::npos);
+  // Time is never empty.
+  e = error_of(write(50, "t,hub_angle,hub_torque", 8, ",0.08,1"));
+  EXPECT_EQ(e.line(), 10);
+  EXPECT_EQ(e.key(), "t");
+}
+
+// A channel logged slower than the rows (a 20 Hz torque beside a 100 Hz angle): empty cells hold the last value.
+TEST_F(Records, EmptyCellsOfASlowerChannelHoldItsLastValue) {
+  const auto path = (dir / "r.csv").string();
+  {
+    std::ofstream out(path);
+    out << "t,hub_angle,hub_torque\n";
+    for (int k = 0; k < 50; ++k) {
+      out << k / 100.0 << "," << 0.01 * k << ",";
+      if (k % 5 == 0) out << k;
+      out << "\n";
+    }
+  }
+  const Record r = read_record_csv(path, {"hub_angle", "hub_torque"});
+  for (int k = 0; k < 50; ++k) EXPECT_EQ(r.at("hub_torque")[k], k / 5 * 5) << k;
+  EXPECT_EQ(r.held.at("hub_torque"), 40u);
+  EXPECT_EQ(r.held.count("hub_angle"), 0u);
 }
 
 TEST_F(Records, TooFewSamplesAreRefusedAtTheLastLine) {
