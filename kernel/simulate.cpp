@@ -118,12 +118,16 @@ void apply_payload_events(const BatchModel& bm, BatchState& s) {
 namespace {
 double at_sample(const std::vector<double>& x, long k) { return x[std::min<std::size_t>(k, x.size() - 1)]; }
 
-// A record's signals at sample k: the reference, then the caller's hook on the state.
-void apply_inputs(const SampleInputs& in, long k, BatchState& s, double* ref, double* ref_ff, int W) {
+// A record's signals at sample k: the reference and the feed-forward from its rate and acceleration (as
+// the trajectory's, with the controller's model's inertia), then the caller's hook on the state.
+void apply_inputs(const BatchModel& bm, const SampleInputs& in, long k, BatchState& s, double* ref, double* ref_ff) {
+  const bool ff = !in.ref_rate.empty() && !in.ref_accel.empty();
   if (!in.ref.empty())
-    for (int l = 0; l < W; ++l) {
+    for (int l = 0; l < bm.W; ++l) {
       ref[l] = at_sample(in.ref, k);
-      ref_ff[l] = 0.0;
+      ref_ff[l] = ff && bm.ff_gain[l] != 0.0
+                      ? bm.models[l].control_inertia * at_sample(in.ref_accel, k) + bm.kd[l] * at_sample(in.ref_rate, k)
+                      : 0.0;
     }
   if (in.at_sample) in.at_sample(s);
 }
@@ -178,7 +182,7 @@ BatchRun simulate(const BatchModel& bm, const std::function<void(const BatchStat
                             bm.kd[l] * calc_shaped_reference_rate(mdl.spec.trajectory, mdl.shaper, s.t)
                       : 0.0;
     }
-    if (inputs) apply_inputs(*inputs, k, s, ref.data(), ref_ff.data(), W);
+    if (inputs) apply_inputs(bm, *inputs, k, s, ref.data(), ref_ff.data());
     // The recorded sensors read the plant before this sample's torque is applied.
     if (recording) compute_recorded_sensors(bm, s, sensor_ws, rec.data());
     if (k == 0) reset_controller(bm, s, ref.data());

@@ -35,7 +35,10 @@ struct BatchRun {
 // Signals from outside that replace the model's own, one value per controller sample k (the last
 // value holds beyond the end), the same for every lane: replaying a measurement record.
 struct SampleInputs {
-  std::vector<double> ref;        // the reference r_k (rad) instead of the trajectory; no model feed-forward
+  std::vector<double> ref;        // the reference r_k (rad) instead of the trajectory
+  // Its rate and acceleration (rad/s, rad/s^2) at the samples, for the controller's feed-forward
+  // f (J_rigid r'' + kd r'); empty: no feed-forward.
+  std::vector<double> ref_rate, ref_accel;
   std::vector<double> torque;     // the hub torque demand (N·m) instead of the controller's: open loop
   // Called at every controller sample with the state at that instant (s.t, s.sample set), after the
   // reference is taken and before the sensors read the plant and the controller acts: it may change

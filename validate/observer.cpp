@@ -69,7 +69,7 @@ std::vector<double> at_samples(const Record& r, const std::vector<double>& y, do
 // What drives the model on the record: its ref (closed loop) or its hub torque (open loop).
 SampleInputs record_inputs(const Record& r, bool closed_loop, double T, long n) {
   SampleInputs in;
-  if (closed_loop) in.ref = at_samples(r, r.at("ref"), T, n);
+  if (closed_loop) set_record_reference(r, T, n, in);
   else in.torque = at_samples(r, r.at("hub_torque"), T, n);
   return in;
 }

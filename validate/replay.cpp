@@ -78,6 +78,20 @@ std::vector<double> at_samples(const Record& r, const std::vector<double>& y, do
   return out;
 }
 
+}  // namespace
+
+void set_record_reference(const Record& r, double T, long n, SampleInputs& in) {
+  const auto& ref = r.at("ref");
+  // Rate and acceleration by central differences (exact for a cubic move between its knots; the jump of
+  // r'' at a move's start and end is smeared over two samples on each side).
+  const auto rate = time_derivative(r.t, ref);
+  in.ref = at_samples(r, ref, T, n);
+  in.ref_rate = at_samples(r, rate, T, n);
+  in.ref_accel = at_samples(r, time_derivative(r.t, rate), T, n);
+}
+
+namespace {
+
 // Central differences of x (spacing T), one-sided at the ends.
 std::vector<double> derivative(const std::vector<double>& x, double T) {
   const std::size_t n = x.size();
@@ -245,7 +259,7 @@ std::vector<Prediction> replay(std::span<const Model> models, const Record& r, R
   const double T = bm.control_period;
   const long ns = std::lround(bm.duration / T) + 1;
   SampleInputs in;
-  if (mode == ReplayMode::kClosedLoop) in.ref = at_samples(r, r.at("ref"), T, ns);
+  if (mode == ReplayMode::kClosedLoop) set_record_reference(r, T, ns, in);
   if (mode == ReplayMode::kOpenLoop) in.torque = at_samples(r, r.at("hub_torque"), T, ns);
   const BatchRun run = simulate(bm, nullptr, &in);
   std::vector<Prediction> out;
