@@ -799,13 +799,15 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
 // Judges a fitted model's residual tests (`tests`, of the record against the model: the scorer's prefix and
 // `fitted`) against what that model leaves of records it made itself: `lanes` runs of it with other noise
 // in its loop (p.loop_noise, p.seed_path), each given the record's measurement noise, scored against the
-// model's own prediction. A channel is within the bootstrap when its RMS is at most kBootstrapMargin times
-// the largest over the lanes, its fractions of correlation lags outside the band at most the largest plus
-// kTestFraction, and its mean unbiased, at most the largest |mean|, or below kRelevantError of the channel's
+// model's own prediction. A channel is within the bootstrap when its mean is unbiased (below) and its RMS
+// is at most kBootstrapLevel times the largest over the lanes, or at most kBootstrapMargin times it with
+// its fractions of correlation lags outside the band at most the lanes' largest plus kTestFraction (a
+// residual a little above the lanes' must be as white as theirs: a noise channel's ACF alone is not
+// judged). Its mean is unbiased when unbiased, at most the largest |mean|, or below kRelevantError of the channel's
 // standard deviation (a fit converged to 10^-4 of its RSS leaves such a bias); or its RMS is itself below
 // kRelevantError of the channel's standard deviation (what no rig's sensor resolves). A limit cycle the model makes with
 // its quantised encoder, whose phase no replay follows, is judged against the misfit it really produces.
-constexpr double kBootstrapMargin = 1.2;
+constexpr double kBootstrapLevel = 1.05, kBootstrapMargin = 1.2;
 void judge_by_bootstrap(const Scorer& sc, const std::vector<Assignment>& fitted, const DiagnoseProblem& p, int lanes,
                         std::map<std::string, ChannelTest>& tests) {
   if (lanes <= 0) return;
@@ -839,8 +841,10 @@ void judge_by_bootstrap(const Scorer& sc, const std::vector<Assignment>& fitted,
     t.boot_ccf = w.ccf_outside;
     t.boot_mean = w.mean;
     t.bootstrapped = true;
-    t.within_bootstrap = t.rms <= kRelevantError || (t.rms <= kBootstrapMargin * w.rms && t.acf_outside <= w.acf_outside + kTestFraction &&
-                         t.ccf_outside <= w.ccf_outside + kTestFraction && (t.unbiased || std::abs(t.mean) <= w.mean || std::abs(t.mean) * t.noise <= kRelevantError));
+    const bool mean_ok = t.unbiased || std::abs(t.mean) <= w.mean || std::abs(t.mean) * t.noise <= kRelevantError;
+    const bool white_ok = t.acf_outside <= w.acf_outside + kTestFraction && t.ccf_outside <= w.ccf_outside + kTestFraction;
+    t.within_bootstrap = t.rms <= kRelevantError ||
+                         (mean_ok && (t.rms <= kBootstrapLevel * w.rms || (t.rms <= kBootstrapMargin * w.rms && white_ok)));
   }
 }
 

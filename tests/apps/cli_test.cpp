@@ -580,6 +580,7 @@ TEST_F(Cli, RunWithoutTracesGivesTheResultsOfTheTraces) {
                        "set:\n"
                        "  trajectory.moves: [{target: 0.3, hold: 6.0}, {target: -0.1, hold: 5.0}]\n"
                        "  notch.enabled: true\n"
+                       "  controller.model: plant\n"  // the notch placed for each variant: some settle
                        "variables:\n"
                        "  - path: payload.mass\n"
                        "    distribution: {type: uniform, lower: 150.0, upper: 450.0}\n"

@@ -28,6 +28,7 @@ class RequirementsCli : public ff::test::CliFixture {
                 "  trajectory.moves: [{target: 0.5, hold: 8.0}]\n"
                 "  simulation.integrator: sdirk2\n"
                 "  notch.enabled: true\n"
+                "  controller.model: plant\n"  // the notch placed for each variant's rig, as designed per unit
                 "variables:\n"
                 "  - path: payload.mass\n"
                 "    distribution: {type: normal, mean: 328.7, std: 40}\n"
@@ -102,17 +103,17 @@ TEST_F(RequirementsCli, WithoutStopWhenDecidedTheWholeStudyRunsAndAFailingRequir
 TEST_F(RequirementsCli, ABadBlockIsOneErrorLineNamingFileLineAndKeyAndWritesNothing) {
   write_study("statement.yaml", "requirements:\n  - P(m1_tip_settling_s <= 3) >= 0.9\n  - P(m1_tip_settling_s =< 3) >= 0.9\n");
   auto r = run("run statement.yaml --out out");
-  expect_one_error_line(r, "statement.yaml:16: requirements[1]: 'P(m1_tip_settling_s =< 3) >= 0.9': at character 21 ");
+  expect_one_error_line(r, "statement.yaml:17: requirements[1]: 'P(m1_tip_settling_s =< 3) >= 0.9': at character 21 ");
   EXPECT_EQ(r.exit_code, 2);
 
   write_study("metric.yaml", "requirements:\n  - p95(tip_settling) <= 3\n");
   r = run("run metric.yaml --out out");
-  expect_one_error_line(r, "metric.yaml:15: requirements[0]: 'tip_settling' is not a result column (the columns: m1_tip_settling_s, ");
+  expect_one_error_line(r, "metric.yaml:16: requirements[0]: 'tip_settling' is not a result column (the columns: m1_tip_settling_s, ");
 
   write_study("lhs.yaml", "requirements:\n  statements: [\"P(m1_tip_settling_s <= 3) >= 0.9\"]\n  stop_when_decided: true\n", 40,
               "lhs");
   r = run("run lhs.yaml --out out");
-  expect_one_error_line(r, "lhs.yaml:16: requirements.stop_when_decided: only for `design: {type: monte_carlo}` without `cases:`");
+  expect_one_error_line(r, "lhs.yaml:17: requirements.stop_when_decided: only for `design: {type: monte_carlo}` without `cases:`");
   EXPECT_FALSE(fs::exists(work / "out"));
 }
 

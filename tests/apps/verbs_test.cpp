@@ -25,9 +25,12 @@ class Verbs : public ::testing::Test {
                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir);
     fs::create_directories(dir);
-    // A listed study small enough to run in a second: three payloads, one short move.
+    // A listed study small enough to run in a second: three payloads, one short move, the notch placed for
+    // each variant's payload (controller.model: plant; at the nominal payload's resonances the light arm
+    // rings through its hold).
     std::ofstream(dir / "s.yaml") << "name: three\nmodel: " FLEXFARM_SOURCE_DIR "/configs/fbtb.yaml\n"
                                      "set:\n  trajectory.moves: [{target: 0.2, hold: 8}]\n  notch.enabled: true\n"
+                                     "  controller.model: plant\n"
                                      "runs:\n  - {label: light, set: {payload.mass: 200}}\n"
                                      "  - {label: light too, set: {payload.mass: 200}}\n"
                                      "  - {label: heavy, set: {payload.mass: 450}}\n";
