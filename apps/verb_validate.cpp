@@ -155,13 +155,12 @@ void add_calibrate_verb(CLI::App& app) {
         for (const auto& n : offered) names += (names.empty() ? "" : ", ") + n;
         throw ExitError("--add: unknown effect '" + name + "' (this model offers: " + names + ")", 2);
       }
-    const EffectFit f = [&] {
-      try {
-        return arm ? fit_arm_effects(src, r, opt, add) : fit_effects(src, r, opt, add);
-      } catch (const std::invalid_argument& e) {  // a name twice, two that write the same path
-        throw ExitError(std::string("--add: ") + e.what(), 2);
-      }
-    }();
+    EffectFit f;
+    try {
+      f = arm ? fit_arm_effects(src, r, opt, add) : fit_effects(src, r, opt, add);
+    } catch (const std::invalid_argument& e) {  // a name twice, two that write the same path
+      throw ExitError(std::string("--add: ") + e.what(), 2);
+    }
     if (!f.ok) throw ExitError("the fit of " + a->add + " failed: " + f.note, 3);
     const std::string yaml = arm ? format_calibrated_arm(src, f, a->data, a->out) : format_calibrated_model(src, f, a->data);
     const std::string ledger = a->ledger.empty()
