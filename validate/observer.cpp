@@ -59,20 +59,6 @@ void set_state(const BatchModel& bm, BatchState& s, int l, const double* x) {
   for (int i = 0; i < bm.layout.nz; ++i) s.z[i * W + l] = x[2 * N + i];
 }
 
-// The record's signal at every controller sample k (t = t0 + k T), as replay() drives the model.
-std::vector<double> at_samples(const Record& r, const std::vector<double>& y, double T, long n) {
-  std::vector<double> out(n);
-  for (long k = 0; k < n; ++k) out[k] = interpolate(r.t, y, r.t.front() + k * T);
-  return out;
-}
-
-// What drives the model on the record: its ref (closed loop) or its hub torque (open loop).
-SampleInputs record_inputs(const Record& r, bool closed_loop, double T, long n) {
-  SampleInputs in;
-  if (closed_loop) set_record_reference(r, T, n, in);
-  else in.torque = at_samples(r, r.at("hub_torque"), T, n);
-  return in;
-}
 
 // The model the gain is designed on: the replay model's smooth part (static Coulomb and Stribeck
 // friction, backlash, the controller's sensor quantisation, noise and delay left out: a central
@@ -310,7 +296,7 @@ ObserverDesign design_observer(const Model& model, const Record& r, ReplayMode m
   const int nx = 2 * b1.nseg + b1.layout.nz;
   Eigen::VectorXd x0(nx);
   get_state(b1, make_state(b1), 0, x0.data());
-  const Linearisation lin = linearise(dm, record_inputs(r, closed, T, 1), channels, x0);
+  const Linearisation lin = linearise(dm, make_record_inputs(r, closed, T, 1), channels, x0);
   if (!lin.ok) {
     d.message = "the model failed numerically in its linearisation";
     return d;
@@ -341,7 +327,7 @@ ObserverRun run_observer(std::span<const Model> models, const Record& r, ReplayM
   if (!options.initial_state.empty() && static_cast<int>(options.initial_state.size()) != nx)
     throw std::invalid_argument("run_observer: the initial state needs " + std::to_string(nx) + " values");
 
-  SampleInputs in = record_inputs(r, closed, T, ns);
+  SampleInputs in = make_record_inputs(r, closed, T, ns);
   const std::vector<long> measured = find_measured_samples(r, T, ns);
   const std::vector<std::string>& names = out.design[0].channels;  // lanes share a shape, so their channels
   std::vector<Channel> channels;

@@ -80,14 +80,20 @@ std::vector<double> at_samples(const Record& r, const std::vector<double>& y, do
 
 }  // namespace
 
-void set_record_reference(const Record& r, double T, long n, SampleInputs& in) {
-  const auto& ref = r.at("ref");
+SampleInputs make_record_inputs(const Record& r, bool closed_loop, double T, long n) {
+  SampleInputs in;
+  if (!closed_loop) {
+    in.torque = at_samples(r, r.at("hub_torque"), T, n);
+    return in;
+  }
   // Rate and acceleration by central differences (exact for a cubic move between its knots; the jump of
   // r'' at a move's start and end is smeared over two samples on each side).
+  const auto& ref = r.at("ref");
   const auto rate = time_derivative(r.t, ref);
   in.ref = at_samples(r, ref, T, n);
   in.ref_rate = at_samples(r, rate, T, n);
   in.ref_accel = at_samples(r, time_derivative(r.t, rate), T, n);
+  return in;
 }
 
 namespace {
@@ -258,9 +264,7 @@ std::vector<Prediction> replay(std::span<const Model> models, const Record& r, R
   const BatchModel bm = make_batch(lanes);
   const double T = bm.control_period;
   const long ns = std::lround(bm.duration / T) + 1;
-  SampleInputs in;
-  if (mode == ReplayMode::kClosedLoop) set_record_reference(r, T, ns, in);
-  if (mode == ReplayMode::kOpenLoop) in.torque = at_samples(r, r.at("hub_torque"), T, ns);
+  const SampleInputs in = make_record_inputs(r, mode == ReplayMode::kClosedLoop, T, ns);
   const BatchRun run = simulate(bm, nullptr, &in);
   std::vector<Prediction> out;
   for (int l = 0; l < bm.W; ++l) out.push_back(sample_trace(lanes[l], run.traces[l], r, run.status[l] == LaneStatus::kOk));

@@ -49,11 +49,12 @@ struct Fit {
 };
 Fit calc_fit(const std::vector<double>& measured, const std::vector<double>& predicted);
 
-// The closed loop's inputs from a record at n controller samples of period T: its reference, and its
-// rate and acceleration (central differences on the record's own times, then interpolated) for the
-// controller's feed-forward, as a trajectory's would drive it.
+// What drives a model on a record at n controller samples of period T (t = t0 + k T): closed loop, its
+// reference, with the reference's rate and acceleration (central differences on the record's own times,
+// then interpolated) for the controller's feed-forward, as a trajectory's would drive it; open loop, its
+// hub torque.
 struct SampleInputs;
-void set_record_reference(const Record& r, double T, long n, SampleInputs& in);
+SampleInputs make_record_inputs(const Record& r, bool closed_loop, double T, long n);
 
 // A model with its simulated span and rate set for the record: duration = the record's length.
 Model make_replay_model(const Model& m, const Record& r);
