@@ -135,6 +135,7 @@ struct ArmSpec {
   double band = 0.02;                // settling band, fraction of each move's amplitude
   double tool_band = 0.0;            // the tool's settling band, m; 0 = band x the tool's largest move
   std::uint64_t seed = 1;            // sensor noise (simulation.seed); a study gives each variant its own
+  bool expected_readings = false;    // simulation.expected_readings (kernel/model.hpp SimulationSpec)
   World world;                       // `world:` (world/world_yaml.hpp): the obstacles
   std::vector<CollisionPartSpec> collision;  // `collision:`: the parts' overrides
   std::vector<MonitorSpec> monitors; // `monitors:` in file order

@@ -425,12 +425,13 @@ void step_arm_controllers(ArmLanes& a, long k) {
       const ActuatedJoint& aj = lanes[l].actuated[static_cast<size_t>(j)];
       const ChannelSpec &ca = aj.control.angle_sensor, &cr = aj.control.rate_sensor;
       const size_t jl = static_cast<size_t>(j * W + l), dl = static_cast<size_t>(d * W + l);
-      a.q_meas[jl] = sample_channel(s.q[dl], ca.noise, aj.angle_key, ca.resolution, ca.delay, aj.angle_hold, k, a.H, W, l,
-                                    a.ring_q[static_cast<size_t>(j)].data());
+      const bool expected = lanes[l].spec.expected_readings;
+      a.q_meas[jl] = sample_channel(s.q[dl], ca.noise, expected, aj.angle_key, ca.resolution, ca.delay, aj.angle_hold, k,
+                                    a.H, W, l, a.ring_q[static_cast<size_t>(j)].data());
       // A slipped encoder, from the first sample at or after its fault time.
       if (static_cast<double>(k) >= aj.control.angle_fault_time / T - 1e-9) a.q_meas[jl] += aj.control.angle_fault_offset;
-      a.qd_meas[jl] = sample_channel(s.qd[dl], cr.noise, aj.rate_key, cr.resolution, cr.delay, aj.rate_hold, k, a.H, W, l,
-                                     a.ring_qd[static_cast<size_t>(j)].data());
+      a.qd_meas[jl] = sample_channel(s.qd[dl], cr.noise, expected, aj.rate_key, cr.resolution, cr.delay, aj.rate_hold, k,
+                                     a.H, W, l, a.ring_qd[static_cast<size_t>(j)].data());
     }
   }
   // The outputs that are the plant's (the monitors watch them), the reference of every lane (its own

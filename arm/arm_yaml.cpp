@@ -150,13 +150,14 @@ const std::array<Field<ArmWaypoint>, 2> kWaypointFields{{
 struct SimulationBlock {
   std::string integrator = "auto";
 };
-const std::array<Field<ArmSpec>, 5> kSimulationFields{{
+const std::array<Field<ArmSpec>, 6> kSimulationFields{{
     {.key = "duration", .member = &ArmSpec::duration, .unit = "s", .bound = Bound::kNonNegative,
      .fallback = "0: the last waypoint + settle"},
     {.key = "settle", .member = &ArmSpec::settle, .unit = "s", .bound = Bound::kNonNegative},
     {.key = "substeps", .member = &ArmSpec::substeps, .bound = Bound::kNonNegative, .fallback = "0: from the modes"},
     {.key = "rtol", .member = &ArmSpec::rtol, .bound = Bound::kPositive},
     {.key = "atol", .member = &ArmSpec::atol, .bound = Bound::kPositive},
+    {.key = "expected_readings", .member = &ArmSpec::expected_readings},
 }};
 const std::array<Field<SimulationBlock>, 1> kIntegratorFields{{
     {.key = "integrator", .member = &SimulationBlock::integrator,

@@ -110,6 +110,7 @@ BatchModel make_batch(std::span<const Model> models) {
     bm.hub_offset.push_back(m.spec.hub_torque_offset);
   }
   for (const auto& m : models) {
+    bm.expected_readings.push_back(m.spec.simulation.expected_readings ? 1 : 0);
     const ChannelSpec* ch[2] = {&m.spec.sensors.hub_angle, &m.spec.sensors.hub_rate};
     for (int c = 0; c < 2; ++c) {
       bm.sensor_resolution[c].push_back(ch[c]->resolution);

@@ -58,6 +58,7 @@ struct BatchModel {
   std::vector<int> sensor_delay[2], sensor_hold[2];           // (W)
   std::vector<std::uint64_t> sensor_key[2];                   // (W)
   int sensor_history = 1;           // ring length: the largest delay + hold
+  std::vector<char> expected_readings;  // (W) 1: every sensor gives its expected reading (simulation.expected_readings)
   // Recorded sensors: which ones the lanes have (the same in every lane), then per channel and lane:
   // quantum, noise std, delay (samples), hold (controller samples per sensor sample), noise key.
   bool rec_enabled[kRecordedChannels] = {};

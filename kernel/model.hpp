@@ -204,6 +204,9 @@ struct SimulationSpec {
   double rtol = 1e-8;             // CVODE relative tolerance
   double atol = 1e-10;            // CVODE absolute tolerance
   std::uint64_t seed = 1;         // sensor noise; a study gives each variant its own
+  // true: every sensor gives the expectation of its reading, E[Q(x + sigma n)] (calc_expected_reading),
+  // instead of drawing its noise: a prediction of what a noisy, quantised sensor reads on average.
+  bool expected_readings = false;
 };
 
 // Everything a user writes in a model YAML file.

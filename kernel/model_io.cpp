@@ -203,13 +203,14 @@ const std::array<Field<MoveSpec>, 2> kMoveFields{{
 }};
 // The integrator by name and the seed as a number, checked after reading.
 struct SimulationBlock : SimulationSpec { std::string integrator_name = "rk4"; double seed_number = 1; };
-const std::array<Field<SimulationBlock>, 6> kSimulationFields{{
+const std::array<Field<SimulationBlock>, 7> kSimulationFields{{
     {.key = "duration", .member = &SimulationBlock::duration, .unit = "s", .fallback = "0: the end of the last hold"},
     {.key = "integrator", .member = &SimulationBlock::integrator_name},
     {.key = "substeps", .member = &SimulationBlock::substeps, .fallback = "0: from the modes"},
     {.key = "rtol", .member = &SimulationBlock::rtol},
     {.key = "atol", .member = &SimulationBlock::atol},
     {.key = "seed", .member = &SimulationBlock::seed_number},
+    {.key = "expected_readings", .member = &SimulationBlock::expected_readings},
 }};
 
 // The block `name` of `top` read through its table; the caller reads the rest and finishes it.

@@ -8,11 +8,34 @@
 
 namespace ff {
 
-double sample_channel(double x, double sigma, std::uint64_t key, double quantum, long d, long n, long k, int H, int W,
-                      int l, double* ring) {
+double calc_expected_reading(double x, double sigma, double q) {
+  if (!(q > 0.0)) return x;
+  if (!(sigma > 0.0)) return q * std::nearbyint(x / q);
+  const double u = x / q, s = sigma / q;
+  if (s > 0.5) {  // the damped Fourier series: exp(-2 pi^2 m^2 s^2) < 1e-8 from m = 3
+    double saw = 0.0;
+    for (int m = 1; m <= 3; ++m)
+      saw += (m % 2 ? 1.0 : -1.0) / m * std::sin(2.0 * M_PI * m * u) * std::exp(-2.0 * M_PI * M_PI * m * m * s * s);
+    return x - q / M_PI * saw;
+  }
+  if (!(std::abs(u) < 1e15)) return x;  // a quantum below the angle's own precision
+  // E[round(u + s n)] = a + sum_{k = a..b} P(u + s n >= k + 1/2), P = Phi((u - k - 1/2) / s): the thresholds
+  // k + 1/2 within 9 s of u (those below are crossed for certain, counted in a; those above never).
+  const auto a = static_cast<long long>(std::ceil(u - 9.0 * s - 0.5)), b = static_cast<long long>(std::floor(u + 9.0 * s - 0.5));
+  double e = static_cast<double>(a);
+  for (long long k = a; k <= b; ++k) e += 0.5 * std::erfc((static_cast<double>(k) + 0.5 - u) / (s * M_SQRT2));
+  return q * e;
+}
+
+double sample_channel(double x, double sigma, bool expected, std::uint64_t key, double quantum, long d, long n, long k,
+                      int H, int W, int l, double* ring) {
   double y = x;
-  if (sigma > 0.0) y += sigma * CounterRng(key, k).normal();
-  if (quantum > 0.0) y = quantum * std::nearbyint(y / quantum);
+  if (expected) {
+    y = calc_expected_reading(x, sigma, quantum);
+  } else {
+    if (sigma > 0.0) y += sigma * CounterRng(key, k).normal();
+    if (quantum > 0.0) y = quantum * std::nearbyint(y / quantum);
+  }
   ring[(k % H) * W + l] = y;
   const long j = k >= d ? (k - d) / n * n : 0;
   return ring[(j % H) * W + l];
@@ -25,7 +48,8 @@ void compute_measurements(const BatchModel& bm, BatchState& s, double* hub_angle
   double* out[2] = {hub_angle, hub_rate};
   for (int c = 0; c < 2; ++c)
     for (int l = 0; l < W; ++l)
-      out[c][l] = sample_channel(truth[c][l], bm.sensor_noise[c][l], bm.sensor_key[c][l], bm.sensor_resolution[c][l],
+      out[c][l] = sample_channel(truth[c][l], bm.sensor_noise[c][l], bm.expected_readings[l], bm.sensor_key[c][l],
+                                 bm.sensor_resolution[c][l],
                                  bm.sensor_delay[c][l], bm.sensor_hold[c][l], k, H, W, l, s.measured[c].data());
 }
 
@@ -44,8 +68,12 @@ std::vector<double> log_channel(const LoopChannelSpec& ch, double controller_rat
     const long kk = static_cast<long>(k);
     const std::size_t j = std::min(static_cast<std::size_t>(kk >= d ? (kk - d) / n * n : 0), x.size() - 1);
     double v = x[j];
-    if (noisy && ch.noise > 0.0) v += ch.noise * CounterRng(key, j).normal();
-    if (read && ch.resolution > 0.0) v = ch.resolution * std::nearbyint(v / ch.resolution);  // as sample_channel
+    if (!noisy) {
+      if (read) v = calc_expected_reading(v, ch.noise, ch.resolution);
+    } else {
+      if (ch.noise > 0.0) v += ch.noise * CounterRng(key, j).normal();
+      if (read && ch.resolution > 0.0) v = ch.resolution * std::nearbyint(v / ch.resolution);  // as sample_channel
+    }
     y[k] = v;
   }
   // The logger's own latency L: the column holds at k what was logged at max(k - L, 0).
@@ -104,7 +132,7 @@ void compute_recorded_sensors(const BatchModel& bm, BatchState& s, Workspace& ws
       compute_tip(bm, q, truth, angle, ws);
     }
     for (int l = 0; l < W; ++l)
-      y_out[l] = sample_channel(truth[l], bm.rec_noise[c][l], bm.rec_key[c][l], bm.rec_resolution[c][l],
+      y_out[l] = sample_channel(truth[l], bm.rec_noise[c][l], bm.expected_readings[l], bm.rec_key[c][l], bm.rec_resolution[c][l],
                                 bm.rec_delay[c][l], bm.rec_hold[c][l], k, H, W, l, s.recorded[c].data());
   }
   if (bm.rec_enabled[kStrainGauge])

@@ -13,13 +13,22 @@
 
 namespace ff {
 
+// The expected reading of a quantised, noisy sensor, E[Q(x + sigma n)], n ~ N(0, 1), Q rounding to the
+// nearest multiple of q: the staircase Q(x) smoothed by the noise (dither). With u = x / q, s = sigma / q:
+//   s <= 0.5:  q (a + sum_{k = a..b} Phi((u - k - 1/2) / s)), the thresholds k + 1/2 within 9 s of u;
+//   s >  0.5:  x - (q / pi) sum_m (-1)^(m+1) / m sin(2 pi m u) exp(-2 pi^2 m^2 s^2), the sawtooth's
+//              Fourier series with each harmonic damped by the Gaussian's characteristic function.
+// q = 0 gives x; sigma = 0 gives Q(x).
+double calc_expected_reading(double x, double sigma, double q);
+
 // One channel of lane l at controller sample k: the reading y = Q(x + sigma n), n ~ N(0, 1) from the
 // counter-based stream `key` at sample k (common/random.hpp; Q rounds to the nearest multiple of
-// `quantum`, none when 0), goes into the ring (H x W, H >= d + n); returned is what the channel gives
-// now, the reading of the last sensor sample j = n floor((k - d) / n) <= k - d (delay d, hold n), or
-// the first reading while k < d. With sigma = quantum = d = 0 and n = 1 it returns x.
-double sample_channel(double x, double sigma, std::uint64_t key, double quantum, long d, long n, long k, int H, int W,
-                      int l, double* ring);
+// `quantum`, none when 0), or its expectation calc_expected_reading(x, sigma, quantum) when `expected`
+// (simulation.expected_readings), goes into the ring (H x W, H >= d + n); returned is what the channel
+// gives now, the reading of the last sensor sample j = n floor((k - d) / n) <= k - d (delay d, hold n),
+// or the first reading while k < d. With sigma = quantum = d = 0 and n = 1 it returns x.
+double sample_channel(double x, double sigma, bool expected, std::uint64_t key, double quantum, long d, long n, long k,
+                      int H, int W, int l, double* ring);
 
 // Takes this sample's measurement of every lane (s.sample, s.q, s.v), stores it in the ring
 // s.measured, and writes what the controller sees now (W each): the measurement of sample
@@ -37,8 +46,8 @@ const LoopChannelSpec& loop_channel_spec(const SensorSpec& s, LoopChannel c);
 // The logged column of an in-loop channel from its truth x at every controller sample (x_k at t = k T):
 //   logged: read  y_k = Q(x_j + sigma n_j), j = n floor((k - d) / n) for k >= d, else j = 0 (delay d, hold n):
 //                 what the controller read at sample k, bit for bit compute_measurements' (the same
-//                 stream (seed, c) at sample j); noisy = false (a prediction) leaves out the noise and
-//                 keeps the quantisation: the loop's reading of the noise-free signal.
+//                 stream (seed, c) at sample j); noisy = false (a prediction) gives the expected reading
+//                 calc_expected_reading(x_j, sigma, Q's quantum): the staircase smoothed by the noise.
 //   logged: true  y_k = x_k + sigma n_k: an on-time measurement, noise only (the channel's stream at
 //                 sample k; no delay, hold or quantisation); noisy = false gives x.
 // Either then shifted by the logger's own latency L = logged_delay: the column at k holds y_max(k - L, 0).

@@ -263,7 +263,20 @@ Diagnosis diagnose_arm(const ModelSource& src, const Record& r, const DiagnoseOp
   check_closed_loop(opt);
   const ArmModel base = build_arm(src);
   check_arm_record(r, base);
-  const ArmFamily family(src, r, base.substeps);
+  // The predictions read the sensors' expected values; each joint's encoder and tachometer without noise of
+  // their own with the noise that joint's controller read (calc_loop_noise, with_expected_readings).
+  std::vector<std::pair<std::string, double>> noise;
+  const YAML::Node doc = apply_overrides(src);
+  for (const ActuatedJoint& a : base.actuated) {
+    auto floor_of = [&](const std::string& column, double none) { return r.has(column) ? calc_noise_floor(r.at(column)) : none; };
+    const auto [sa, sr] = calc_loop_noise(floor_of(a.name + ".angle", 0.0), floor_of(a.name + ".rate", 0.0),
+                                          floor_of(a.name + ".torque", NAN), a.control.kp, a.control.kd);
+    const std::string path = "joints." + a.name + ".sensors.";
+    if (number_at(doc, path + "angle.noise", 0.0) == 0.0) noise.emplace_back(path + "angle.noise", sa);
+    if (number_at(doc, path + "rate.noise", 0.0) == 0.0) noise.emplace_back(path + "rate.noise", sr);
+  }
+  const ModelSource fit_src = with_expected_readings(src, noise);
+  const ArmFamily family(fit_src, r, base.substeps);
   DiagnoseProblem p;
   p.family = &family;
   p.record = &r;
@@ -275,7 +288,7 @@ Diagnosis diagnose_arm(const ModelSource& src, const Record& r, const DiagnoseOp
   if (p.channels.empty())
     throw ConfigError(r.source, 1, "t", "no column of the record varies: nothing to diagnose");
   for (const ActuatedJoint& a : base.actuated) add_arm_joint_states(r, a.name, false, p.states);
-  p.doc = apply_overrides(src);
+  p.doc = doc;
   const ArmReplay replay = replay_arm_record(base, r);
   p.effects = make_candidates(base, p.doc, r, replay);
   for (const Effect& e : p.effects) p.names.push_back(e.name);
@@ -289,16 +302,6 @@ Diagnosis diagnose_arm(const ModelSource& src, const Record& r, const DiagnoseOp
           p.sensitive.emplace_back(q.path, number_at(p.doc, q.path, 0.0));
   // The ranges of named re-fits: the first joint's torque scales (signed offsets are within twice its torque).
   p.scales = make_torque_scales(replay, r, base.actuated.front());
-  // The bootstrap's noise in the loop: each joint's encoder and tachometer without noise of their own get
-  // the noise that joint's controller read (calc_loop_noise).
-  for (const ActuatedJoint& a : base.actuated) {
-    auto floor_of = [&](const std::string& column, double none) { return r.has(column) ? calc_noise_floor(r.at(column)) : none; };
-    const auto [sa, sr] = calc_loop_noise(floor_of(a.name + ".angle", 0.0), floor_of(a.name + ".rate", 0.0),
-                                          floor_of(a.name + ".torque", NAN), a.control.kp, a.control.kd);
-    const std::string path = "joints." + a.name + ".sensors.";
-    if (sa > 0 && number_at(p.doc, path + "angle.noise", 0.0) == 0.0) p.loop_noise.emplace_back(path + "angle.noise", sa);
-    if (sr > 0 && number_at(p.doc, path + "rate.noise", 0.0) == 0.0) p.loop_noise.emplace_back(path + "rate.noise", sr);
-  }
   return diagnose_problem(p, opt);
 }
 

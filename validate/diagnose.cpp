@@ -798,8 +798,8 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
 
 // Judges a fitted model's residual tests (`tests`, of the record against the model: the scorer's prefix and
 // `fitted`) against what that model leaves of records it made itself: `lanes` runs of it with other noise
-// in its loop (p.loop_noise, p.seed_path), each given the record's measurement noise, scored against the
-// model's own prediction. A channel is within the bootstrap when its mean is unbiased (below) and its RMS
+// in its loop (its sensors' noise drawn, p.seed_path, where the prediction has their expected readings:
+// with_expected_readings), each given the record's measurement noise, scored against the model's own prediction. A channel is within the bootstrap when its mean is unbiased (below) and its RMS
 // is at most kBootstrapLevel times the largest over the lanes, or at most kBootstrapMargin times it with
 // its fractions of correlation lags outside the band at most the lanes' largest plus kTestFraction (a
 // residual a little above the lanes' must be as white as theirs: a noise channel's ACF alone is not
@@ -814,7 +814,7 @@ void judge_by_bootstrap(const Scorer& sc, const std::vector<Assignment>& fitted,
   std::vector<std::vector<Assignment>> sets(lanes + 1, fitted);
   for (int b = 1; b <= lanes; ++b) {
     sets[b].push_back(assign(p.seed_path, YAML::Node(1000 + b)));
-    for (const auto& [path, sd] : p.loop_noise) sets[b].push_back(assign(path, YAML::Node(sd)));
+    sets[b].push_back(assign("simulation.expected_readings", YAML::Node(false)));
   }
   const auto pred = sc.predict(sets);
   if (!pred[0].ok) return;
@@ -1099,6 +1099,13 @@ std::pair<double, double> calc_loop_noise(double s_angle, double s_rate, double 
   return {f * s_angle, f * s_rate};
 }
 
+ModelSource with_expected_readings(ModelSource src, const std::vector<std::pair<std::string, double>>& loop_noise) {
+  src.set.push_back(assign("simulation.expected_readings", YAML::Node(true)));
+  for (const auto& [path, sd] : loop_noise)
+    if (sd > 0) src.set.push_back(assign(path, YAML::Node(sd)));
+  return src;
+}
+
 EffectFit combine_effects(const std::vector<EffectFit>& fits) {
   if (fits.empty()) throw std::invalid_argument("no effect to combine");
   EffectFit out = fits.back();
@@ -1151,11 +1158,21 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   // The fits integrate an explicit (RK4) model with the linearly implicit midpoint rule: one
   // articulated-body pass per step and the drive's states implicit, half the cost or less, within
   // 1e-4 of the RK4 response on the reference rig (docs/validation.md). The written model keeps its own.
+  // The predictions read the sensors' expected values, the encoder and tachometer with the noise the
+  // controller read (with_expected_readings).
   const ModelSource fit_src = [&] {
     ModelSource f = src;
-    if (build_model(src).spec.simulation.integrator == Integrator::kRk4)
+    const auto& s = build_model(src).spec;
+    if (s.simulation.integrator == Integrator::kRk4)
       f.set.push_back(assign("simulation.integrator", YAML::Node("midpoint")));
-    return f;
+    const auto [sa, sr] = calc_loop_noise(calc_noise_floor(r.at("hub_angle")),
+                                          r.has("hub_rate") ? calc_noise_floor(r.at("hub_rate")) : 0.0,
+                                          r.has("hub_torque") ? calc_noise_floor(r.at("hub_torque")) : NAN,
+                                          s.controller.kp, s.controller.kd);
+    std::vector<std::pair<std::string, double>> noise;
+    if (s.sensors.hub_angle.noise == 0.0) noise.emplace_back("sensors.hub_angle.noise", sa);
+    if (s.sensors.hub_rate.noise == 0.0) noise.emplace_back("sensors.hub_rate.noise", sr);
+    return with_expected_readings(f, noise);
   }();
   const Model base = build_model(fit_src);
   const RigFamily family(fit_src, r, opt.mode);
@@ -1191,15 +1208,6 @@ Diagnosis diagnose(const ModelSource& src, const Record& r, const DiagnoseOption
   p.names = effect_names();
   const auto& s = base.spec;
   const bool beam = base.nseg > 1;
-  // The bootstrap's noise in the loop: an encoder or tachometer without noise of its own gets the noise
-  // the controller read (calc_loop_noise).
-  {
-    const auto [sa, sr] = calc_loop_noise(calc_noise_floor(angle), r.has("hub_rate") ? calc_noise_floor(r.at("hub_rate")) : 0.0,
-                                          r.has("hub_torque") ? calc_noise_floor(r.at("hub_torque")) : NAN,
-                                          s.controller.kp, s.controller.kd);
-    if (s.sensors.hub_angle.noise == 0.0 && sa > 0) p.loop_noise.emplace_back("sensors.hub_angle.noise", sa);
-    if (s.sensors.hub_rate.noise == 0.0 && sr > 0) p.loop_noise.emplace_back("sensors.hub_rate.noise", sr);
-  }
   p.sensitive = {{"hub.inertia", s.hub_inertia},           {"payload.mass", s.payload_mass},
                  {"payload.inertia", s.payload_inertia},   {"friction.viscous", s.friction.viscous},
                  {"friction.coulomb", s.friction.coulomb}, {"joints.stiffness", beam ? s.joints.stiffness : 0.0},

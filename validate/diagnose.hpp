@@ -184,10 +184,8 @@ struct DiagnoseProblem {
   std::vector<std::string> names;                // every effect the family knows (`only` is checked against it)
   std::vector<std::pair<std::string, double>> sensitive;  // `--refit auto`'s targets: (path, value)
   EffectScales scales;                           // ranges of re-fitted parameters
-  // The bootstrap's noise: its seed path, and the in-loop sensors' noise paths with the standard deviation
-  // each gets where the model has none (the record's noise floor of that channel).
+  // The bootstrap's noise: its seed path (its lanes draw the sensors' noise, simulation.expected_readings false).
   std::string seed_path = "simulation.seed";
-  std::vector<std::pair<std::string, double>> loop_noise;
 };
 
 // The noise a joint's controller read (the bootstrap's in-loop noise): the record's noise floors of its
@@ -196,6 +194,10 @@ struct DiagnoseProblem {
 // NaN = no torque column): a record whose noise was added to the logged columns only did not feed it back.
 // Returns the two standard deviations.
 std::pair<double, double> calc_loop_noise(double s_angle, double s_rate, double s_torque, double kp, double kd);
+// The source of a diagnosis's predictions: every sensor gives its expected reading (simulation.expected_readings:
+// a quantised encoder's staircase smoothed by its noise, no noise drawn), and each in-loop sensor without noise
+// of its own gets the noise its controller read, `loop_noise` (path, standard deviation; 0 = none).
+ModelSource with_expected_readings(ModelSource src, const std::vector<std::pair<std::string, double>>& loop_noise);
 Diagnosis diagnose_problem(const DiagnoseProblem& p, const DiagnoseOptions& opt);
 
 // Effects fitted in turn, each on top of those before (what `calibrate --add a,b` uses), combined.

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "common/errors.hpp"
 #include "common/files.hpp"
@@ -169,6 +170,93 @@ double interpolate(const std::vector<double>& t, const std::vector<double>& y, d
   const std::size_t k = static_cast<std::size_t>(it - t.begin());
   const double u = (x - t[k - 1]) / (t[k] - t[k - 1]);
   return y[k - 1] + u * (y[k] - y[k - 1]);
+}
+
+namespace {
+
+// A cubic a0 + a1 s + a2 s^2 + a3 s^3 in s = x - c.
+struct Cubic {
+  double c = 0.0, a[4] = {};
+  double value(double x) const { const double s = x - c; return a[0] + s * (a[1] + s * (a[2] + s * a[3])); }
+  double rate(double x) const { const double s = x - c; return a[1] + s * (2 * a[2] + s * 3 * a[3]); }
+  double accel(double x) const { return 2 * a[2] + 6 * a[3] * (x - c); }
+};
+
+// The interpolating polynomial through (t, y)[lo, lo + m), m <= 4, about c = t[lo]: Newton's divided
+// differences, expanded into powers of s.
+Cubic fit_cubic(const std::vector<double>& t, const std::vector<double>& y, std::size_t lo, std::size_t m) {
+  double d[4], x[4];
+  for (std::size_t j = 0; j < m; ++j) x[j] = t[lo + j] - t[lo], d[j] = y[lo + j];
+  for (std::size_t l = 1; l < m; ++l)
+    for (std::size_t j = m - 1; j >= l; --j) d[j] = (d[j] - d[j - 1]) / (x[j] - x[j - l]);
+  Cubic p;
+  p.c = t[lo];
+  p.a[0] = d[m - 1];
+  for (std::size_t k = m - 1; k-- > 0;) {  // p <- p (s - x_k) + d_k
+    for (std::size_t j = m - 1; j > 0; --j) p.a[j] = p.a[j - 1] - x[k] * p.a[j];
+    p.a[0] = d[k] - x[k] * p.a[0];
+  }
+  return p;
+}
+
+}  // namespace
+
+SmoothSamples sample_piecewise_smooth(const std::vector<double>& t, const std::vector<double>& y, double t0, double T,
+                                      long n) {
+  const std::size_t N = t.size();
+  if (N < 2) throw std::invalid_argument("sample_piecewise_smooth: fewer than two samples");
+  const std::size_t m = std::min<std::size_t>(N, 4);
+  // Each interval's cubic: of the (up to three) four-sample stencils holding [t_i, t_i+1], the one with the
+  // smallest third divided difference, a3 of its cubic.
+  std::vector<Cubic> p(N - 1);
+  for (std::size_t i = 0; i + 1 < N; ++i) {
+    const std::size_t first = i + 2 >= m ? i + 2 - m : 0, last = std::min(i, N - m);
+    p[i] = fit_cubic(t, y, first, m);
+    for (std::size_t lo = first + 1; lo <= last; ++lo)
+      if (const Cubic c = fit_cubic(t, y, lo, m); std::abs(c.a[3]) < std::abs(p[i].a[3])) p[i] = c;
+  }
+  // Knots: interval i when its neighbours' cubics differ in y'' at its middle by more than 2 h (|y'''_l| +
+  // |y'''_r|) + 1e-3 max |y''| and their slopes agree somewhere inside it (there the knot is).
+  double peak = 0.0;
+  for (std::size_t i = 0; i + 1 < N; ++i) peak = std::max(peak, std::abs(p[i].accel(0.5 * (t[i] + t[i + 1]))));
+  std::vector<double> knot(p.size(), NAN);  // the knot's time in interval i, NaN = none
+  for (std::size_t i = 1; i + 2 < N; ++i) {
+    const Cubic &l = p[i - 1], &r = p[i + 1];
+    const double h = t[i + 1] - t[i], mid = t[i] + 0.5 * h;
+    if (std::abs(r.accel(mid) - l.accel(mid)) <= 12 * h * (std::abs(l.a[3]) + std::abs(r.a[3])) + 1e-3 * peak) continue;
+    // The slopes' difference, a quadratic A s^2 + B s + C in s = x - t_i: its root in the interval
+    // nearest the middle (the middle when it has none).
+    const double sl = t[i] - l.c, sr = t[i] - r.c;
+    const double A = 3 * (r.a[3] - l.a[3]);
+    const double B = 2 * (r.a[2] - l.a[2]) + 6 * (r.a[3] * sr - l.a[3] * sl);
+    const double C = r.rate(t[i]) - l.rate(t[i]);
+    double best = NAN;
+    std::vector<double> roots;
+    if (std::abs(A) * h > 1e-12 * std::abs(B)) {
+      const double disc = B * B - 4 * A * C;
+      if (disc >= 0) roots = {(-B + std::sqrt(disc)) / (2 * A), (-B - std::sqrt(disc)) / (2 * A)};
+    } else if (B != 0) {
+      roots = {-C / B};
+    }
+    double dist = INFINITY;
+    for (double s : roots)
+      if (s >= 0 && s <= h && std::abs(s - 0.5 * h) < dist) dist = std::abs(s - 0.5 * h), best = s;
+    knot[i] = t[i] + best;  // NaN (no knot) when no root is inside
+  }
+  SmoothSamples out;
+  out.value.resize(n);
+  out.rate.resize(n);
+  out.accel.resize(n);
+  for (long k = 0; k < n; ++k) {
+    const double x = std::clamp(t0 + static_cast<double>(k) * T, t.front(), t.back());
+    std::size_t i = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
+    i = std::min(i > 0 ? i - 1 : 0, p.size() - 1);
+    const Cubic& c = std::isnan(knot[i]) ? p[i] : x < knot[i] ? p[i - 1] : p[i + 1];
+    out.value[k] = x == t[i] ? y[i] : c.value(x);  // on a sample: the sample
+    out.rate[k] = c.rate(x);
+    out.accel[k] = c.accel(x);
+  }
+  return out;
 }
 
 }  // namespace ff

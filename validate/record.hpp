@@ -42,4 +42,19 @@ std::vector<double> time_derivative(const std::vector<double>& t, const std::vec
 // Linear interpolation of (t, y) at time x; clamped to the ends.
 double interpolate(const std::vector<double>& t, const std::vector<double>& y, double x);
 
+// A piecewise-smooth column (a reference: moves joined at knots where its second derivative jumps) and
+// its first two derivatives at x_k = t0 + k T, k < n (clamped to the record's span). On each record
+// interval: the cubic through the four samples around it whose third divided difference is the smallest
+// (the ENO choice, Harten et al. 1987: that stencil does not reach across a knot, where the third
+// difference is O(jump / h)). An interval whose neighbours' cubics differ in y'' by more than their own
+// change over two intervals, and agree in slope inside it, holds a knot: the left neighbour's cubic is used up to the knot
+// and the right's after it, the knot where the two cubics' slopes agree (the sub-cell resolution of
+// Harten 1989: a C1 knot is a double root of their difference). Exact for piecewise cubics whose knots
+// are at least four samples apart; central differences smear a knot's jump over two samples each side.
+struct SmoothSamples {
+  std::vector<double> value, rate, accel;  // y, y' (per s), y'' (per s^2)
+};
+SmoothSamples sample_piecewise_smooth(const std::vector<double>& t, const std::vector<double>& y, double t0, double T,
+                                      long n);
+
 }  // namespace ff

@@ -86,13 +86,12 @@ SampleInputs make_record_inputs(const Record& r, bool closed_loop, double T, lon
     in.torque = at_samples(r, r.at("hub_torque"), T, n);
     return in;
   }
-  // Rate and acceleration by central differences (exact for a cubic move between its knots; the jump of
-  // r'' at a move's start and end is smeared over two samples on each side).
-  const auto& ref = r.at("ref");
-  const auto rate = time_derivative(r.t, ref);
-  in.ref = at_samples(r, ref, T, n);
-  in.ref_rate = at_samples(r, rate, T, n);
-  in.ref_accel = at_samples(r, time_derivative(r.t, rate), T, n);
+  // The reference and its rate and acceleration from its piecewise cubics (exact for cubic moves, the jump of
+  // r'' at a move's knots kept: a feed-forward J r'' sees it as the controller did).
+  SmoothSamples ref = sample_piecewise_smooth(r.t, r.at("ref"), r.t.front(), T, n);
+  in.ref = std::move(ref.value);
+  in.ref_rate = std::move(ref.rate);
+  in.ref_accel = std::move(ref.accel);
   return in;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/errors.hpp"
+#include "common/random.hpp"
 #include "kernel/controller.hpp"
 #include "kernel/dynamics.hpp"
 #include "tests/kernel/test_support.hpp"
@@ -386,12 +387,56 @@ TEST(LoggedChannels, ReadIsTheControllersInputSampleForSample) {
   }
   EXPECT_EQ(rig.m.spec.sensors.hub_angle.logged, "read");
   EXPECT_EQ(log_loop_channel(rig.m, kLoopHubAngle, x, true), seen);
-  // A prediction: the same reading without the noise, Q(x_j), j = 4 floor((k - 2) / 4).
+  // A prediction: the expected reading E[Q(x_j + sigma n)], j = 4 floor((k - 2) / 4).
   const auto p = log_loop_channel(rig.m, kLoopHubAngle, x, false);
   for (std::size_t k = 0; k < x.size(); ++k) {
     const std::size_t j = k >= 2 ? (k - 2) / 4 * 4 : 0;
-    ASSERT_EQ(p[k], 1e-3 * std::nearbyint(x[j] / 1e-3)) << k;
+    ASSERT_EQ(p[k], calc_expected_reading(x[j], 3e-4, 1e-3)) << k;
   }
+}
+
+// E[Q(x + sigma n)] against its definition: the mean of 400 000 quantised noisy readings (within 5 standard
+// errors), at random x and sigma / q from 0.01 to 3 (both of calc_expected_reading's branches); its limits:
+// the staircase Q(x) at sigma = 0, x itself once sigma >> q, a level's midpoint kept by symmetry.
+TEST(ExpectedReading, IsTheMeanOfManyQuantisedNoisyReadings) {
+  CounterRng pick(77, 0);
+  for (int c = 0; c < 24; ++c) {
+    const double q = 1e-3 * std::pow(10.0, pick.uniform() - 0.5);
+    const double s = 0.01 * std::pow(300.0, pick.uniform()), x = (pick.uniform() - 0.5) * 40 * q;
+    const double sigma = s * q;
+    CounterRng noise(1234, static_cast<std::uint64_t>(c));
+    const int n = 400000;
+    double sum = 0.0, sum2 = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double y = q * std::nearbyint((x + sigma * noise.normal()) / q);
+      sum += y;
+      sum2 += y * y;
+    }
+    const double mean = sum / n, se = std::sqrt(std::max(sum2 / n - mean * mean, 0.0) / n);
+    EXPECT_NEAR(calc_expected_reading(x, sigma, q), mean, 5.0 * se + 1e-9 * q) << "x/q " << x / q << " sigma/q " << s;
+  }
+  EXPECT_EQ(calc_expected_reading(0.0149, 0.0, 0.01), 0.01);
+  EXPECT_EQ(calc_expected_reading(0.0149, 1e-3, 0.0), 0.0149);
+  EXPECT_NEAR(calc_expected_reading(0.0137, 0.05, 0.01), 0.0137, 1e-15);  // sigma = 5 q: smooth
+  EXPECT_NEAR(calc_expected_reading(0.015, 0.002, 0.01), 0.015, 1e-15);
+  // The two branches meet at sigma = q / 2.
+  for (double u : {0.1, 0.3, 0.45})
+    EXPECT_NEAR(calc_expected_reading(u, 0.4999999, 1.0), calc_expected_reading(u, 0.5000001, 1.0), 1e-6) << u;
+}
+
+// simulation.expected_readings: the controller is given E[Q(x + sigma n)], the same at every sample (no
+// noise drawn), the recorded sensors likewise.
+TEST(ExpectedReading, IsWhatTheControllerReadsInExpectedMode) {
+  ModelSpec spec = test::rig_spec();
+  spec.sensors.hub_angle.resolution = 1e-3;
+  spec.sensors.hub_angle.noise = 4e-4;
+  spec.simulation.expected_readings = true;
+  Rig rig(spec);
+  for (long k = 0; k < 50; ++k) {
+    const double x = 1e-4 * static_cast<double>(k);
+    ASSERT_EQ(rig.see(k, x), calc_expected_reading(x, 4e-4, 1e-3)) << k;
+  }
+  EXPECT_NE(rig.see(60, 2.5e-4), 0.0);  // a quarter-quantum in: the staircase would read 0
 }
 
 // The same in a closed-loop run: the PD's torque is kp (r_k - y_k) - kd w_k with y and w the trace's true

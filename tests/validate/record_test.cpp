@@ -163,5 +163,89 @@ TEST_F(Records, RaggedRowIsRefused) {
   EXPECT_EQ(e.line(), 5);
 }
 
+
+// A reference of rest-to-rest moves r0 + D (3u^2 - 2u^3), u = (t - ts) / T, and holds: exact value, rate and
+// acceleration (the acceleration jumps by 6 D / T^2 at each move's start and end).
+struct MoveProfile {
+  struct Move { double start, T, from, to; };
+  std::vector<Move> moves;
+  double at(double t, int d) const {
+    double r = moves.empty() ? 0.0 : moves.front().from;
+    double v = 0.0, a = 0.0;
+    for (const Move& m : moves) {
+      if (t < m.start) break;
+      const double D = m.to - m.from;
+      if (t >= m.start + m.T) { r = m.to; v = a = 0.0; continue; }
+      const double u = (t - m.start) / m.T;
+      r = m.from + D * u * u * (3 - 2 * u);
+      v = D * 6 * u * (1 - u) / m.T;
+      a = D * 6 * (1 - 2 * u) / (m.T * m.T);
+    }
+    return d == 0 ? r : d == 1 ? v : a;
+  }
+};
+
+// sample_piecewise_smooth against the moves' own derivatives: 30 references drawn at random (1-4 moves of
+// 0.3-4 s, holds of none or 0.1-3 s, knots anywhere between samples, records at 100-1000 Hz), read at
+// 1 kHz. The acceleration is within 2 % of its peak a everywhere (a knot a few hundredths of a sample
+// from a sample is not told from a smooth bend) and within 1e-3 a in RMS, the value and rate within
+// 0.2 a h^2 and 0.2 a h; central differences, which it replaced, are off by a third of a or more at the knots.
+TEST(PiecewiseSmooth, MovesAreReadWithTheirAccelerationJumpsAtTheKnots) {
+  std::uint64_t state = 20261207;
+  auto uniform = [&](double lo, double hi) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return lo + (hi - lo) * static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  double worst_central = 0.0;
+  for (int c = 0; c < 30; ++c) {
+    MoveProfile prof;
+    double t = uniform(0.0, 0.7), at = 0.0;
+    const int moves = 1 + static_cast<int>(uniform(0, 4));
+    for (int m = 0; m < moves; ++m) {
+      const double to = at + (uniform(0, 1) < 0.5 ? -1 : 1) * uniform(0.1, 1.0), T = uniform(0.3, 4.0);
+      prof.moves.push_back({t, T, at, to});
+      at = to;
+      t += T + (uniform(0, 1) < 0.3 ? 0.0 : uniform(0.1, 3.0));
+    }
+    const double h = 1.0 / uniform(100, 1000), end = t + 0.5;
+    std::vector<double> ts, ys;
+    for (double x = 0.0; x <= end; x += h) ts.push_back(x), ys.push_back(prof.at(x, 0));
+    double peak = 0.0;
+    for (const auto& m : prof.moves) peak = std::max(peak, 6 * std::abs(m.to - m.from) / (m.T * m.T));
+    const double T = 1e-3;
+    const long n = static_cast<long>((ts.back() - ts.front()) / T) + 1;
+    const SmoothSamples s = sample_piecewise_smooth(ts, ys, ts.front(), T, n);
+    const auto rate = time_derivative(ts, ys), accel = time_derivative(ts, rate);
+    double e2 = 0.0;
+    for (long k = 0; k < n; ++k) {
+      const double x = static_cast<double>(k) * T;
+      ASSERT_NEAR(s.value[k], prof.at(x, 0), 0.2 * peak * h * h) << "case " << c << " t " << x;
+      ASSERT_NEAR(s.rate[k], prof.at(x, 1), 0.2 * peak * h) << "case " << c << " t " << x;
+      ASSERT_NEAR(s.accel[k], prof.at(x, 2), 0.02 * peak) << "case " << c << " t " << x << " h " << h;
+      e2 += std::pow((s.accel[k] - prof.at(x, 2)) / peak, 2);
+      worst_central = std::max(worst_central, std::abs(interpolate(ts, accel, x) - prof.at(x, 2)) / peak);
+    }
+    EXPECT_LT(std::sqrt(e2 / n), 1e-3) << "case " << c;
+  }
+  EXPECT_GT(worst_central, 0.3);
+}
+
+// A smooth signal without knots (a sine) is read to the cubic's accuracy, O(h^2) in the acceleration; a
+// record on the controller's own grid gives its samples exactly.
+TEST(PiecewiseSmooth, ASmoothSignalIsReadToTheCubicsAccuracy) {
+  std::vector<double> ts, ys;
+  const double h = 0.005, w = 2.0;
+  for (int k = 0; k <= 800; ++k) ts.push_back(k * h), ys.push_back(std::sin(w * k * h));
+  const SmoothSamples s = sample_piecewise_smooth(ts, ys, 0.0, 1e-3, 4001);
+  for (long k = 0; k < 4001; ++k) {
+    const double x = k * 1e-3;
+    ASSERT_NEAR(s.value[k], std::sin(w * x), 1e-8) << x;
+    ASSERT_NEAR(s.rate[k], w * std::cos(w * x), 1e-6) << x;
+    ASSERT_NEAR(s.accel[k], -w * w * std::sin(w * x), 1e-3) << x;
+  }
+  const SmoothSamples on = sample_piecewise_smooth(ts, ys, 0.0, h, 801);
+  EXPECT_EQ(on.value, ys);
+}
+
 }  // namespace
 }  // namespace ff
