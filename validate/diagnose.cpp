@@ -848,6 +848,52 @@ void judge_by_bootstrap(const Scorer& sc, const std::vector<Assignment>& fitted,
   }
 }
 
+// The scorer of the model with the selected effects but the one at `skip` (its re-fitted existing
+// parameters kept): what that effect is refitted on.
+Scorer without_effect(const Scorer& sc, const std::vector<EffectFit>& sel, std::size_t skip) {
+  Scorer s = sc;
+  for (std::size_t k = 0; k < sel.size(); ++k) {
+    if (k == skip) continue;
+    const auto a = sel[k].assignments();
+    s.prefix.insert(s.prefix.end(), a.begin(), a.end());
+  }
+  for (const auto& path : sel[skip].refit) s.prefix.push_back(assign(path, number_node(path, sel[skip].params.at(path))));
+  return s;
+}
+
+// One pass of backfitting over the selected effects: each (the one at `last` last) refitted on top of the
+// others as they now are, from its values (its scan's first point; a grid searched again), and kept when
+// the whole model's RSS falls. An effect fitted before a later one was found took some of its signature
+// (a Stribeck curve fitted beside a torque delay not yet found); this gives it back. `rss`: the whole
+// model's, updated. Only the values change: each keeps the Delta BIC and the tests it was selected with
+// (of the model with the effects up to it).
+void backfit(const Scorer& sc, const std::vector<Effect>& plain, std::vector<EffectFit>& sel, std::size_t last, double& rss,
+             const DiagnoseOptions& opt) {
+  std::vector<std::size_t> order;
+  for (std::size_t j = 0; j < sel.size(); ++j)
+    if (j != last) order.push_back(j);
+  order.push_back(last);
+  for (std::size_t j : order) {
+    const auto e0 = std::find_if(plain.begin(), plain.end(), [&](const Effect& e) { return e.name == sel[j].effect; });
+    if (e0 == plain.end() || e0->params.empty()) continue;
+    Effect e = *e0;
+    for (auto& q : e.params)
+      if (const auto v = sel[j].params.find(q.path); v != sel[j].params.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
+    const Scorer s = without_effect(sc, sel, j);
+    const auto r = s.residuals({{}})[0];
+    if (r.empty()) continue;
+    EffectFit f = fit_one(s, e, {sum_squares(r), s.fit_percent({}), s.tests(r, nullptr)}, opt, 0, scan_effect(s, e), true);
+    if (!f.ok || !(f.rss < rss)) continue;
+    rss = f.rss;
+    for (const auto& [path, v] : f.params) {
+      sel[j].params[path] = v;
+      sel[j].stderr_[path] = f.stderr_.count(path) ? f.stderr_.at(path) : NAN;
+    }
+    sel[j].at_bound = f.at_bound;
+    sel[j].unidentifiable = f.unidentifiable;
+  }
+}
+
 // Whether an effect writes a path another already selected writes (they cannot both be added).
 bool overlaps(const Effect& e, const std::vector<EffectFit>& selected) {
   const auto paths = effect_paths(e);
@@ -1012,23 +1058,56 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   // Forward selection: the best significant effect is added (its tests judged by the bootstrap); while the
   // model with it is not explained, every candidate that does not write what a selected one does is tried
   // again on top of it (screened, the kFullFitsLater best fitted in full): an effect whose signature the
-  // first one masked is found now. calibrate (opt.add): its effects in its order.
+  // first one masked is found now. So is the richer form of a selected effect (Stribeck for Coulomb,
+  // Effect::extends), which replaces it when chosen: the simpler one went first by Occam (order_nested)
+  // on a record where alone it fitted as well. calibrate (opt.add): its effects in its order.
   Scorer current = sc;
   std::vector<EffectFit> ranked = d.ranking;
   for (std::size_t round = 0;; ++round) {
     const bool forced = !opt.add.empty();
     if (ranked.empty() || !ranked[0].ok || (!forced && !ranked[0].significant)) break;
-    EffectFit chosen = ranked[0];
-    judge_by_bootstrap(current, chosen.assignments(), p, opt.bootstrap_lanes, chosen.tests);
-    chosen.explained = all_explained(chosen.tests);
-    d.selected.push_back(chosen);
-    if (forced ? d.selected.size() == opt.add.size() : chosen.explained || d.selected.size() >= kMaxEffects) break;
-    const auto mine = chosen.assignments();
-    current.prefix.insert(current.prefix.end(), mine.begin(), mine.end());
-    const Against now{chosen.rss, chosen.fit_percent, chosen.tests};
-    std::vector<Effect> next;
+    auto simpler = [&](const Effect& e) {
+      return std::find_if(d.selected.begin(), d.selected.end(), [&](const EffectFit& f) { return !e.extends.empty() && f.effect == e.extends; });
+    };
+    const Effect* rich = nullptr;
     for (const Effect& e : plain)
-      if ((forced ? e.name == opt.add[d.selected.size()] : true) && !overlaps(e, d.selected)) next.push_back(e);
+      if (e.name == ranked[0].effect) rich = &e;
+    std::size_t at = d.selected.size();
+    if (auto s = rich ? simpler(*rich) : d.selected.end(); s != d.selected.end()) at = static_cast<std::size_t>(s - d.selected.begin());
+    if (at == d.selected.size()) d.selected.push_back(ranked[0]);
+    else d.selected[at] = ranked[0];
+    // The earlier effects refitted beside the new one; the whole model judged by the bootstrap.
+    double rss = ranked[0].rss;
+    if (!forced && d.selected.size() > 1) backfit(sc, plain, d.selected, at, rss, opt);
+    EffectFit& chosen = d.selected[at];
+    {
+      const Scorer others = without_effect(sc, d.selected, at);
+      if (rss < ranked[0].rss) {  // backfitting moved the others: the whole model's residual again
+        const auto r = others.residuals({chosen.assignments()})[0];
+        if (!r.empty()) chosen.tests = others.tests(r, &chosen.n_eff);
+        chosen.fit_percent = others.fit_percent(chosen.assignments());
+        chosen.rss = rss;
+      }
+      judge_by_bootstrap(others, chosen.assignments(), p, opt.bootstrap_lanes, chosen.tests);
+    }
+    chosen.explained = all_explained(chosen.tests);
+    if (at + 1 != d.selected.size()) std::rotate(d.selected.begin() + at, d.selected.begin() + at + 1, d.selected.end());
+    if (forced ? d.selected.size() == opt.add.size() : d.selected.back().explained || d.selected.size() >= kMaxEffects) break;
+    const EffectFit& last = d.selected.back();
+    current.prefix = sc.prefix;
+    for (const EffectFit& f : d.selected) {
+      const auto mine = f.assignments();
+      current.prefix.insert(current.prefix.end(), mine.begin(), mine.end());
+    }
+    const Against now{rss, last.fit_percent, last.tests};
+    std::vector<Effect> next;
+    for (const Effect& e : plain) {
+      if (forced ? e.name != opt.add[d.selected.size()] : false) continue;
+      std::vector<EffectFit> others = d.selected;
+      if (!forced)
+        if (auto s = simpler(e); s != d.selected.end()) others.erase(others.begin() + (s - d.selected.begin()));
+      if (!overlaps(e, others)) next.push_back(e);
+    }
     if (forced && next.empty())
       throw std::invalid_argument("effect '" + opt.add[d.selected.size()] + "' writes what an effect before it does");
     if (next.empty()) break;
