@@ -799,7 +799,8 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
 // Judges a fitted model's residual tests (`tests`, of the record against the model: the scorer's prefix and
 // `fitted`) against what that model leaves of records it made itself: `lanes` runs of it with other noise
 // in its loop (its sensors' noise drawn, p.seed_path, where the prediction has their expected readings:
-// with_expected_readings), each given the record's measurement noise, scored against the model's own prediction. A channel is within the bootstrap when its mean is unbiased (below) and its RMS
+// with_expected_readings), each given the record's measurement noise, scored against the model's own
+// prediction. A channel is within the bootstrap when its mean is unbiased (below) and its RMS
 // is at most kBootstrapLevel times the largest over the lanes, or at most kBootstrapMargin times it with
 // its fractions of correlation lags outside the band at most the lanes' largest plus kTestFraction (a
 // residual a little above the lanes' must be as white as theirs: a noise channel's ACF alone is not

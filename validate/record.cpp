@@ -225,7 +225,7 @@ SmoothSamples sample_piecewise_smooth(const std::vector<double>& t, const std::v
     const double h = t[i + 1] - t[i], mid = t[i] + 0.5 * h;
     if (std::abs(r.accel(mid) - l.accel(mid)) <= 12 * h * (std::abs(l.a[3]) + std::abs(r.a[3])) + 1e-3 * peak) continue;
     // The slopes' difference, a quadratic A s^2 + B s + C in s = x - t_i: its root in the interval
-    // nearest the middle (the middle when it has none).
+    // nearest the middle (no knot when it has none).
     const double sl = t[i] - l.c, sr = t[i] - r.c;
     const double A = 3 * (r.a[3] - l.a[3]);
     const double B = 2 * (r.a[2] - l.a[2]) + 6 * (r.a[3] * sr - l.a[3] * sl);
