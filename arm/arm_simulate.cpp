@@ -265,6 +265,7 @@ ArmLanes make_arm_lanes(std::span<const ArmModel> lanes, const ArmRunOptions& op
       p.k3 = c.train.cubic_stiffness;
       p.c = c.train.damping;
       p.b = 0.5 * c.train.backlash;
+      p.closing = c.train.closing_damping;
       p.eta = c.train.efficiency;
       law.push_back(p);
       nonlinear = nonlinear || (c.drive && is_nonlinear_drive(c.train));

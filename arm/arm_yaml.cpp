@@ -124,7 +124,7 @@ const std::array<Field<LoopChannelSpec>, 2> kLoggedFields{{
 }};
 
 // A drive train on the joint (description/tree_description.hpp, DriveTrain), output-side units.
-const std::array<Field<DriveTrain>, 7> kDriveFields{{
+const std::array<Field<DriveTrain>, 8> kDriveFields{{
     {.key = "rotor_inertia", .member = &DriveTrain::rotor_inertia, .unit = "kg·m² (kg)", .bound = Bound::kNonNegative},
     {.key = "ratio", .member = &DriveTrain::ratio, .bound = Bound::kPositive},
     {.key = "stiffness", .member = &DriveTrain::stiffness, .unit = "N·m/rad (N/m)", .bound = Bound::kPositive},
@@ -134,6 +134,7 @@ const std::array<Field<DriveTrain>, 7> kDriveFields{{
     {.key = "backlash", .member = &DriveTrain::backlash, .unit = "rad (m)", .bound = Bound::kNonNegative,
      .fallback = "0: none"},
     {.key = "efficiency", .member = &DriveTrain::efficiency, .bound = Bound::kPositive},
+    {.key = "closing_damping", .member = &DriveTrain::closing_damping},
 }};
 
 struct TrajectoryBlock {

@@ -66,11 +66,12 @@ struct DriveTrain {
   double cubic_stiffness = 0.0;  // k3, hardening, N·m/rad³ (N/m³)
   double backlash = 0.0;         // total free play 2b at the output, rad (m)
   double efficiency = 1.0;       // eta in (0, 1]
+  bool closing_damping = false;  // c only while the teeth close, e de/dt > 0 (the rig's drive.closing_damping)
 };
 
 // Whether the drive's law is more than the linear spring and damper.
 inline bool is_nonlinear_drive(const DriveTrain& d) {
-  return d.cubic_stiffness != 0.0 || d.backlash != 0.0 || d.efficiency != 1.0;
+  return d.cubic_stiffness != 0.0 || d.backlash != 0.0 || d.efficiency != 1.0 || d.closing_damping;
 }
 
 // Splits the moving joint `joint` into the drive's two: a massless rotor body "<body>.rotor" inserted

@@ -60,6 +60,7 @@ LaneDrive make_lane_drive(const Model& m) {
     p.k3 = d.cubic_stiffness;
     p.c = d.damping;
     p.b = 0.5 * d.backlash;
+    p.closing = d.closing_damping;
   }
   return p;
 }
@@ -81,19 +82,22 @@ double calc_displacement(const HydraulicSpec& h) {
   return h.piston_area > 0 ? h.piston_area * h.pinion_radius : h.displacement;
 }
 
+// The mesh's damping coefficient at twist e and rate de: c, or with closing damping c only while |e| grows.
+static double mesh_damping(const LaneDrive& p, double e, double de) { return p.closing && e * de <= 0.0 ? 0.0 : p.c; }
+
 double calc_transmission_torque(const LaneDrive& p, double d, double dd) {
-  if (p.b == 0.0) return (p.k + p.k3 * d * d) * d + p.c * dd;
+  if (p.b == 0.0) return (p.k + p.k3 * d * d) * d + mesh_damping(p, d, dd) * dd;
   // Free play: no torque inside +-b; in contact the gear teeth push, never pull.
   const double e = d > p.b ? d - p.b : (d < -p.b ? d + p.b : 0.0);
   if (e == 0.0) return 0.0;
-  const double t = (p.k + p.k3 * e * e) * e + p.c * dd;
+  const double t = (p.k + p.k3 * e * e) * e + mesh_damping(p, e, dd) * dd;
   return e > 0.0 ? std::max(t, 0.0) : std::min(t, 0.0);
 }
 
 TransmissionTangent calc_transmission_tangent(const LaneDrive& p, double d, double dd) {
   const double e = p.b == 0.0 ? d : (d > p.b ? d - p.b : (d < -p.b ? d + p.b : 0.0));
   if (p.b != 0.0 && (e == 0.0 || calc_transmission_torque(p, d, dd) == 0.0)) return {};
-  return {p.k + 3.0 * p.k3 * e * e, p.c};
+  return {p.k + 3.0 * p.k3 * e * e, mesh_damping(p, e, dd)};
 }
 
 double calc_efficiency_factor(double eta, double power) {

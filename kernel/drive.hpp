@@ -39,6 +39,7 @@ struct LaneDrive {
   double wv = 0, zv = 0, gain = 0;
   // drive train
   double ja = 0, n = 1, eta = 1, k = 0, k3 = 0, c = 0, b = 0;
+  bool closing = false;  // c only while the twist grows, e de/dt > 0 (DriveSpec::closing_damping)
   // LuGre (b, Fc, Fs, vs shared with the static map in BatchModel)
   double sigma0 = 0, sigma1 = 0;
 };

@@ -161,6 +161,8 @@ struct DriveSpec {
   double cubic_stiffness = 0.0;   // k3, hardening, N·m/rad^3
   double damping = 2.0e3;         // c, N·m·s/rad
   double backlash = 0.0;          // total free play 2b at the output, rad
+  // true: c acts only while the teeth close (e de/dt > 0): impact losses, no drag as they part
+  bool closing_damping = false;
 };
 
 // Input shaper on the reference (kernel/shaper.hpp), off by default.

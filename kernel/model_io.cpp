@@ -184,7 +184,7 @@ const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
 const std::array<Field<HydraulicSpec>, 1> kHydraulicEnabledFields{{
     {.key = "enabled", .member = &HydraulicSpec::enabled},
 }};
-const std::array<Field<DriveSpec>, 8> kDriveFields{{
+const std::array<Field<DriveSpec>, 9> kDriveFields{{
     {.key = "enabled", .member = &DriveSpec::enabled},
     {.key = "inertia", .member = &DriveSpec::inertia, .unit = "kg·m²"},
     {.key = "ratio", .member = &DriveSpec::ratio},
@@ -193,6 +193,7 @@ const std::array<Field<DriveSpec>, 8> kDriveFields{{
     {.key = "cubic_stiffness", .member = &DriveSpec::cubic_stiffness, .unit = "N·m/rad³"},
     {.key = "damping", .member = &DriveSpec::damping, .unit = "N·m·s/rad"},
     {.key = "backlash", .member = &DriveSpec::backlash, .unit = "rad"},
+    {.key = "closing_damping", .member = &DriveSpec::closing_damping},
 }};
 const std::array<Field<TrajectorySpec>, 1> kTrajectoryFields{{
     {.key = "move_time", .member = &TrajectorySpec::move_time, .unit = "s"},

@@ -131,11 +131,16 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   out.push_back({"viscous_friction@" + a.name, "viscous friction at " + a.name, {},
                  {make_positive_param(j + "friction.viscous", f.viscous, 0.05 * tau / w, 1e-4 * tau / w, 10.0 * tau / w)},
                  "", {}, false, ""});
+  const EffectParam stiction =
+      make_positive_param(j + "friction.stiction", f.stiction, std::max(0.1 * tau, 2.0 * f.coulomb), 2e-3 * tau, 4.0 * tau);
+  const EffectParam stribeck_velocity =
+      make_positive_param(j + "friction.stribeck_velocity", f.stribeck_velocity, 0.05 * w, 1e-3 * w, w);
   out.push_back({"stribeck_friction@" + a.name, "Coulomb friction with a Stribeck (stiction) peak at " + a.name, {},
-                 {coulomb,
-                  make_positive_param(j + "friction.stiction", f.stiction, std::max(0.1 * tau, 2.0 * f.coulomb), 2e-3 * tau, 4.0 * tau),
-                  make_positive_param(j + "friction.stribeck_velocity", f.stribeck_velocity, 0.05 * w, 1e-3 * w, w), smoothing},
-                 "", {}, false, "coulomb_friction@" + a.name});
+                 {coulomb, stiction, stribeck_velocity, smoothing}, "", {}, false, "coulomb_friction@" + a.name});
+  out.push_back({"lugre_friction@" + a.name, "LuGre friction at " + a.name + ": the Stribeck curve with pre-sliding bristles",
+                 {{j + "friction.model", "lugre"}},
+                 make_lugre_params(j + "friction.", f, tau, inertia, {coulomb, stiction, stribeck_velocity}), "", {}, false,
+                 "stribeck_friction@" + a.name});
   out.push_back({"torque_offset@" + a.name, "a constant load torque on " + a.name + " (cable drag, an unbalanced axis)",
                  {}, {make_effect_param(j + "torque_offset", a.control.torque_offset, sc)}, "", {}, false, ""});
   // The drive train: its spring from the loop's own to a thousand times it, its damper's time constant
@@ -158,6 +163,13 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
     play.insert(play.end(), drive.begin(), drive.end());
     out.push_back({"backlash@" + a.name, "free play in " + a.name + "'s drive train", {}, play, "", {}, false,
                    "drive_compliance@" + a.name});
+    out.push_back({"impact_backlash@" + a.name, "free play in " + a.name + "'s drive train, its mesh damping only as the teeth close",
+                   {{j + "drive.closing_damping", "true"}}, play, "", {}, false, "backlash@" + a.name});
+    std::vector<EffectParam> hardening = drive;
+    hardening.push_back(make_cubic_param(j + "drive.cubic_stiffness", number_at(doc, j + "drive.cubic_stiffness", 0.0),
+                                         drive[0].initial, peak));
+    out.push_back({"mesh_hardening@" + a.name, "a drive train at " + a.name + " whose mesh stiffens with its twist (k e + k3 e^3)",
+                   {}, hardening, "", {}, false, "drive_compliance@" + a.name});
   }
   // A hydraulic joint's oil spring 4 beta D^2 / V (the rig's hydraulic_compressibility): the bulk modulus
   // (entrained air lowers it by decades) and the chamber volume.

@@ -734,6 +734,49 @@ void quiet_ceres() {
   (void)quiet;
 }
 
+// The Delta BIC an effect would have on top of a model with residual `rss` (n_eff effective samples) if it
+// took off `gain` of it, as it did alone: n_eff ln((rss - gain) / rss) + k ln n_eff (additive signatures).
+double calc_added_delta_bic(double rss, double gain, double n_eff, int k) {
+  const double left = std::max(rss - gain, 1e-12 * rss);
+  return std::max(n_eff, 1.0) * std::log(std::max(left, 1e-300) / std::max(rss, 1e-300)) + k * std::log(std::max(n_eff, 1.0));
+}
+
+// Whether `e` extends the effect `name`, directly or through the chain of Effect::extends in `all`.
+bool extends_effect(const std::vector<Effect>& all, const Effect& e, const std::string& name) {
+  const Effect* at = &e;
+  for (std::size_t hops = 0; at && !at->extends.empty() && hops < all.size(); ++hops) {
+    if (at->extends == name) return true;
+    const std::string& next = at->extends;
+    at = nullptr;
+    for (const Effect& x : all)
+      if (x.name == next) at = &x;
+  }
+  return false;
+}
+
+// The simplest form `e` extends (the end of its Effect::extends chain; itself when it extends none).
+std::string root_effect(const std::vector<Effect>& all, const Effect& e) {
+  std::string root = e.name;
+  const Effect* at = &e;
+  for (std::size_t hops = 0; at && !at->extends.empty() && hops < all.size(); ++hops) {
+    root = at->extends;
+    at = nullptr;
+    for (const Effect& x : all)
+      if (x.name == root) at = &x;
+  }
+  return root;
+}
+
+// Whether `e` may take the selected effect `name`'s place: it extends it, or it is another form of the same
+// root that is not one of `name`'s simpler forms.
+bool replaces_effect(const std::vector<Effect>& all, const Effect& e, const std::string& name) {
+  if (e.name == name) return false;
+  if (extends_effect(all, e, name)) return true;
+  const auto other = std::find_if(all.begin(), all.end(), [&](const Effect& x) { return x.name == name; });
+  if (other == all.end() || extends_effect(all, *other, e.name)) return false;
+  return root_effect(all, e) == root_effect(all, *other);
+}
+
 // Occam: an effect ranked above the simpler one it extends must fit visibly better, else the simpler goes first.
 void order_nested(std::vector<EffectFit>& ranking, const std::vector<Effect>& effects) {
   for (const Effect& e : effects) {
@@ -752,7 +795,8 @@ void order_nested(std::vector<EffectFit>& ranking, const std::vector<Effect>& ef
 // n_eff) fitted in full, the others as the scan left them (screened); ranked best first. against[i],
 // shared[i]: effect i's baseline and how many of its parameters are re-fits (as fit_one).
 std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& effects, const std::vector<Against>& against,
-                                  const std::vector<int>& shared, int keep, const DiagnoseOptions& opt) {
+                                  const std::vector<int>& shared, int keep, const DiagnoseOptions& opt,
+                                  const std::vector<bool>& always = {}) {
   const std::size_t n = effects.size();
   std::vector<Scanned> scans(n);
 #pragma omp parallel for schedule(dynamic, 1)
@@ -769,7 +813,8 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
   }
   std::stable_sort(screen.begin(), screen.end());
   std::vector<bool> full(n, true);
-  for (std::size_t j = static_cast<std::size_t>(std::max(keep, 0)); j < screen.size(); ++j) full[screen[j].second] = false;
+  for (std::size_t j = static_cast<std::size_t>(std::max(keep, 0)); j < screen.size(); ++j)
+    full[screen[j].second] = screen[j].second < always.size() && always[screen[j].second];
   // The costliest fits (full ones with most parameters) first, so that the threads finish together.
   std::vector<std::size_t> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = i;
@@ -1053,6 +1098,11 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   }
   const bool all_full = !opt.only.empty() || !opt.add.empty();
   d.ranking = rank_round(sc, effects, against, shared, all_full ? static_cast<int>(effects.size()) : kFullFits, opt);
+  // What each effect took off the residual in round 1 (RSS against its baseline's; scan-only fits a lower bound).
+  std::map<std::string, double> gain1;
+  for (std::size_t i = 0; i < effects.size(); ++i)
+    for (const EffectFit& f : d.ranking)
+      if (f.effect == effects[i].name && f.ok) gain1[f.effect] = std::max(0.0, against[i].rss - f.rss);
   // The base model judged by the bootstrap.
   judge_by_bootstrap(sc, reported.assignments(), p, opt.bootstrap_lanes, d.base_tests);
   d.base_explained = all_explained(d.base_tests);
@@ -1067,8 +1117,10 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
   for (std::size_t round = 0;; ++round) {
     const bool forced = !opt.add.empty();
     if (ranked.empty() || !ranked[0].ok || (!forced && !ranked[0].significant)) break;
+    // The selected effect `e` may replace: one it is a richer form of (LuGre for Coulomb, through Stribeck), or
+    // another form of the same root (free play for a hardening mesh: both drive compliance).
     auto simpler = [&](const Effect& e) {
-      return std::find_if(d.selected.begin(), d.selected.end(), [&](const EffectFit& f) { return !e.extends.empty() && f.effect == e.extends; });
+      return std::find_if(d.selected.begin(), d.selected.end(), [&](const EffectFit& f) { return replaces_effect(plain, e, f.effect); });
     };
     const Effect* rich = nullptr;
     for (const Effect& e : plain)
@@ -1093,7 +1145,10 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
     }
     chosen.explained = all_explained(chosen.tests);
     if (at + 1 != d.selected.size()) std::rotate(d.selected.begin() + at, d.selected.begin() + at + 1, d.selected.end());
-    if (forced ? d.selected.size() == opt.add.size() : d.selected.back().explained || d.selected.size() >= kMaxEffects) break;
+    // (Replacements do not add: the rounds are bounded too, so two forms cannot take each other's place forever.)
+    if (forced ? d.selected.size() == opt.add.size()
+               : d.selected.back().explained || d.selected.size() >= kMaxEffects || round + 1 >= 2 * kMaxEffects)
+      break;
     const EffectFit& last = d.selected.back();
     current.prefix = sc.prefix;
     for (const EffectFit& f : d.selected) {
@@ -1101,19 +1156,35 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
       current.prefix.insert(current.prefix.end(), mine.begin(), mine.end());
     }
     const Against now{rss, last.fit_percent, last.tests};
+    double n_eff_now = 0.0;
+    for (const auto& [c, t] : last.tests) n_eff_now += t.n_eff;
     std::vector<Effect> next;
+    std::vector<bool> replacing;  // fitted in full whatever its scan: a richer or other form of a selected effect
     for (const Effect& e : plain) {
       if (forced ? e.name != opt.add[d.selected.size()] : false) continue;
       std::vector<EffectFit> others = d.selected;
-      if (!forced)
-        if (auto s = simpler(e); s != d.selected.end()) others.erase(others.begin() + (s - d.selected.begin()));
-      if (!overlaps(e, others)) next.push_back(e);
+      const auto s = forced ? d.selected.end() : simpler(e);
+      if (s != d.selected.end()) others.erase(others.begin() + (s - d.selected.begin()));
+      if (overlaps(e, others)) continue;
+      // Round 1's evidence: an effect that would not pay for its parameters on top of the selected even
+      // if it took off what it took alone is not tried again (a richer form of a selected effect is).
+      const auto g = gain1.find(e.name);
+      const int k = static_cast<int>(e.params.size()) + (e.grid_path.empty() ? 0 : 1);
+      if (!forced && s == d.selected.end() && g != gain1.end() &&
+          calc_added_delta_bic(rss, g->second, n_eff_now, k) >= kLaterRoundScreen)
+        continue;
+      next.push_back(e);
+      replacing.push_back(s != d.selected.end());
+      // A richer form starts where the simpler selected one left what they share (LuGre's Coulomb level).
+      if (s != d.selected.end())
+        for (EffectParam& q : next.back().params)
+          if (const auto v = s->params.find(q.path); v != s->params.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
     }
     if (forced && next.empty())
       throw std::invalid_argument("effect '" + opt.add[d.selected.size()] + "' writes what an effect before it does");
     if (next.empty()) break;
     ranked = rank_round(current, next, std::vector<Against>(next.size(), now), std::vector<int>(next.size(), 0),
-                        forced ? 1 : kFullFitsLater, opt);
+                        forced ? 1 : kFullFitsLater, opt, replacing);
     d.rounds.push_back(ranked);
   }
   // The verdict: the selected effects when with them the record is explained; else "none" when the model
@@ -1465,6 +1536,18 @@ std::string format_diagnosis_text(const Diagnosis& d) {
       }
       std::snprintf(buf, sizeof buf, "    %d. %s: delta BIC %.1f, %s; %s\n", ++i, f.effect.c_str(), f.delta_bic,
                     f.explained ? "with it the record is explained" : "not yet explained", params.c_str());
+      out += buf;
+    }
+    // Each later round's best three, on top of the effects selected before it.
+    for (std::size_t r = 0; r < d.rounds.size(); ++r) {
+      std::string best;
+      for (std::size_t j = 0; j < std::min<std::size_t>(3, d.rounds[r].size()); ++j) {
+        const EffectFit& f = d.rounds[r][j];
+        std::snprintf(buf, sizeof buf, "%s%s %.1f%s", best.empty() ? "" : ", ", f.effect.c_str(), f.delta_bic,
+                      f.ok ? (f.screened ? "~" : "") : " (failed)");
+        best += buf;
+      }
+      std::snprintf(buf, sizeof buf, "    round %zu (%zu tried): %s\n", r + 2, d.rounds[r].size(), best.empty() ? "-" : best.c_str());
       out += buf;
     }
   }

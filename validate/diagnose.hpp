@@ -39,6 +39,9 @@ inline constexpr double kMinFitGain = 0.02;
 // Candidates fitted by Ceres after the screening scan, in the first round and in each later one.
 inline constexpr int kFullFits = 6;
 inline constexpr int kFullFitsLater = 3;
+// A later round tries an effect again only when what it took off the residual alone in round 1 would, on
+// top of the selected, give a Delta BIC below this (lenient: significance is kSignificantDeltaBic).
+inline constexpr double kLaterRoundScreen = 10.0;
 // At most this many effects are selected in turn.
 inline constexpr int kMaxEffects = 3;
 // Noise realisations of the fitted model the residual tests are judged against.

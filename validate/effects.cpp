@@ -7,7 +7,8 @@ namespace ff {
 
 std::vector<std::string> effect_names() {
   return {"coulomb_friction",      "viscous_friction",       "stribeck_friction",        "torque_offset",
-          "backlash",              "drive_compliance",       "hydraulic_compressibility", "torque_saturation",
+          "lugre_friction",        "backlash",               "impact_backlash",          "drive_compliance",
+          "mesh_hardening",        "hydraulic_compressibility", "torque_saturation",
           "joint_stiffening",      "sensor_delay.hub_angle", "sensor_delay.hub_rate",    "sensor_delay.hub_torque",
           "sensor_delay.tip_deflection", "logger_delay.hub_angle", "sensor_quantization", "extra_mode",
           "payload",               "hub_inertia"};
@@ -35,6 +36,26 @@ EffectParam make_effect_param(const std::string& path, double value, const Effec
 EffectParam make_positive_param(const std::string& path, double current, double fallback, double lo, double hi) {
   const double start = std::clamp(current > 0 ? current : fallback, lo, hi);
   return {path, start, lo, hi, ParamScale::kLog};
+}
+
+std::vector<EffectParam> make_lugre_params(const std::string& prefix, const FrictionSpec& f, double tau, double inertia,
+                                           std::vector<EffectParam> stribeck) {
+  // Bristles deflecting z0 = Fc / sigma0 from 1 urad to 10 mrad at the Coulomb range's ends; damped from
+  // a thousandth to ten times critical on the inertia J they hold (2 sqrt(sigma0 J) is critical).
+  const bool lugre = f.model == "lugre";
+  const double fc = std::max(f.coulomb, 0.05 * tau), j = std::max(inertia, 1e-9);
+  const double s0 = lugre ? f.bristle_stiffness : fc / 1e-4;
+  const double lo = 0.1 * tau, hi = 2e6 * tau;
+  stribeck.push_back(make_positive_param(prefix + "bristle_stiffness", lugre ? s0 : 0.0, s0, lo, hi));
+  stribeck.push_back(make_positive_param(prefix + "bristle_damping", lugre ? f.bristle_damping : 0.0, std::sqrt(s0 * j),
+                                         2e-3 * std::sqrt(lo * j), 20.0 * std::sqrt(hi * j)));
+  return stribeck;
+}
+
+EffectParam make_cubic_param(const std::string& path, double current, double k, double torque_max) {
+  // k3 e^2 from 1e-4 to 1e4 times k at the twist e = torque_max / k the peak torque gives.
+  const double e = std::max(torque_max, 1e-9) / std::max(k, 1e-9), s = k / (e * e);
+  return make_positive_param(path, current, s, 1e-4 * s, 1e4 * s);
 }
 
 std::vector<double> make_delay_grid(int last) {
@@ -66,12 +87,15 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
   out.push_back({"viscous_friction", "viscous friction at the hub", {},
                  {make_positive_param("friction.viscous", s.friction.viscous, 0.05 * tau / w, 1e-4 * tau / w, 10.0 * tau / w)}, "",
                  {}, false, ""});
+  const EffectParam stiction = make_positive_param("friction.stiction", s.friction.stiction,
+                                                    std::max(0.1 * tau, 2.0 * s.friction.coulomb), 2e-3 * tau, 4.0 * tau);
+  const EffectParam stribeck_velocity =
+      make_positive_param("friction.stribeck_velocity", s.friction.stribeck_velocity, 0.05 * w, 1e-3 * w, w);
   out.push_back({"stribeck_friction", "Coulomb friction with a Stribeck (stiction) peak", {},
-                 {coulomb,
-                  make_positive_param("friction.stiction", s.friction.stiction, std::max(0.1 * tau, 2.0 * s.friction.coulomb),
-                           2e-3 * tau, 4.0 * tau),
-                  make_positive_param("friction.stribeck_velocity", s.friction.stribeck_velocity, 0.05 * w, 1e-3 * w, w), smoothing},
-                 "", {}, false, "coulomb_friction"});
+                 {coulomb, stiction, stribeck_velocity, smoothing}, "", {}, false, "coulomb_friction"});
+  out.push_back({"lugre_friction", "LuGre friction: the Stribeck curve with pre-sliding bristles", {{"friction.model", "lugre"}},
+                 make_lugre_params("friction.", s.friction, tau, base.rigid_inertia, {coulomb, stiction, stribeck_velocity}), "",
+                 {}, false, "stribeck_friction"});
   out.push_back({"torque_offset", "a constant load torque on the hub (cable drag, an unbalanced axis, amplifier bias)",
                  {}, {make_effect_param("hub.torque_offset", s.hub_torque_offset, sc)}, "", {}, false, ""});
   if (!inverse) {
@@ -87,9 +111,18 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
     const EffectParam damping = make_positive_param("drive.damping", s.drive.enabled ? s.drive.damping : 0.0, 2e3, 1.0, 1e5);
     out.push_back({"drive_compliance", "a compliant drive train between actuator and hub", {{"drive.enabled", "true"}},
                    {stiffness, damping, share}, "", {}, false, ""});
+    const EffectParam play = make_positive_param("drive.backlash", s.drive.backlash, 1e-3, 1e-5, 3e-2);
     out.push_back({"backlash", "free play in the drive train", {{"drive.enabled", "true"}},
-                   {make_positive_param("drive.backlash", s.drive.backlash, 1e-3, 1e-5, 3e-2), stiffness, damping, share}, "", {},
-                   false, "drive_compliance"});
+                   {play, stiffness, damping, share}, "", {}, false, "drive_compliance"});
+    out.push_back({"impact_backlash", "free play whose mesh damps only as the teeth close (it rattles)",
+                   {{"drive.enabled", "true"}, {"drive.closing_damping", "true"}}, {play, stiffness, damping, share}, "", {},
+                   false, "backlash"});
+    out.push_back({"mesh_hardening", "a compliant drive train whose mesh stiffens with its twist (k e + k3 e^3)",
+                   {{"drive.enabled", "true"}},
+                   {stiffness, damping, share,
+                    make_cubic_param("drive.cubic_stiffness", s.drive.enabled ? s.drive.cubic_stiffness : 0.0, stiffness.initial,
+                                     sc.torque_max)},
+                   "", {}, false, "drive_compliance"});
     // The oil spring 4 beta D^2 / V: bulk modulus (entrained air lowers it by decades) and chamber volume.
     const double beta0 = s.hydraulics.enabled ? s.hydraulics.bulk_modulus : 1.4e9;
     const double v0 = s.hydraulics.chamber_volume;

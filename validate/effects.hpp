@@ -63,6 +63,16 @@ EffectParam make_effect_param(const std::string& path, double value, const Effec
 // `fallback` (clamped to the range).
 EffectParam make_positive_param(const std::string& path, double current, double fallback, double lo, double hi);
 
+// LuGre's parameters (kernel/friction.hpp) under `prefix` ("friction.", "joints.j1.friction."): the Stribeck
+// curve's `stribeck` (coulomb, stiction, stribeck_velocity) and the bristles' stiffness sigma0 and damping
+// sigma1, started from `f` when it is LuGre; `tau` the torque RMS (N m), `inertia` what the joint moves.
+std::vector<EffectParam> make_lugre_params(const std::string& prefix, const FrictionSpec& f, double tau, double inertia,
+                                           std::vector<EffectParam> stribeck);
+
+// A hardening mesh's cubic stiffness k3 (N m/rad^3) at `path` for a mesh of stiffness k: k3 e^2 from 1e-4 to
+// 1e4 times k at the twist the peak torque gives.
+EffectParam make_cubic_param(const std::string& path, double current, double k, double torque_max);
+
 // Whole numbers from 1 to `last`, spaced by about a factor 4/3 (every one up to 5): the delays searched.
 std::vector<double> make_delay_grid(int last);
 

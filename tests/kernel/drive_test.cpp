@@ -232,6 +232,26 @@ TEST(DriveTrain, TransmitsNothingInsideTheFreePlayAndNeverPulls) {
   EXPECT_NEAR(calc_transmission_torque(p, -0.012, 0.0), -1e6 * 0.002, 1e-6);
 }
 
+TEST(DriveTrain, ClosingDampingActsOnlyWhileTheTwistGrows) {
+  // drive.closing_damping: c e' only while |e| grows (the teeth closing); the spring alone as they part.
+  LaneDrive p;
+  p.k = 1e6;
+  p.c = 1e3;
+  p.b = 0.01;
+  p.closing = true;
+  EXPECT_NEAR(calc_transmission_torque(p, 0.011, 5.0), 1e6 * 0.001 + 1e3 * 5.0, 1e-6);   // closing
+  EXPECT_NEAR(calc_transmission_torque(p, 0.011, -0.5), 1e6 * 0.001, 1e-6);             // parting: no drag
+  EXPECT_NEAR(calc_transmission_torque(p, -0.012, 0.5), -1e6 * 0.002, 1e-6);            // parting, other flank
+  EXPECT_NEAR(calc_transmission_torque(p, -0.012, -2.0), -1e6 * 0.002 - 1e3 * 2.0, 1e-6);  // closing
+  EXPECT_EQ(calc_transmission_tangent(p, 0.011, -0.5).damping, 0.0);
+  EXPECT_EQ(calc_transmission_tangent(p, 0.011, 0.5).damping, 1e3);
+  p.b = 0.0;  // without free play: the twist itself
+  EXPECT_NEAR(calc_transmission_torque(p, 0.001, -3.0), 1e3, 1e-9);
+  EXPECT_NEAR(calc_transmission_torque(p, 0.001, 3.0), 1e3 + 3e3, 1e-9);
+  p.closing = false;
+  EXPECT_NEAR(calc_transmission_torque(p, 0.001, -3.0), 1e3 - 3e3, 1e-9);
+}
+
 // Drive train on the stiff arm: steps RK4 at 0.1 ms with the shaft torque demand `demand(t)`;
 // calls `sample(st)` every millisecond.
 template <class Demand, class Sample>

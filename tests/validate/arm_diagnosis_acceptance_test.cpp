@@ -87,6 +87,7 @@ Hidden draw_effect(std::mt19937_64& rng, const std::string& kind, int j, const T
     h.fields = {p + "friction.coulomb=" + num(fc)};
     h.accepted = {"coulomb_friction@" + J, "stribeck_friction@" + J};
     if (kind == "lugre") {
+      h.accepted.insert("lugre_friction@" + J);
       h.fields.push_back(p + "friction.lugre=true");
       h.fields.push_back(p + "friction.stiction=" + num(fc * uniform(rng, 1.0, 1.8)));
       h.fields.push_back(p + "friction.stribeck_velocity=" + num(w * log_uniform(rng, 0.01, 0.1)));
@@ -108,7 +109,7 @@ Hidden draw_effect(std::mt19937_64& rng, const std::string& kind, int j, const T
     if (kind == "multislope_mesh") {
       h.fields.push_back(p + "drive.knee=" + num(log_uniform(rng, 2e-4, 2e-3)));
       h.fields.push_back(p + "drive.stiffness2=" + num(k * uniform(rng, 2.0, 6.0)));
-      h.accepted = {"drive_compliance@" + J, "backlash@" + J};
+      h.accepted = {"mesh_hardening@" + J, "drive_compliance@" + J, "backlash@" + J};
     } else {
       h.fields.push_back(p + "drive.backlash=" + num(log_uniform(rng, 1e-3, 8e-3)));
       h.accepted = {"backlash@" + J};

@@ -17,7 +17,8 @@
 // candidates (kForms below; docs/validation.md lists them). Scored per record: the first-ranked effect
 // (Diagnosis::selected's first when diagnose returns a selected set, else ranking[0]), the right set
 // (selected, or the verdict split on " + "), the right verdict ("none" when nothing is hidden), false
-// `unexplained` and false effects on clean records, and the time per diagnosis.
+// `unexplained` and false effects on clean records, and the time per diagnosis. An effect no draw made visible
+// is marked "(invisible)" and need not be named (the arm suite's rule).
 //
 // ctest runs three records (kFastRecords) and asserts each verdict is right, and that the nominal model fits
 // the clean one (>= 95 % on every sample channel: the suite's truth-to-model mapping). The whole suite is
@@ -97,7 +98,7 @@ Fields draw_drive(CounterRng& rng, double k_min, double& k) {
 const std::vector<Form>& forms() {
   static const std::vector<Form> f = {
       // --- forms flexfarm does not share ---
-      {"lugre", "friction", {"coulomb_friction", "stribeck_friction"},
+      {"lugre", "friction", {"lugre_friction", "coulomb_friction", "stribeck_friction"},
        [](CounterRng& rng, const Nominal& n) {
          // LuGre (Canudas de Wit 1995): Stribeck curve Fc .. Fs, bristles deflecting z0 = Fc/sigma0 at
          // breakaway, damped at 0.3 of critical on the rigid arm.
@@ -126,7 +127,7 @@ const std::vector<Form>& forms() {
                        {"friction.position_waves", num(std::round(uniform(8, 40, rng.uniform())))},
                        {"friction.position_phase", num(uniform(0, 2 * M_PI, rng.uniform()))}};
        }},
-      {"multi_slope_mesh", "drive", {"drive_compliance"},
+      {"multi_slope_mesh", "drive", {"mesh_hardening", "drive_compliance"},
        [](CounterRng& rng, const Nominal& n) {
          double k = 0.0;
          Fields s = draw_drive(rng, 3e5, k);
@@ -139,7 +140,7 @@ const std::vector<Form>& forms() {
                               {"drive.stiffness_3", num(k2 * uniform(1.5, 3.0, rng.uniform()))}});
          return s;
        }},
-      {"one_sided_backlash", "drive", {"backlash"},
+      {"one_sided_backlash", "drive", {"impact_backlash", "backlash"},
        [](CounterRng& rng, const Nominal&) {
          double k = 0.0;
          Fields s = draw_drive(rng, 3e7, k);
@@ -249,6 +250,7 @@ struct Case {
   Record record;
   std::string describe;
   double visibility = INFINITY;    // the least visible effect's RMS change / noise
+  std::vector<bool> visible;       // each form's: no draw of kRedraws changed the record by its noise = false
 };
 
 // The truth of `c` with `effects`; `noisy` false: every channel's noise off (deterministic, for visibility).
@@ -382,6 +384,7 @@ Case make_case(int i) {
       if (v >= kMinVisibility) break;
     }
     c.visibility = std::min(c.visibility, v);
+    c.visible.push_back(v >= kMinVisibility);
     c.effects.push_back(st);
   }
 
@@ -442,16 +445,27 @@ bool accepts(const std::string& form_name, const std::string& effect) {
   return std::find(a.begin(), a.end(), effect) != a.end();
 }
 
-// A set of named effects matches the hidden forms: one accepted name per form, nothing else.
-bool matches(const std::vector<std::string>& forms_hidden, const std::vector<std::string>& named) {
-  if (named.size() != forms_hidden.size()) return false;
+// A set of named effects matches the hidden forms: one accepted name per visible form, and any name left
+// over one of an invisible form (which no diagnosis need find: as the arm suite scores them).
+bool matches(const Case& c, const std::vector<std::string>& named) {
   std::vector<std::string> rest = named;
-  for (const auto& f : forms_hidden) {
-    const auto it = std::find_if(rest.begin(), rest.end(), [&](const std::string& e) { return accepts(f, e); });
-    if (it == rest.end()) return false;
-    rest.erase(it);
-  }
-  return true;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t k = 0; k < c.forms.size(); ++k) {
+      if (c.visible[k] != (pass == 0)) continue;
+      const auto it = std::find_if(rest.begin(), rest.end(), [&](const std::string& e) { return accepts(c.forms[k], e); });
+      if (it != rest.end()) rest.erase(it);
+      else if (c.visible[k]) return false;
+    }
+  return rest.empty();
+}
+
+// The record's hidden forms as the tables name them, an invisible one marked.
+std::string hidden_names(const Case& c) {
+  if (c.forms.empty()) return "—";
+  std::string s;
+  for (std::size_t k = 0; k < c.forms.size(); ++k)
+    s += (k ? " + " : "") + std::string(c.visible[k] ? "" : "(invisible) ") + c.forms[k];
+  return s;
 }
 
 struct Outcome {
@@ -459,6 +473,7 @@ struct Outcome {
   int rank = 0;  // of the first hidden form's accepted effect in the ranking (0: not ranked)
   double base_fit = NAN;  // the nominal model's worst sample channel, fit %
   std::vector<std::string> set;
+  bool scored_first = false;  // a visible form is hidden: the first-ranked effect is scored
   bool first_ok = false, set_ok = false, verdict_ok = false;
   bool false_unexplained = false, false_effect = false;  // clean records
   double seconds = NAN;
@@ -487,13 +502,16 @@ Outcome run_case(const Case& c, bool print) {
     o.false_unexplained = d.verdict == "unexplained";
     o.false_effect = !named.empty();
   } else {
-    o.first_ok = std::any_of(c.forms.begin(), c.forms.end(), [&](const std::string& f) { return accepts(f, o.first); });
-    o.set_ok = matches(c.forms, o.set);
-    o.verdict_ok = matches(c.forms, named);
+    for (std::size_t k = 0; k < c.forms.size(); ++k) {
+      o.scored_first = o.scored_first || c.visible[k];
+      o.first_ok = o.first_ok || (c.visible[k] && accepts(c.forms[k], o.first));
+    }
+    o.set_ok = matches(c, o.set);
+    o.verdict_ok = d.verdict != "unexplained" && matches(c, named);
   }
   if (print)
-    std::printf("record %d [%s]: %s\n%s\n", c.id, c.forms.empty() ? "clean" : (c.forms[0] + (c.forms.size() > 1 ? " + " + c.forms[1] : "")).c_str(),
-                c.describe.c_str(), format_diagnosis_text(d).c_str());
+    std::printf("record %d [%s]: %s\n%s\n", c.id, c.forms.empty() ? "clean" : hidden_names(c).c_str(), c.describe.c_str(),
+                format_diagnosis_text(d).c_str());
   return o;
 }
 
@@ -523,8 +541,7 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
   if (std::getenv("FLEXFARM_SUITE_LIST")) {  // the records alone, no diagnosis
     for (int id : ids) {
       const Case c = make_case(id);
-      std::printf("record %d [%s]: %s\n", id, c.forms.empty() ? "clean" : (c.forms[0] + (c.forms.size() > 1 ? " + " + c.forms[1] : "")).c_str(),
-                  c.describe.c_str());
+      std::printf("record %d [%s]: %s\n", id, c.forms.empty() ? "clean" : hidden_names(c).c_str(), c.describe.c_str());
     }
     return;
   }
@@ -538,7 +555,7 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
 
   // Per form (a pair counts under each of its forms) and in total.
   struct Tally {
-    int records = 0, first = 0, set = 0, verdict = 0;
+    int records = 0, scored_first = 0, first = 0, set = 0, verdict = 0;
     double seconds = 0.0;
   };
   std::map<std::string, Tally> by;
@@ -551,9 +568,11 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
     const Outcome& o = out[i];
     std::vector<Tally*> tallies = {&all, c.forms.empty() ? &clean : &hidden};
     if (c.forms.empty()) tallies.push_back(&by["(clean)"]);
-    for (const auto& f : c.forms) tallies.push_back(&by[c.forms.size() > 1 ? f + " (in a pair)" : f]);
+    for (std::size_t k = 0; k < c.forms.size(); ++k)
+      tallies.push_back(&by[(c.visible[k] ? "" : "(invisible) ") + c.forms[k] + (c.forms.size() > 1 ? " (in a pair)" : "")]);
     for (Tally* t : tallies) {
       t->records++;
+      t->scored_first += o.scored_first;
       t->first += o.first_ok;
       t->set += o.set_ok;
       t->verdict += o.verdict_ok;
@@ -562,11 +581,10 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
     false_unexplained += o.false_unexplained;
     false_effect += o.false_effect;
     worst_seconds = std::max(worst_seconds, o.seconds);
-    std::string hidden_names = c.forms.empty() ? "—" : c.forms[0] + (c.forms.size() > 1 ? " + " + c.forms[1] : "");
     std::string set;
     for (const auto& e : o.set) set += (set.empty() ? "" : " + ") + e;
     char line[1400];
-    std::snprintf(line, sizeof line, "| %d | %s | %s | %s%s | %s | %s | %.0f |\n", c.id, hidden_names.c_str(), c.describe.c_str(),
+    std::snprintf(line, sizeof line, "| %d | %s | %s | %s%s | %s | %s | %.0f |\n", c.id, hidden_names(c).c_str(), c.describe.c_str(),
                   o.first.c_str(), o.first_ok ? " ✓" : "", set.empty() ? "—" : set.c_str(), o.verdict.c_str(), o.seconds);
     rows += line;
   }
@@ -581,7 +599,7 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
   row("**with an effect**", hidden);
   row("**clean**", clean);
   row("**all**", all);
-  table += "\nFirst-ranked right (records with an effect): " + percent(hidden.first, hidden.records) +
+  table += "\nFirst-ranked right (records with a visible effect): " + percent(hidden.first, hidden.scored_first) +
            " (target >= 90 %); right verdict (all records): " + percent(all.verdict, all.records) +
            " (target >= 85 %); clean records given an effect or `unexplained`: " +
            percent(false_effect + false_unexplained, clean.records) + " (target <= 5 %; `unexplained` " +
@@ -595,7 +613,7 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
   }
   if (only) return;
   if (full) {  // issue 33, "Done when"
-    EXPECT_GE(hidden.first, 0.90 * hidden.records) << table;
+    EXPECT_GE(hidden.first, 0.90 * hidden.scored_first) << table;
     EXPECT_GE(all.verdict, 0.85 * all.records) << table;
     EXPECT_LE(false_effect + false_unexplained, 0.05 * clean.records) << table;
     EXPECT_LE(worst_seconds, 60.0) << table;
