@@ -741,30 +741,27 @@ double calc_added_delta_bic(double rss, double gain, double n_eff, int k) {
   return std::max(n_eff, 1.0) * std::log(std::max(left, 1e-300) / std::max(rss, 1e-300)) + k * std::log(std::max(n_eff, 1.0));
 }
 
-// Whether `e` extends the effect `name`, directly or through the chain of Effect::extends in `all`.
-bool extends_effect(const std::vector<Effect>& all, const Effect& e, const std::string& name) {
-  const Effect* at = &e;
-  for (std::size_t hops = 0; at && !at->extends.empty() && hops < all.size(); ++hops) {
-    if (at->extends == name) return true;
-    const std::string& next = at->extends;
-    at = nullptr;
-    for (const Effect& x : all)
-      if (x.name == next) at = &x;
+// The forms `e` extends, simplest last: its Effect::extends, what that extends in turn, and so on through `all`.
+std::vector<std::string> simpler_forms(const std::vector<Effect>& all, const Effect& e) {
+  std::vector<std::string> chain;
+  for (const Effect* at = &e; at && !at->extends.empty() && chain.size() < all.size();) {
+    chain.push_back(at->extends);
+    const auto next = std::find_if(all.begin(), all.end(), [&](const Effect& x) { return x.name == chain.back(); });
+    at = next == all.end() ? nullptr : &*next;
   }
-  return false;
+  return chain;
 }
 
-// The simplest form `e` extends (the end of its Effect::extends chain; itself when it extends none).
+// Whether `e` extends the effect `name`, directly or through the chain.
+bool extends_effect(const std::vector<Effect>& all, const Effect& e, const std::string& name) {
+  const auto chain = simpler_forms(all, e);
+  return std::find(chain.begin(), chain.end(), name) != chain.end();
+}
+
+// The simplest form `e` extends (the end of its chain; itself when it extends none).
 std::string root_effect(const std::vector<Effect>& all, const Effect& e) {
-  std::string root = e.name;
-  const Effect* at = &e;
-  for (std::size_t hops = 0; at && !at->extends.empty() && hops < all.size(); ++hops) {
-    root = at->extends;
-    at = nullptr;
-    for (const Effect& x : all)
-      if (x.name == root) at = &x;
-  }
-  return root;
+  const auto chain = simpler_forms(all, e);
+  return chain.empty() ? e.name : chain.back();
 }
 
 // Whether `e` may take the selected effect `name`'s place: it extends it, or it is another form of the same
