@@ -78,7 +78,7 @@ const std::array<Field<JointControlSpec>, 1> kJointFields{{
     {.key = "torque_offset", .member = &JointControlSpec::torque_offset, .unit = "N·m (N)"},
 }};
 
-const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
+const std::array<Field<FrictionSpec>, 11> kFrictionFields{{
     {.key = "viscous", .member = &FrictionSpec::viscous, .unit = "N·m·s/rad (N·s/m)", .bound = Bound::kNonNegative},
     {.key = "coulomb", .member = &FrictionSpec::coulomb, .unit = "N·m (N)", .bound = Bound::kNonNegative},
     {.key = "stiction", .member = &FrictionSpec::stiction, .unit = "N·m (N)", .bound = Bound::kNonNegative,
@@ -90,6 +90,10 @@ const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
      .bound = Bound::kPositive},
     {.key = "bristle_damping", .member = &FrictionSpec::bristle_damping, .unit = "N·m·s/rad (N·s/m)",
      .bound = Bound::kNonNegative},
+    {.key = "position_waves", .member = &FrictionSpec::position_waves, .unit = "1/rev (1/m)",
+     .bound = Bound::kNonNegative},
+    {.key = "position_cos", .member = &FrictionSpec::position_cos},
+    {.key = "position_sin", .member = &FrictionSpec::position_sin},
 }};
 
 const std::array<Field<ChannelSpec>, 4> kAngleSensorFields{{
@@ -373,6 +377,9 @@ ArmSpec parse_arm_spec(const YAML::Node& doc, const std::string& source) {
         friction.fail("stiction", "must be >= coulomb (or 0 for no Stribeck peak)");
       if (c.friction.model != "static" && c.friction.model != "lugre")
         friction.fail("model", "unknown friction model '" + c.friction.model + "' (static, lugre)");
+      if (!(std::hypot(c.friction.position_cos, c.friction.position_sin) < 1.0))
+        friction.fail("position_cos", "the Coulomb level's ripple needs position_cos^2 + position_sin^2 < 1 (a level that "
+                                      "never reaches zero)");
       if (c.friction.model == "lugre" && !(c.friction.coulomb > 0))
         friction.fail("coulomb", "LuGre friction needs coulomb > 0 (the bristles' steady-state level)");
       friction.finish();

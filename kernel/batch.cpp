@@ -101,12 +101,7 @@ BatchModel make_batch(std::span<const Model> models) {
 
   for (const auto& m : models) {
     const auto& f = m.spec.friction;
-    const FrictionMap fm = make_friction_map(f);
-    bm.fric_b.push_back(fm.b);
-    bm.fric_c.push_back(fm.fc);
-    bm.fric_s.push_back(fm.fs);
-    bm.fric_inv_vs.push_back(fm.inv_vs);
-    bm.fric_inv_eps.push_back(fm.inv_eps);
+    bm.friction.push_back(make_friction_map(f));
     bm.hub_offset.push_back(m.spec.hub_torque_offset);
   }
   for (const auto& m : models) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "kernel/drive.hpp"
+#include "kernel/friction.hpp"
 #include "kernel/model.hpp"
 #include "kernel/notch.hpp"
 
@@ -49,8 +50,7 @@ struct BatchModel {
   std::vector<double> ff_gain;      // (W) gain of the model-based feed-forward
   std::vector<double> notch_coef;   // (5 * nsections x W) biquad coefficients
   std::vector<char> notch_feedback; // (W) 1: the notch filters the measured hub angle, 0: the reference
-  // Hub friction (W each): viscous b, Coulomb Fc, Stribeck excess Fs - Fc, 1/vs, 1/eps.
-  std::vector<double> fric_b, fric_c, fric_s, fric_inv_vs, fric_inv_eps;
+  std::vector<FrictionMap> friction;  // (W) the hub's friction map (kernel/friction.hpp)
   std::vector<double> hub_offset;   // (W) constant load torque on the hub (hub.torque_offset), N·m
   // Sensors, per channel (0 hub angle, 1 hub rate) and lane: quantum, noise std, delay (samples),
   // hold (controller samples per sensor sample), noise key.

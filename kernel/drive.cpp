@@ -327,13 +327,13 @@ double lane_drive(const BatchModel& bm, int l, const double* q, const double* v,
 
   // Friction at the hub: the LuGre bristles or the static map.
   if (L.bristle >= 0) {
-    const FrictionMap f{bm.fric_b[l], bm.fric_c[l], bm.fric_s[l], bm.fric_inv_vs[l], bm.fric_inv_eps[l]};
+    const FrictionMap f = at_angle(bm.friction[l], th_h);
     const double zb = Z(L.bristle);
     const double zd = calc_lugre_bristle_rate(f, p.sigma0, w_h, zb);
     set(L.bristle, zd);
     tau_hub += calc_lugre_torque(f, p.sigma0, p.sigma1, w_h, zb, zd);
   } else {
-    tau_hub += calc_hub_friction(bm, l, w_h);
+    tau_hub += calc_hub_friction(bm, l, th_h, w_h);
   }
   return tau_hub - bm.hub_offset[l];  // the constant load torque (hub.torque_offset)
 }

@@ -15,17 +15,12 @@ namespace ff {
 // Parent-to-child transform (Featherstone's plnr(q, [L_parent, 0])):
 //   X = [[1, 0, 0], [s L, c, s], [c L, -s, c]],  c = cos q, s = sin q.
 
-namespace {
-// Lane l's friction map (kernel/friction.hpp).
-FrictionMap hub_friction_map(const BatchModel& bm, int l) {
-  return {bm.fric_b[l], bm.fric_c[l], bm.fric_s[l], bm.fric_inv_vs[l], bm.fric_inv_eps[l]};
+double calc_hub_friction(const BatchModel& bm, int l, double q, double w) {
+  return calc_friction_torque(at_angle(bm.friction[l], q), w);
 }
-}  // namespace
 
-double calc_hub_friction(const BatchModel& bm, int l, double w) { return calc_friction_torque(hub_friction_map(bm, l), w); }
-
-double calc_hub_friction_damping(const BatchModel& bm, int l, double w) {
-  return calc_friction_damping(hub_friction_map(bm, l), w);
+double calc_hub_friction_damping(const BatchModel& bm, int l, double q, double w) {
+  return calc_friction_damping(at_angle(bm.friction[l], q), w);
 }
 
 static void compute_joint_torques_kernel(const BatchModel& bm, const double* q, const double* v,

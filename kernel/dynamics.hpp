@@ -11,12 +11,12 @@ namespace ff {
 void compute_joint_torques(const BatchModel& bm, const double* q, const double* v, const double* tau_hub,
                            double* tau);
 
-// Hub friction torque at hub rate w of lane l (FrictionSpec), N·m; never adds energy: tau_f w <= 0.
-double calc_hub_friction(const BatchModel& bm, int lane, double w);
+// Hub friction torque at hub angle q and rate w of lane l (FrictionSpec), N·m; never adds energy: tau_f w <= 0.
+double calc_hub_friction(const BatchModel& bm, int lane, double q, double w);
 
 // The friction map's damping at hub rate w, -d calc_hub_friction / dw, N·m·s/rad, not below 0 (the
 // Stribeck drop's negative slope is left out): b + g'(w) tanh(w/eps) + g(w) sech^2(w/eps) / eps.
-double calc_hub_friction_damping(const BatchModel& bm, int lane, double w);
+double calc_hub_friction_damping(const BatchModel& bm, int lane, double q, double w);
 
 // Forward dynamics qdd = M(q)^-1 (tau - C(q, v) v) by the articulated-body algorithm
 // (Featherstone, Rigid Body Dynamics Algorithms, 2008, Table 7.1, planar form), O(N) per lane.

@@ -44,7 +44,7 @@ void set_hub_armature(const BatchModel& bm, const double* q, const double* w, co
   const DriveLayout& L = bm.layout;
   const int W = bm.W;
   for (int l = 0; l < W; ++l) {
-    double a = L.bristle >= 0 ? 0.0 : gh_f * calc_hub_friction_damping(bm, l, w[l]);
+    double a = L.bristle >= 0 ? 0.0 : gh_f * calc_hub_friction_damping(bm, l, q[l], w[l]);
     if (L.shaft >= 0 && bm.drive[l].b == 0.0) {
       const LaneDrive& p = bm.drive[l];
       const TransmissionTangent t =

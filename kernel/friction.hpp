@@ -2,7 +2,9 @@
 // the reference rig's hub (kernel/dynamics.cpp: calc_hub_friction, calc_hub_friction_damping) and the
 // arm models' actuated joints (multibody/lanes.hpp: TreeLanes::friction):
 //   tau_f(w) = -(b w + (Fc + (Fs - Fc) exp(-(w/vs)^2)) tanh(w/eps))
-// (Armstrong-Helouvry 1994, tanh smoothing). Never adds energy: tau_f w <= 0.
+// (Armstrong-Helouvry 1994, tanh smoothing). Never adds energy: tau_f w <= 0. A worn or eccentric gear's
+// friction level varies with the joint angle q: Fc and Fs times 1 + a cos(p q) + b sin(p q), p waves a
+// revolution (at_angle below).
 #pragma once
 
 #include <algorithm>
@@ -19,11 +21,22 @@ struct FrictionMap {
   double fs = 0.0;       // the Stribeck excess Fs - Fc (0 when stiction is 0), N·m (N)
   double inv_vs = 0.0;   // 1 / stribeck_velocity
   double inv_eps = 0.0;  // 1 / smoothing
+  double waves = 0.0;    // p, the friction level's waves a revolution (0: independent of the angle)
+  double wave_cos = 0.0, wave_sin = 0.0;  // a, b: its relative amplitudes
 };
 
 inline FrictionMap make_friction_map(const FrictionSpec& f) {
-  return {f.viscous, f.coulomb, f.stiction > 0 ? f.stiction - f.coulomb : 0.0, 1.0 / f.stribeck_velocity,
-          1.0 / f.smoothing};
+  return {f.viscous,          f.coulomb,         f.stiction > 0 ? f.stiction - f.coulomb : 0.0,
+          1.0 / f.stribeck_velocity, 1.0 / f.smoothing, f.position_waves, f.position_cos, f.position_sin};
+}
+
+// The map at joint angle q (rad, m): its levels Fc and Fs - Fc times 1 + a cos(p q) + b sin(p q).
+inline FrictionMap at_angle(FrictionMap f, double q) {
+  if (f.waves == 0.0) return f;
+  const double m = 1.0 + f.wave_cos * std::cos(f.waves * q) + f.wave_sin * std::sin(f.waves * q);
+  f.fc *= m;
+  f.fs *= m;
+  return f;
 }
 
 // True when the map is not identically zero.

@@ -171,6 +171,10 @@ void validate(const ModelSpec& s, const std::string& src) {
   if (s.friction.model != "static" && s.friction.model != "lugre")
     throw ConfigError(src, 0, "friction.model", "unknown model '" + s.friction.model + "' (static, lugre)");
   positive(s.friction.bristle_stiffness, "friction.bristle_stiffness");
+  non_negative(s.friction.position_waves, "friction.position_waves");
+  if (!(std::hypot(s.friction.position_cos, s.friction.position_sin) < 1.0))
+    throw ConfigError(src, 0, "friction.position_cos",
+                      "the Coulomb level's ripple needs position_cos^2 + position_sin^2 < 1 (a level that never reaches zero)");
   non_negative(s.friction.bristle_damping, "friction.bristle_damping");
   if (s.friction.model == "lugre" && !(s.friction.coulomb > 0))
     throw ConfigError(src, 0, "friction.model", "lugre needs friction.coulomb > 0 (the level the bristles slip at), got " +

@@ -117,6 +117,11 @@ struct FrictionSpec {
   std::string model = "static";
   double bristle_stiffness = 1.0e5;  // sigma0, N·m/rad
   double bristle_damping = 300.0;    // sigma1, N·m·s/rad
+  // A worn or eccentric gear: the levels Fc and Fs times 1 + a cos(p q) + b sin(p q) at joint angle q,
+  // p = position_waves a revolution (0: none), a = position_cos, b = position_sin (a^2 + b^2 < 1).
+  double position_waves = 0.0;
+  double position_cos = 0.0;
+  double position_sin = 0.0;
 };
 
 // Hydraulic rotary actuator (rack and pinion) behind a servo valve; off by default, when the

@@ -170,7 +170,7 @@ std::array<Channel, 9> channels(SensorSpec& ss) {
            {"pressure_b", "Pa", &ss.pressure_b, nullptr, nullptr}}};
 }
 
-const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
+const std::array<Field<FrictionSpec>, 11> kFrictionFields{{
     {.key = "viscous", .member = &FrictionSpec::viscous, .unit = "N·m·s/rad"},
     {.key = "coulomb", .member = &FrictionSpec::coulomb, .unit = "N·m"},
     {.key = "stiction", .member = &FrictionSpec::stiction, .unit = "N·m", .fallback = "0: no Stribeck peak"},
@@ -179,6 +179,9 @@ const std::array<Field<FrictionSpec>, 8> kFrictionFields{{
     {.key = "model", .member = &FrictionSpec::model},
     {.key = "bristle_stiffness", .member = &FrictionSpec::bristle_stiffness, .unit = "N·m/rad"},
     {.key = "bristle_damping", .member = &FrictionSpec::bristle_damping, .unit = "N·m·s/rad"},
+    {.key = "position_waves", .member = &FrictionSpec::position_waves, .unit = "1/rev"},
+    {.key = "position_cos", .member = &FrictionSpec::position_cos},
+    {.key = "position_sin", .member = &FrictionSpec::position_sin},
 }};
 // The rest of the block is hydraulic_fields(), the arm's too.
 const std::array<Field<HydraulicSpec>, 1> kHydraulicEnabledFields{{

@@ -40,7 +40,8 @@ void set_stage_armature(const TreeLanes& tl, TreeStepWorkspace& ws, const double
     for (std::size_t l = 0; l < W; ++l) {
       const std::size_t j = o + l;
       ws.armature[j] =
-          is_friction_on(fm[l]) ? base(j) + gh * fm[l].b + gf * calc_coulomb_friction_damping(fm[l], w[j]) : base(j);
+          is_friction_on(fm[l]) ? base(j) + gh * fm[l].b + gf * calc_coulomb_friction_damping(at_angle(fm[l], q[j]), w[j])
+                                : base(j);
     }
   }
   for (std::size_t d = 0; d < tl.transmission_dofs.size(); ++d) {
@@ -84,7 +85,8 @@ void solve_state_stages(const TreeLanes& tl, const double* q, const double* qd, 
     const std::size_t o = static_cast<std::size_t>(tl.lugre_dofs[b]) * W;
     const std::size_t zo = static_cast<std::size_t>(tl.bristle_row(b)) * W;
     for (std::size_t l = 0; l < W; ++l)
-      Z[zo + l] = solve_lugre_stage(tl.lugre[b * W + l], tl.bristle_stiffness[b * W + l], qd[o + l], zpre[zo + l], gh);
+      Z[zo + l] = solve_lugre_stage(at_angle(tl.lugre[b * W + l], q[o + l]), tl.bristle_stiffness[b * W + l], qd[o + l],
+                                    zpre[zo + l], gh);
   }
 }
 }  // namespace

@@ -502,7 +502,7 @@ void compute_tree_passive_forces(const TreeLanes& tl, const double* q, const dou
     const std::size_t o = static_cast<std::size_t>(tl.friction_dofs[f]) * W;
     const FrictionMap* fm = tl.friction.data() + f * W;
     for (std::size_t l = 0; l < W; ++l)
-      if (is_friction_on(fm[l])) tau[o + l] += calc_friction_torque(fm[l], qd[o + l]);
+      if (is_friction_on(fm[l])) tau[o + l] += calc_friction_torque(at_angle(fm[l], q[o + l]), qd[o + l]);
   }
   // The nonlinear drive trains: the twist q_t = body - rotor, so the rotor drives the body with
   // T_t = T(-q_t, -qd_t) = -T(q_t, qd_t) (T odd); the body's coordinate is q_rotor + q_t, so the twist
@@ -665,9 +665,10 @@ void compute_tree_actuator_forces(const TreeLanes& tl, const double* q, const do
     for (std::size_t l = 0; l < W; ++l) {
       const std::size_t i = b * W + l;
       const double w = qd[o + l], zb = z[zo + l];
-      const double zd = calc_lugre_bristle_rate(tl.lugre[i], tl.bristle_stiffness[i], w, zb);
+      const FrictionMap f = at_angle(tl.lugre[i], q[o + l]);
+      const double zd = calc_lugre_bristle_rate(f, tl.bristle_stiffness[i], w, zb);
       if (zdot) zdot[zo + l] = zd;
-      tau_act[o + l] += calc_lugre_torque(tl.lugre[i], tl.bristle_stiffness[i], tl.bristle_damping[i], w, zb, zd);
+      tau_act[o + l] += calc_lugre_torque(f, tl.bristle_stiffness[i], tl.bristle_damping[i], w, zb, zd);
     }
   }
 }

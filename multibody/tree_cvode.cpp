@@ -197,7 +197,7 @@ int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector 
   for (std::size_t f = 0; f < one.friction_dofs.size(); ++f)
     if (is_friction_on(one.friction[f])) {
       const int d = one.friction_dofs[f];
-      L.c[static_cast<std::size_t>(d)] += calc_friction_damping(one.friction[f], yd[n + d]);
+      L.c[static_cast<std::size_t>(d)] += calc_friction_damping(at_angle(one.friction[f], yd[d]), yd[n + d]);
     }
   for (std::size_t t = 0; t < one.transmission_dofs.size(); ++t) {
     const int d = one.transmission_dofs[t];
@@ -227,8 +227,9 @@ int psolve(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, N_Vector r, N_Vector 
   for (std::size_t b = 0; b < one.lugre_dofs.size(); ++b) {
     const std::size_t o = 2 * static_cast<std::size_t>(n) + static_cast<std::size_t>(one.bristle_row(b));
     const double w = yd[n + one.lugre_dofs[b]];
-    const double dzdz = calc_lugre_bristle_rate(one.lugre[b], one.bristle_stiffness[b], w, 1.0) -
-                        calc_lugre_bristle_rate(one.lugre[b], one.bristle_stiffness[b], w, 0.0);
+    const FrictionMap f = at_angle(one.lugre[b], yd[one.lugre_dofs[b]]);
+    const double dzdz = calc_lugre_bristle_rate(f, one.bristle_stiffness[b], w, 1.0) -
+                        calc_lugre_bristle_rate(f, one.bristle_stiffness[b], w, 0.0);
     zd[o] = rd[o] / (1.0 - gamma * dzdz);
   }
   for (int i = 0; i < 2 * n + L.nz; ++i)

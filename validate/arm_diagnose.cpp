@@ -128,6 +128,8 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   const EffectParam smoothing =
       make_positive_param(j + "friction.smoothing", f.smoothing, 1e-3, 1e-4 * w, std::max(1e-2 * w, 2.0 * f.smoothing));
   out.push_back({"coulomb_friction@" + a.name, "Coulomb friction at " + a.name, {}, {coulomb, smoothing}, "", {}, false, ""});
+  out.push_back(make_worn_gear_effect("worn_gear_friction@" + a.name, j + "friction.", "coulomb_friction@" + a.name, f,
+                                      coulomb, smoothing));
   out.push_back({"viscous_friction@" + a.name, "viscous friction at " + a.name, {},
                  {make_positive_param(j + "friction.viscous", f.viscous, 0.05 * tau / w, 1e-4 * tau / w, 10.0 * tau / w)},
                  "", {}, false, ""});
@@ -189,6 +191,11 @@ std::vector<Effect> make_joint_effects(const ArmModel& base, const YAML::Node& d
   if (a.control.kd > 0)
     out.push_back({"sensor_delay." + a.name + "_rate", "delay of " + a.name + "'s rate measurement (in the loop)", {}, {},
                    j + "sensors.rate.delay", make_delay_grid(last), true, ""});
+  // The angle late in the loop with its column logged on time (the rig's loop_delay.hub_angle), offered where
+  // the model says the column is as read.
+  if (!is_logged_on_time(a.control.angle_sensor))
+    out.push_back({"loop_delay." + a.name + "_angle", "delay of " + a.name + "'s angle in the loop only, its column logged on time",
+                   {{j + "sensors.angle.logged", "true"}}, {}, j + "sensors.angle.delay", make_delay_grid(last), true, ""});
   // A logger that stamps the on-time angle late (logged: true): the scored column shifted, the loop untouched.
   if (is_logged_on_time(a.control.angle_sensor))
     out.push_back({"logger_delay." + a.name + "_angle", "latency of the logged " + a.name + " angle (output only)", {}, {},

@@ -393,9 +393,20 @@ double search_grid(const Scorer& sc, const Effect& e, const std::vector<double>&
 }
 
 // The global scan's points in the box of coordinates: 16 evenly spaced for one parameter, an 8 x 8
-// grid for two, 64 Sobol' points for three, 128 for more; the starting point first.
+// grid for two, 64 Sobol' points for three, 128 for more, or the effect's own starts; the starting point first.
 std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<double>& start) {
   const std::size_t p = e.params.size();
+  if (!e.starts.empty()) {
+    std::vector<std::vector<double>> out = {start};
+    for (const auto& values : e.starts) {
+      std::vector<double> t = start;
+      for (std::size_t j = 0; j < p; ++j)
+        if (const auto v = values.find(e.params[j].path); v != values.end())
+          t[j] = param_theta(e.params[j], std::clamp(v->second, e.params[j].lo, e.params[j].hi));
+      out.push_back(t);
+    }
+    return out;
+  }
   std::vector<double> lo(p), hi(p);
   for (std::size_t j = 0; j < p; ++j) {
     lo[j] = param_theta(e.params[j], e.params[j].lo);
@@ -774,7 +785,25 @@ bool replaces_effect(const std::vector<Effect>& all, const Effect& e, const std:
   return root_effect(all, e) == root_effect(all, *other);
 }
 
-// Occam: an effect ranked above the simpler one it extends must fit visibly better, else the simpler goes first.
+// Whether the record determines what an extension adds to the form it extends: none of its own parameters
+// (those the simpler form does not fit) unidentifiable or on a bound of its range. One that is not
+// determined is a flexible curve, not evidence (a worn gear's ripple at its largest amplitude imitating
+// viscous friction and an offset on the EMPS record): it is not significant, nor ranked above the simpler form.
+bool is_extension_determined(const EffectFit& f, const std::vector<Effect>& effects) {
+  const auto e = std::find_if(effects.begin(), effects.end(), [&](const Effect& x) { return x.name == f.effect; });
+  if (e == effects.end() || e->extends.empty()) return true;
+  const auto simple = std::find_if(effects.begin(), effects.end(), [&](const Effect& x) { return x.name == e->extends; });
+  const auto inherited = simple == effects.end() ? std::vector<std::string>{} : effect_paths(*simple);
+  for (const auto& p : e->params) {
+    if (std::find(inherited.begin(), inherited.end(), p.path) != inherited.end()) continue;
+    for (const auto* list : {&f.unidentifiable, &f.at_bound})
+      if (std::find(list->begin(), list->end(), p.path) != list->end()) return false;
+  }
+  return true;
+}
+
+// Occam: an effect ranked above the simpler one it extends must fit visibly better, and be determined by the
+// record, else the simpler goes first.
 void order_nested(std::vector<EffectFit>& ranking, const std::vector<Effect>& effects) {
   for (const Effect& e : effects) {
     if (e.extends.empty()) continue;
@@ -783,7 +812,55 @@ void order_nested(std::vector<EffectFit>& ranking, const std::vector<Effect>& ef
     if (rich == ranking.end() || simple == ranking.end() || simple < rich || !simple->ok) continue;
     double gain = -INFINITY;
     for (const auto& [c, v] : rich->fit_percent) gain = std::max(gain, v - simple->fit_percent.at(c));
-    if (gain < kNestedFitMargin) std::rotate(rich, simple, simple + 1);
+    if (gain < kNestedFitMargin || !is_extension_determined(*rich, effects)) std::rotate(rich, simple, simple + 1);
+  }
+}
+
+// A richer form does at least as well as the form it extends at its optimum (it contains it, or comes as near
+// as its bounds allow), so one fitted to a larger RSS is stuck in a valley of its own: fitted again in full from
+// the simpler fit's values (its own parameters at their initial values) when that start is already below the
+// stuck fit's RSS, and kept if better. A form with starts of its own is always scanned again so, at them:
+// starts scanned at the initial values are only as good as those are (a worn gear's waves, scanned at a
+// guessed Coulomb level, fit the level instead).
+// Simplest first (by the length of the extends chain, each length's refits in parallel), so a chain
+// (Coulomb, Stribeck, LuGre) is carried up; only forms fitted in full.
+void refit_stuck_forms(const Scorer& sc, const std::vector<Effect>& effects, const std::vector<Against>& against,
+                       const std::vector<int>& shared, const DiagnoseOptions& opt, const std::vector<Scanned>& scans,
+                       const std::vector<bool>& full, std::vector<EffectFit>& fits) {
+  std::vector<std::size_t> depth(effects.size()), simpler(effects.size(), effects.size());
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    depth[i] = simpler_forms(effects, effects[i]).size();
+    for (std::size_t j = 0; j < effects.size(); ++j)
+      if (effects[j].name == effects[i].extends) simpler[i] = j;
+  }
+  for (std::size_t d = 1; d <= effects.size(); ++d) {
+    std::vector<std::size_t> stuck;
+    for (std::size_t i = 0; i < effects.size(); ++i)
+      if (depth[i] == d && full[i] && simpler[i] < effects.size() && fits[simpler[i]].ok && fits[i].ok &&
+          (fits[i].rss > fits[simpler[i]].rss || !effects[i].starts.empty()))
+        stuck.push_back(i);
+    if (stuck.empty() && std::none_of(depth.begin(), depth.end(), [&](std::size_t x) { return x > d; })) break;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::size_t k = 0; k < stuck.size(); ++k) {
+      const std::size_t i = stuck[k];
+      Effect seeded = effects[i];
+      for (auto& q : seeded.params) {
+        const auto& from = fits[simpler[i]].params;
+        if (const auto v = from.find(q.path); v != from.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
+      }
+      Scanned start;
+      if (seeded.starts.empty()) {  // the seeded point alone, the grid where the first scan found it
+        start.grid_value = scans[i].grid_value;
+        start.points.emplace_back();
+        for (const auto& q : seeded.params) start.points[0].push_back(param_theta(q, q.initial));
+        start.rss = trial_rss(sc, make_trials(seeded, start.points, start.grid_value));
+      } else {
+        start = scan_effect(sc, seeded);
+      }
+      if (start.rss.empty() || !(start.rss[0] < fits[i].rss)) continue;  // no better start: the first fit stands
+      EffectFit again = fit_one(sc, seeded, against[i], opt, shared[i], start, true);
+      if (again.ok && again.rss < fits[i].rss) fits[i] = std::move(again);
+    }
   }
 }
 
@@ -830,6 +907,14 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
       opt.on_fitted(++done, static_cast<int>(n), ranking[i]);
     }
   }
+  refit_stuck_forms(sc, effects, against, shared, opt, scans, full, ranking);
+  for (auto& f : ranking)
+    if (f.ok && f.significant && !f.screened && !is_extension_determined(f, effects)) {
+      f.significant = false;
+      f.note = "what it adds to " + std::find_if(effects.begin(), effects.end(), [&](const Effect& x) {
+                                      return x.name == f.effect;
+                                    })->extends + " is not determined by the record (unidentifiable or on a bound)";
+    }
   std::stable_sort(ranking.begin(), ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
     return a.delta_bic < b.delta_bic;

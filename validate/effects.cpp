@@ -6,11 +6,11 @@
 namespace ff {
 
 std::vector<std::string> effect_names() {
-  return {"coulomb_friction",      "viscous_friction",       "stribeck_friction",        "torque_offset",
+  return {"coulomb_friction",      "worn_gear_friction",     "viscous_friction",       "stribeck_friction",        "torque_offset",
           "lugre_friction",        "backlash",               "impact_backlash",          "drive_compliance",
           "mesh_hardening",        "hydraulic_compressibility", "torque_saturation",
           "joint_stiffening",      "sensor_delay.hub_angle", "sensor_delay.hub_rate",    "sensor_delay.hub_torque",
-          "sensor_delay.tip_deflection", "logger_delay.hub_angle", "sensor_quantization", "extra_mode",
+          "sensor_delay.tip_deflection", "loop_delay.hub_angle", "loop_delay.hub_rate", "logger_delay.hub_angle", "sensor_quantization", "extra_mode",
           "payload",               "hub_inertia"};
 }
 
@@ -58,6 +58,24 @@ EffectParam make_cubic_param(const std::string& path, double current, double k, 
   return make_positive_param(path, current, s, 1e-4 * s, 1e4 * s);
 }
 
+Effect make_worn_gear_effect(const std::string& name, const std::string& prefix, const std::string& extends,
+                             const FrictionSpec& f, EffectParam coulomb, EffectParam smoothing) {
+  Effect e{name, "friction whose level varies with the angle (a worn or eccentric gear)", {}, {coulomb, smoothing}, "",
+           {}, false, extends};
+  for (const auto& [k, now] : {std::pair{"position_cos", f.position_cos}, std::pair{"position_sin", f.position_sin}})
+    e.params.push_back({prefix + k, std::clamp(now, -0.9, 0.9), -0.9, 0.9, ParamScale::kLinear});
+  e.params.push_back(make_positive_param(prefix + "position_waves", f.position_waves, 10.0, 1.5, 60.0));
+  // Each whole number of waves from 2 to 48 a start, as the valleys are about a wave apart on a record that
+  // turns the joint a radian; at four phases of amplitude 0.4, as a ripple at the right waves but the wrong
+  // phase adds as much misfit as it takes (four leave at most 45 degrees). The fit then refines all five.
+  for (int p = 2; p <= 48; ++p)
+    for (int k = 0; k < 4; ++k)
+      e.starts.push_back({{prefix + "position_waves", p},
+                          {prefix + "position_cos", 0.4 * std::cos(k * M_PI / 2)},
+                          {prefix + "position_sin", 0.4 * std::sin(k * M_PI / 2)}});
+  return e;
+}
+
 std::vector<double> make_delay_grid(int last) {
   std::vector<double> g;
   for (double x = 1.0; std::lround(x) <= last; x = std::max(x + 1.0, x * 4.0 / 3.0)) g.push_back(std::lround(x));
@@ -91,6 +109,7 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
                                                     std::max(0.1 * tau, 2.0 * s.friction.coulomb), 2e-3 * tau, 4.0 * tau);
   const EffectParam stribeck_velocity =
       make_positive_param("friction.stribeck_velocity", s.friction.stribeck_velocity, 0.05 * w, 1e-3 * w, w);
+  out.push_back(make_worn_gear_effect("worn_gear_friction", "friction.", "coulomb_friction", s.friction, coulomb, smoothing));
   out.push_back({"stribeck_friction", "Coulomb friction with a Stribeck (stiction) peak", {},
                  {coulomb, stiction, stribeck_velocity, smoothing}, "", {}, false, "coulomb_friction"});
   out.push_back({"lugre_friction", "LuGre friction: the Stribeck curve with pre-sliding bristles", {{"friction.model", "lugre"}},
@@ -153,6 +172,14 @@ std::vector<Effect> make_candidate_effects(const Model& base, ReplayMode mode, c
                    "sensors.hub_angle.delay", delays, true, ""});
     out.push_back({"sensor_delay.hub_rate", "delay of the hub rate measurement (in the loop)", {}, {},
                    "sensors.hub_rate.delay", delays, true, ""});
+    // The same delay in the loop with the column logged on time (logged: true: a controller's latency, or
+    // a logger that stamps each reading when taken), offered where the model says the column is as read.
+    for (const auto& [c, ch] : {std::pair{"hub_angle", &s.sensors.hub_angle}, std::pair{"hub_rate", &s.sensors.hub_rate}})
+      if (!is_logged_on_time(*ch) && std::find(scored.begin(), scored.end(), c) != scored.end())
+        out.push_back({std::string("loop_delay.") + c,
+                       std::string("delay of the ") + c + " in the loop only, its column logged on time",
+                       {{std::string("sensors.") + c + ".logged", "true"}}, {}, std::string("sensors.") + c + ".delay",
+                       delays, true, ""});
   }
   for (const char* c : {"hub_torque", "tip_deflection"})
     if (std::find(scored.begin(), scored.end(), c) != scored.end())

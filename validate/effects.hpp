@@ -3,6 +3,7 @@
 // (docs/validation.md, "The candidate effects").
 #pragma once
 
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,6 +39,10 @@ struct Effect {
   std::vector<double> grid;                              // its values, ascending
   bool grid_integer = false;                             // whole numbers: refined between the best one's neighbours
   std::string extends;                                   // the simpler effect this one contains ("" = none)
+  // Starting points scanned instead of the global scan's Sobol' points, each some params' values (the rest at
+  // their initial values): where the sum of squares has many narrow valleys the Sobol' points miss (a
+  // ripple's waves at each of four phases). Empty: the global scan.
+  std::vector<std::map<std::string, double>> starts;
 };
 
 // How much better (percentage points of fit, on some channel) an effect must do than the simpler
@@ -72,6 +77,14 @@ std::vector<EffectParam> make_lugre_params(const std::string& prefix, const Fric
 // A hardening mesh's cubic stiffness k3 (N m/rad^3) at `path` for a mesh of stiffness k: k3 e^2 from 1e-4 to
 // 1e4 times k at the twist the peak torque gives.
 EffectParam make_cubic_param(const std::string& path, double current, double k, double torque_max);
+
+// A worn or eccentric gear named `name`: the Coulomb friction of `coulomb` and `smoothing` (paths under
+// `prefix`, e.g. "friction." or "joints.J.friction.") with its level times 1 + a cos(p q) + b sin(p q):
+// p started at whole waves a revolution, 2 to 48, each at four phases, and fitted (1.5 to 60) with a and b
+// (within +-0.9).
+// Extends `extends` (the Coulomb candidate).
+Effect make_worn_gear_effect(const std::string& name, const std::string& prefix, const std::string& extends,
+                             const FrictionSpec& f, EffectParam coulomb, EffectParam smoothing);
 
 // Whole numbers from 1 to `last`, spaced by about a factor 4/3 (every one up to 5): the delays searched.
 std::vector<double> make_delay_grid(int last);

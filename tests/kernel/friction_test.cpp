@@ -27,18 +27,20 @@ ModelSpec friction_rig() {
 TEST(Friction, NeverAddsEnergyAndMatchesItsLaw) {
   const Model m = make_model(friction_rig());
   const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
-  for (double w = -2.0; w <= 2.0; w += 0.001) EXPECT_LE(calc_hub_friction(bm, 0, w) * w, 0.0) << w;
-  EXPECT_EQ(calc_hub_friction(bm, 0, 0.0), 0.0);
+  for (double w = -2.0; w <= 2.0; w += 0.001) EXPECT_LE(calc_hub_friction(bm, 0, 0.0, w) * w, 0.0) << w;
+  EXPECT_EQ(calc_hub_friction(bm, 0, 0.0, 0.0), 0.0);
   // Well above the Stribeck velocity: Coulomb plus viscous.
-  EXPECT_NEAR(calc_hub_friction(bm, 0, 1.0), -(400.0 + 50.0), 1e-6);
+  EXPECT_NEAR(calc_hub_friction(bm, 0, 0.0, 1.0), -(400.0 + 50.0), 1e-6);
   // Near the Stribeck peak (w >> eps, w << vs): the stiction level.
-  EXPECT_NEAR(calc_hub_friction(bm, 0, 0.005), -(50.0 * 0.005 + (400.0 + 200.0 * std::exp(-0.0625)) * std::tanh(5.0)),
+  EXPECT_NEAR(calc_hub_friction(bm, 0, 0.0, 0.005), -(50.0 * 0.005 + (400.0 + 200.0 * std::exp(-0.0625)) * std::tanh(5.0)),
               1e-9);
 }
 
-// The hub displacement after 2 s under a constant hub torque (no controller), on a stiff arm.
-double slide(double torque) {
+// The hub displacement after 2 s under a constant hub torque (no controller), on a stiff arm; `worn`
+// changes the spec first.
+double slide(double torque, void (*worn)(ModelSpec&) = nullptr) {
   ModelSpec s = friction_rig();
+  if (worn) worn(s);
   s.joints.stiffness *= 100.0;
   const Model m = make_model(s);
   const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
@@ -57,6 +59,36 @@ TEST(Friction, BreaksAwayAtTheStictionTorque) {
   EXPECT_GT(above, 0.03);
   EXPECT_GT(above, 10.0 * below);
   EXPECT_DOUBLE_EQ(slide(-1.1 * 600.0), -above);  // symmetric
+}
+
+// A worn gear's friction levels times 1 + a cos(p q) + b sin(p q): at q = 0 a = -0.5 halves the breakaway
+// torque Fs to 300 N m, so 540 N m slides the arm that held at 600; a = +0.5 raises it to 900, and 660 N m,
+// which slid the unworn arm, only creeps. The sine term is zero at q = 0: b moves nothing.
+TEST(Friction, AWornGearBreaksAwayAtTheCoulombLevelOfItsAngle) {
+  const auto low = [](ModelSpec& s) {
+    s.friction.position_waves = 25;
+    s.friction.position_cos = -0.5;
+    s.friction.position_sin = 0.3;
+  };
+  const auto high = [](ModelSpec& s) {
+    s.friction.position_waves = 25;
+    s.friction.position_cos = 0.5;
+  };
+  EXPECT_GT(slide(0.9 * 600.0, low), 0.03);
+  EXPECT_LT(std::fabs(slide(1.1 * 600.0, high)), 0.005);
+  // The law itself at three angles, well above the Stribeck velocity.
+  const Model m = make_model([] {
+    ModelSpec s = friction_rig();
+    s.friction.position_waves = 25;
+    s.friction.position_cos = 0.3;
+    s.friction.position_sin = -0.2;
+    return s;
+  }());
+  const BatchModel bm = make_batch(std::span<const Model>(&m, 1));
+  for (double q : {0.0, 0.05, 0.3})
+    EXPECT_NEAR(calc_hub_friction(bm, 0, q, 1.0), -(50.0 + 400.0 * (1.0 + 0.3 * std::cos(25 * q) - 0.2 * std::sin(25 * q))),
+                1e-6)
+        << q;
 }
 
 // Steep maps (smoothing 1e-4 and 1e-5 rad/s: F_s / (eps J) up to ~1e6 /s) under the PD loop through a

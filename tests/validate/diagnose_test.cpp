@@ -20,6 +20,18 @@ const std::string kModel = std::string(FLEXFARM_SOURCE_DIR) + "/configs/fbtb.yam
 
 const std::vector<std::string> kShortRun = {"trajectory.moves=[{target: 0.5, hold: 3}]"};
 
+// A record of the independent simulator (tests/validate/truth): one 0.5 rad move held 3 s, recorded at 500 Hz
+// with the tip and torque noise of a rig (2 mm, 20 N m), and `fields` set on top.
+Record make_truth_record(const std::vector<std::pair<std::string, std::string>>& fields) {
+  truth::TruthRig rig;
+  set_truth_field(rig, "trajectory.moves", "0.5:3");
+  set_truth_field(rig, "sensors.tip_deflection.noise", "0.002");
+  set_truth_field(rig, "sensors.hub_torque.noise", "20");
+  set_truth_field(rig, "record.decimate", "2");
+  for (const auto& [k, v] : fields) set_truth_field(rig, k, v);
+  return truth::simulate_truth(rig);
+}
+
 // The diagnosis of a record made from the base with `hidden` set, noise seed `seed`.
 Diagnosis diagnose_hidden(const std::vector<std::string>& hidden, std::uint64_t seed) {
   std::vector<std::string> truth_set = kShortRun;
@@ -108,15 +120,9 @@ TEST(Diagnose, FittedCoulombFrictionMatchesTheTruthWithinItsStandardError) {
 // in the loop) whose tip sensor is 40 ms late. The latency of a recorded-only channel is a candidate,
 // found with its delay, and after it the record is explained.
 TEST(Diagnose, TipSensorLatencyOnAnIndependentRecordIsFoundWithItsDelay) {
-  truth::TruthRig rig;
-  set_truth_field(rig, "trajectory.moves", "0.5:3");
-  set_truth_field(rig, "sensors.hub_angle.quantize", "true");
-  set_truth_field(rig, "sensors.hub_rate.noise", "5e-4");
-  set_truth_field(rig, "sensors.tip_deflection.delay", "40");
-  set_truth_field(rig, "sensors.tip_deflection.noise", "0.002");
-  set_truth_field(rig, "sensors.hub_torque.noise", "20");
-  set_truth_field(rig, "record.decimate", "2");
-  const Record r = truth::simulate_truth(rig);
+  const Record r = make_truth_record({{"sensors.hub_angle.quantize", "true"},
+                                        {"sensors.hub_rate.noise", "5e-4"},
+                                        {"sensors.tip_deflection.delay", "40"}});
   const Diagnosis d = diagnose(load_model_source(kModel, kShortRun), r, DiagnoseOptions{});
   ASSERT_EQ(d.verdict, "sensor_delay.tip_deflection") << format_diagnosis_text(d);
   EXPECT_EQ(d.ranking[0].params.at("sensors.tip_deflection.delay"), 40.0);
@@ -193,21 +199,32 @@ TEST(Diagnose, ARecordNoCandidateExplainsIsUnexplainedWithTheBestPartialCandidat
 // angle 2 samples late in the loop and in the record. The model's column is logged as read (the default),
 // so the in-loop delay fits the angle and the tip at once: found to the sample, and it explains the record.
 TEST(Diagnose, ALateHubAngleLoggedAsReadIsTheInLoopDelayToTheSample) {
-  truth::TruthRig rig;
-  set_truth_field(rig, "trajectory.moves", "0.5:3");
-  set_truth_field(rig, "sensors.hub_angle.delay", "2");
-  set_truth_field(rig, "sensors.hub_angle.noise", "1e-5");
-  set_truth_field(rig, "sensors.tip_deflection.noise", "0.002");
-  set_truth_field(rig, "sensors.hub_torque.noise", "20");
-  set_truth_field(rig, "record.as_seen", "true");
-  set_truth_field(rig, "record.decimate", "2");
-  const Record r = truth::simulate_truth(rig);
+  const Record r = make_truth_record({{"sensors.hub_angle.delay", "2"},
+                                        {"sensors.hub_angle.noise", "1e-5"},
+                                        {"record.as_seen", "true"}});
   DiagnoseOptions opt;
   opt.only = {"sensor_delay.hub_angle"};
   const Diagnosis d = diagnose(load_model_source(kModel, kShortRun), r, opt);
   ASSERT_EQ(d.verdict, "sensor_delay.hub_angle") << format_diagnosis_text(d);
   EXPECT_EQ(d.ranking[0].params.at("sensors.hub_angle.delay"), 2.0);
   EXPECT_TRUE(d.ranking[0].explained) << format_diagnosis_text(d);
+}
+
+// The same loop delay (6 samples) with the column stamped when read (the independent simulator's default), and
+// a model that says the column is as read: no one delay of sensor_delay.hub_angle moves the loop and leaves
+// the column on time, so loop_delay.hub_angle (the delay with logged: true) is ranked first, found to the
+// sample, and explains the record.
+TEST(Diagnose, ALoopDelayWithTheColumnOnTimeIsTheLoopDelayNotTheLateEncoder) {
+  const Record r = make_truth_record({{"sensors.hub_angle.delay", "6"},
+                                        {"sensors.hub_angle.noise", "1e-5"}});
+  DiagnoseOptions opt;
+  opt.only = {"sensor_delay.hub_angle", "loop_delay.hub_angle"};
+  const Diagnosis d = diagnose(load_model_source(kModel, kShortRun), r, opt);
+  ASSERT_EQ(d.verdict, "loop_delay.hub_angle") << format_diagnosis_text(d);
+  EXPECT_EQ(d.ranking[0].params.at("sensors.hub_angle.delay"), 6.0);
+  EXPECT_TRUE(d.ranking[0].explained) << format_diagnosis_text(d);
+  ASSERT_EQ(d.ranking[1].effect, "sensor_delay.hub_angle");
+  EXPECT_GT(d.ranking[1].delta_bic, d.ranking[0].delta_bic + 100.0) << format_diagnosis_text(d);
 }
 
 // An on-time hub angle (logged: true) stamped 12 samples late by its logger, the loop untouched: the
@@ -227,21 +244,42 @@ TEST(Diagnose, AnOnTimeAngleStampedLateIsTheLoggersDelay) {
   const auto names = make_candidate_effects(build_model(load_model_source(kModel, kShortRun)), ReplayMode::kClosedLoop,
                                             EffectScales{}, {"hub_angle"});
   EXPECT_TRUE(std::none_of(names.begin(), names.end(), [](const Effect& e) { return e.name == "logger_delay.hub_angle"; }));
+  // Logged on time, the in-loop delay already leaves the column on time: loop_delay is not offered either.
+  const auto on_time = make_candidate_effects(build_model(load_model_source(kModel, base)), ReplayMode::kClosedLoop,
+                                              EffectScales{}, {"hub_angle"});
+  EXPECT_TRUE(std::none_of(on_time.begin(), on_time.end(), [](const Effect& e) { return e.name == "loop_delay.hub_angle"; }));
+}
+
+// A worn gear in the independent simulator (its Coulomb level times 1 + 0.5 cos(20 theta + 2), atan-regularised)
+// under a model that logs on time as the truth does: worn_gear_friction is ranked above the plain Coulomb
+// level it extends, finds the waves within 0.1 and the ripple's a = 0.5 cos 2, b = -0.5 sin 2 within 0.05,
+// and explains the record.
+TEST(Diagnose, AWornGearsRippleIsFoundWithItsWavesAndPhase) {
+  const Record r = make_truth_record({{"friction.coulomb", "300"},
+                                        {"friction.position_amplitude", "0.5"},
+                                        {"friction.position_waves", "20"},
+                                        {"friction.position_phase", "2"},
+                                        {"sensors.hub_angle.noise", "1e-5"}});
+  std::vector<std::string> set = kShortRun;
+  set.push_back("sensors.hub_angle.logged=true");
+  DiagnoseOptions opt;
+  opt.only = {"coulomb_friction", "worn_gear_friction"};
+  const Diagnosis d = diagnose(load_model_source(kModel, set), r, opt);
+  ASSERT_EQ(d.verdict, "worn_gear_friction") << format_diagnosis_text(d);
+  const auto& p = d.ranking[0].params;
+  EXPECT_NEAR(p.at("friction.position_waves"), 20.0, 0.1) << format_diagnosis_text(d);
+  EXPECT_NEAR(p.at("friction.position_cos"), 0.5 * std::cos(2.0), 0.05) << format_diagnosis_text(d);
+  EXPECT_NEAR(p.at("friction.position_sin"), -0.5 * std::sin(2.0), 0.05) << format_diagnosis_text(d);
+  EXPECT_NEAR(p.at("friction.coulomb"), 300.0, 15.0);
 }
 
 // A 16-bit encoder quantised in the loop and logged as read, tachometer noise in the loop, nothing else
 // hidden: the model that has the encoder's resolution predicts the quantised column as the loop read it;
 // the record is not unexplained.
 TEST(Diagnose, AnEncoderQuantisedInTheLoopAndLoggedIsNotUnexplained) {
-  truth::TruthRig rig;
-  set_truth_field(rig, "trajectory.moves", "0.5:3");
-  set_truth_field(rig, "sensors.hub_angle.quantize", "true");  // 16 bits
-  set_truth_field(rig, "sensors.hub_rate.noise", "5e-4");      // tachometer noise in the loop, rad/s
-  set_truth_field(rig, "sensors.tip_deflection.noise", "0.002");
-  set_truth_field(rig, "sensors.hub_torque.noise", "20");
-  set_truth_field(rig, "record.as_seen", "true");
-  set_truth_field(rig, "record.decimate", "2");
-  const Record r = truth::simulate_truth(rig);
+  const Record r = make_truth_record({{"sensors.hub_angle.quantize", "true"},  // 16 bits
+                                        {"sensors.hub_rate.noise", "5e-4"},       // tachometer noise in the loop, rad/s
+                                        {"record.as_seen", "true"}});
   std::vector<std::string> set = kShortRun;
   set.push_back("sensors.hub_angle.resolution=9.587379924285257e-05");  // 2 pi / 2^16 rad
   DiagnoseOptions opt;

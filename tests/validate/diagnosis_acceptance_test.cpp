@@ -26,7 +26,9 @@
 //       build/tests/test_validate --gtest_filter='DiagnosisAcceptance.*'
 // and EXPECTs issue 33's targets (first >= 90 %, verdict >= 85 %, <= 1 in 20 clean records given an
 // effect or `unexplained`, every diagnosis within 60 s); FLEXFARM_SUITE_RECORDS=3,7 runs only those
-// records and prints each diagnosis.
+// records and prints each diagnosis; FLEXFARM_SUITE_LIST=1 lists the records without diagnosing them, and
+// with FLEXFARM_SUITE_SAVE=DIR writes each as DIR/record_<i>.csv with the model's --set in record_<i>.set
+// (for `flexfarm diagnose configs/fbtb.yaml DIR/record_<i>.csv $(cat DIR/record_<i>.set)`).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -45,6 +47,7 @@
 #include "common/random.hpp"
 #include "tests/validate/truth/truth_sim.hpp"
 #include "validate/diagnose.hpp"
+#include "validate/record.hpp"
 #include "validate/residuals.hpp"
 
 namespace ff {
@@ -119,7 +122,7 @@ const std::vector<Form>& forms() {
                        {"friction.stribeck_velocity", num(log_uniform(0.01, 0.05, rng.uniform()))},
                        {"friction.stribeck_exponent", num(delta[rng.next_below(4)])}};
        }},
-      {"worn_gear_friction", "friction", {"coulomb_friction"},
+      {"worn_gear_friction", "friction", {"worn_gear_friction", "coulomb_friction"},
        [](CounterRng& rng, const Nominal&) {
          // Coulomb level Fc (1 + a cos(p theta + phase)): p waves per hub revolution.
          return Fields{{"friction.coulomb", num(log_uniform(100, 600, rng.uniform()))},
@@ -189,7 +192,7 @@ const std::vector<Form>& forms() {
        [](CounterRng& rng, const Nominal&) {
          return Fields{{"torque_offset", num((rng.uniform() < 0.5 ? -1 : 1) * log_uniform(60, 800, rng.uniform()))}};
        }},
-      {"hub_angle_delay", "delay", {"sensor_delay.hub_angle"},
+      {"hub_angle_delay", "delay", {"loop_delay.hub_angle", "sensor_delay.hub_angle"},
        [](CounterRng& rng, const Nominal&) {
          return Fields{{"sensors.hub_angle.delay", num(std::round(log_uniform(2, 12, rng.uniform())))}};
        }},
@@ -539,9 +542,18 @@ TEST(DiagnosisAcceptance, TruthRecordsWithEffectsInForeignFormsAreDiagnosed) {
   }
   const int n = static_cast<int>(ids.size());
   if (std::getenv("FLEXFARM_SUITE_LIST")) {  // the records alone, no diagnosis
+    const char* dir = std::getenv("FLEXFARM_SUITE_SAVE");  // and each record's CSV and the model's --set there
     for (int id : ids) {
       const Case c = make_case(id);
       std::printf("record %d [%s]: %s\n", id, c.forms.empty() ? "clean" : hidden_names(c).c_str(), c.describe.c_str());
+      if (!dir) continue;
+      const std::string stem = std::string(dir) + "/record_" + std::to_string(id);
+      std::vector<std::string> columns;
+      for (const char* k : {"ref", "hub_torque", "hub_angle", "hub_rate", "tip_deflection", "pressure_a", "pressure_b"})
+        if (c.record.has(k)) columns.push_back(k);
+      write_record_csv(c.record, columns, stem + ".csv", 17);
+      std::ofstream args(stem + ".set");
+      for (const auto& s : c.model_set) args << "--set '" << s << "' ";
     }
     return;
   }

@@ -121,6 +121,18 @@ TEST(TruthCompare, TheMappedFlexfarmModelExplainsEachHiddenEffect) {
          s.friction.bristle_damping = 5e4;
        },
        99.5},
+      // A worn gear: Fc (1 + A cos(p q + phi)) in the truth, Fc (1 + a cos(p q) + b sin(p q)) in flexfarm,
+      // a = A cos(phi), b = -A sin(phi).
+      {"worn gear",
+       {{"friction.coulomb", "400"}, {"friction.position_amplitude", "0.6"}, {"friction.position_waves", "20"},
+        {"friction.position_phase", "1"}},
+       [](ModelSpec& s) {
+         s.friction.coulomb = 400;
+         s.friction.position_waves = 20;
+         s.friction.position_cos = 0.6 * std::cos(1.0);
+         s.friction.position_sin = -0.6 * std::sin(1.0);
+       },
+       99.5},
   };
   for (const auto& c : cases) {
     truth::TruthRig r = short_rig();
