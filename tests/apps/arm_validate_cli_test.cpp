@@ -199,7 +199,7 @@ TEST_F(ArmCli, ARecordMissingAJointColumnOrNamingAnUnknownJointIsOneErrorAndWrit
   expect_one_error_line(g, "--mode: an arm model is diagnosed in closed loop only");
   const auto h = run("calibrate --model configs/arm.yaml --data rec.csv --add payload --out m/model.yaml");
   EXPECT_EQ(h.exit_code, 2) << h.output;
-  expect_one_error_line(h, "--add: unknown effect 'payload' (this model offers: coulomb_friction@shoulder, "
+  expect_one_error_line(h, "--add: unknown effect 'payload' (this model offers: coulomb_friction@shoulder, worn_gear_friction@shoulder, "
                            "viscous_friction@shoulder,");
   EXPECT_FALSE(fs::exists(work / "d.json"));
   EXPECT_FALSE(fs::exists(work / "m"));
