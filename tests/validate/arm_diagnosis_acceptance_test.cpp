@@ -98,6 +98,7 @@ Hidden draw_effect(std::mt19937_64& rng, const std::string& kind, int j, const T
       h.fields.push_back(p + "friction.stribeck_velocity=" + num(w * log_uniform(rng, 0.02, 0.2)));
       h.fields.push_back(p + "friction.stribeck_exponent=" + num(uniform(rng, 0.5, 1.5)));
     } else {
+      h.accepted.insert("worn_gear_friction@" + J);
       h.fields.push_back(p + "friction.position_amplitude=" + num(uniform(rng, 0.3, 0.8)));
       h.fields.push_back(p + "friction.position_period=" + num(uniform(rng, 0.2, 1.0)));
       h.fields.push_back(p + "friction.position_phase=" + num(uniform(rng, 0.0, 2.0 * M_PI)));
