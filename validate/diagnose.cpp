@@ -745,6 +745,13 @@ void quiet_ceres() {
   (void)quiet;
 }
 
+// `e` started from `values` (a fit's, by path) where it has the same paths, clamped to their ranges.
+Effect start_from(Effect e, const std::map<std::string, double>& values) {
+  for (auto& q : e.params)
+    if (const auto v = values.find(q.path); v != values.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
+  return e;
+}
+
 // The Delta BIC an effect would have on top of a model with residual `rss` (n_eff effective samples) if it
 // took off `gain` of it, as it did alone: n_eff ln((rss - gain) / rss) + k ln n_eff (additive signatures).
 double calc_added_delta_bic(double rss, double gain, double n_eff, int k) {
@@ -827,27 +834,24 @@ void order_nested(std::vector<EffectFit>& ranking, const std::vector<Effect>& ef
 void refit_stuck_forms(const Scorer& sc, const std::vector<Effect>& effects, const std::vector<Against>& against,
                        const std::vector<int>& shared, const DiagnoseOptions& opt, const std::vector<Scanned>& scans,
                        const std::vector<bool>& full, std::vector<EffectFit>& fits) {
-  std::vector<std::size_t> depth(effects.size()), simpler(effects.size(), effects.size());
-  for (std::size_t i = 0; i < effects.size(); ++i) {
+  const std::size_t n = effects.size();
+  std::vector<std::size_t> depth(n), simpler(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
     depth[i] = simpler_forms(effects, effects[i]).size();
-    for (std::size_t j = 0; j < effects.size(); ++j)
+    for (std::size_t j = 0; j < n; ++j)
       if (effects[j].name == effects[i].extends) simpler[i] = j;
   }
-  for (std::size_t d = 1; d <= effects.size(); ++d) {
+  const std::size_t deepest = n ? *std::max_element(depth.begin(), depth.end()) : 0;
+  for (std::size_t d = 1; d <= deepest; ++d) {
     std::vector<std::size_t> stuck;
-    for (std::size_t i = 0; i < effects.size(); ++i)
-      if (depth[i] == d && full[i] && simpler[i] < effects.size() && fits[simpler[i]].ok && fits[i].ok &&
+    for (std::size_t i = 0; i < n; ++i)
+      if (depth[i] == d && full[i] && simpler[i] < n && fits[simpler[i]].ok && fits[i].ok &&
           (fits[i].rss > fits[simpler[i]].rss || !effects[i].starts.empty()))
         stuck.push_back(i);
-    if (stuck.empty() && std::none_of(depth.begin(), depth.end(), [&](std::size_t x) { return x > d; })) break;
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::size_t k = 0; k < stuck.size(); ++k) {
       const std::size_t i = stuck[k];
-      Effect seeded = effects[i];
-      for (auto& q : seeded.params) {
-        const auto& from = fits[simpler[i]].params;
-        if (const auto v = from.find(q.path); v != from.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
-      }
+      const Effect seeded = start_from(effects[i], fits[simpler[i]].params);
       Scanned start;
       if (seeded.starts.empty()) {  // the seeded point alone, the grid where the first scan found it
         start.grid_value = scans[i].grid_value;
@@ -908,12 +912,10 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
     }
   }
   refit_stuck_forms(sc, effects, against, shared, opt, scans, full, ranking);
-  for (auto& f : ranking)
-    if (f.ok && f.significant && !f.screened && !is_extension_determined(f, effects)) {
-      f.significant = false;
-      f.note = "what it adds to " + std::find_if(effects.begin(), effects.end(), [&](const Effect& x) {
-                                      return x.name == f.effect;
-                                    })->extends + " is not determined by the record (unidentifiable or on a bound)";
+  for (std::size_t i = 0; i < n; ++i)  // ranking[i] is still effects[i]'s
+    if (ranking[i].ok && ranking[i].significant && !ranking[i].screened && !is_extension_determined(ranking[i], effects)) {
+      ranking[i].significant = false;
+      ranking[i].note = "what it adds to " + effects[i].extends + " is not determined by the record (unidentifiable or on a bound)";
     }
   std::stable_sort(ranking.begin(), ranking.end(), [](const EffectFit& a, const EffectFit& b) {
     if (a.ok != b.ok) return a.ok;
@@ -1004,9 +1006,7 @@ void backfit(const Scorer& sc, const std::vector<Effect>& plain, std::vector<Eff
   for (std::size_t j : order) {
     const auto e0 = std::find_if(plain.begin(), plain.end(), [&](const Effect& e) { return e.name == sel[j].effect; });
     if (e0 == plain.end() || e0->params.empty()) continue;
-    Effect e = *e0;
-    for (auto& q : e.params)
-      if (const auto v = sel[j].params.find(q.path); v != sel[j].params.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
+    const Effect e = start_from(*e0, sel[j].params);
     const Scorer s = without_effect(sc, sel, j);
     const auto r = s.residuals({{}})[0];
     if (r.empty()) continue;
@@ -1255,12 +1255,9 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
       if (!forced && s == d.selected.end() && g != gain1.end() &&
           calc_added_delta_bic(rss, g->second, n_eff_now, k) >= kLaterRoundScreen)
         continue;
-      next.push_back(e);
-      replacing.push_back(s != d.selected.end());
       // A richer form starts where the simpler selected one left what they share (LuGre's Coulomb level).
-      if (s != d.selected.end())
-        for (EffectParam& q : next.back().params)
-          if (const auto v = s->params.find(q.path); v != s->params.end()) q.initial = std::clamp(v->second, q.lo, q.hi);
+      next.push_back(s != d.selected.end() ? start_from(e, s->params) : e);
+      replacing.push_back(s != d.selected.end());
     }
     if (forced && next.empty())
       throw std::invalid_argument("effect '" + opt.add[d.selected.size()] + "' writes what an effect before it does");
