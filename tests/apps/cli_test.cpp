@@ -396,8 +396,8 @@ TEST_F(Cli, DiagnoseJsonHasTheBaselineTheRankingAndTheVerdict) {
   EXPECT_LT(first, second);  // ranked: Coulomb friction first
   for (const char* key : {"\"stderr\": {", "\"fit_percent\": {", "\"delta_bic\": -", "\"significant\": true"})
     EXPECT_NE(json.find(key, first), std::string::npos) << key;
-  // The payload on a one-body axis: its mass, inertia and the hub's are one number; not identifiable.
-  EXPECT_NE(json.find("\"unidentifiable\": [\"payload.mass\", \"payload.inertia\", \"hub.inertia\"]", second),
+  // The payload on a one-body axis: its mass and inertia add to the hub's, one number; not identifiable.
+  EXPECT_NE(json.find("\"unidentifiable\": [\"payload.mass\", \"payload.inertia\"", second),
             std::string::npos) << json;
   EXPECT_NE(json.find("\"payload.mass\": null", second), std::string::npos) << json;
   // Coulomb friction alone does not explain a real axis (viscous friction, the offset): "unexplained".

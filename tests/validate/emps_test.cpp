@@ -107,7 +107,7 @@ TEST(EmpsLoop, CalibrateAddsFrictionAndOffsetAndTheErrorFallsVersionByVersion) {
   sqlite3_finalize(st);
   sqlite3_close(db);
   ASSERT_EQ(effects, (std::vector<std::string>{"base", "coulomb_friction", "viscous_friction", "torque_offset"}));
-  const double want_fit[] = {30.5, 83.2, 91.4, 93.8}, want_rel[] = {69.4, 16.7, 8.6, 6.7};
+  const double want_fit[] = {30.5, 83.2, 91.4, 93.8}, want_rel[] = {69.4, 16.7, 8.6, 6.1};
   for (int v = 0; v < 4; ++v) {
     EXPECT_NEAR(fit[v], want_fit[v], 0.5) << "version " << v + 1;
     EXPECT_NEAR(relative[v], want_rel[v], 0.4) << "version " << v + 1;
