@@ -490,14 +490,33 @@ struct Scanned {
   std::string error;                        // non-empty: the scan failed
 };
 
-Scanned scan_effect(const Scorer& sc, const Effect& e) {
+// A later round's points (`first`: the effect's scan in round 1, on the base model): its starting point,
+// then the best quarter (at least kRescanPoints) of the first scan's points, its own parameters' coordinates
+// (round 1 may have fitted re-fits beside them, last). Where the effects selected since have not moved an
+// effect's valley these hold it; the whole scan again each round cost three quarters of a two-effect
+// diagnosis.
+constexpr std::size_t kRescanPoints = 8;
+std::vector<std::vector<double>> rescan_points(const std::vector<double>& start, const Scanned& first) {
+  std::vector<std::vector<double>> out = {start};
+  const std::size_t keep = std::min(first.points.size(), std::max(kRescanPoints, (first.points.size() + 3) / 4));
+  for (std::size_t i = 0; i < keep; ++i) {
+    if (first.points[i].size() < start.size()) continue;
+    std::vector<double> t(first.points[i].begin(), first.points[i].begin() + static_cast<std::ptrdiff_t>(start.size()));
+    if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// The effect's scan: its grid searched, then its parameters' global scan (or, given `first`, the
+// later round's points: rescan_points).
+Scanned scan_effect(const Scorer& sc, const Effect& e, const Scanned* first = nullptr) {
   Scanned s;
   std::vector<double> theta;
   for (const auto& p : e.params) theta.push_back(param_theta(p, std::clamp(p.initial, p.lo, p.hi)));
   try {
     if (!e.grid_path.empty()) s.grid_value = search_grid(sc, e, theta, &s.grid_rss);
     if (e.params.empty()) return s;
-    const auto points = scan_points(e, theta);
+    const auto points = first && !first->points.empty() ? rescan_points(theta, *first) : scan_points(e, theta);
     const auto rss = trial_rss(sc, make_trials(e, points, s.grid_value));
     std::vector<std::size_t> order(points.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -878,11 +897,15 @@ void refit_stuck_forms(const Scorer& sc, const std::vector<Effect>& effects, con
 // shared[i]: effect i's baseline and how many of its parameters are re-fits (as fit_one).
 std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& effects, const std::vector<Against>& against,
                                   const std::vector<int>& shared, int keep, const DiagnoseOptions& opt,
-                                  const std::vector<bool>& always = {}) {
+                                  std::map<std::string, Scanned>& first, const std::vector<bool>& always = {}) {
   const std::size_t n = effects.size();
   std::vector<Scanned> scans(n);
 #pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t i = 0; i < n; ++i) scans[i] = scan_effect(sc, effects[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto seen = first.find(effects[i].name);
+    scans[i] = scan_effect(sc, effects[i], seen == first.end() ? nullptr : &seen->second);
+  }
+  for (std::size_t i = 0; i < n; ++i) first.try_emplace(effects[i].name, scans[i]);
   std::vector<std::pair<double, std::size_t>> screen;
   for (std::size_t i = 0; i < n; ++i) {
     if (effects[i].params.empty() || !scans[i].error.empty()) continue;
@@ -1183,7 +1206,9 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
     shared.push_back(static_cast<int>(refits[i].size()));
   }
   const bool all_full = !opt.only.empty() || !opt.add.empty();
-  d.ranking = rank_round(sc, effects, against, shared, all_full ? static_cast<int>(effects.size()) : kFullFits, opt);
+  std::map<std::string, Scanned> first_scans;  // each effect's round-1 scan: where the later rounds look
+  d.ranking = rank_round(sc, effects, against, shared, all_full ? static_cast<int>(effects.size()) : kFullFits, opt,
+                         first_scans);
   // What each effect took off the residual in round 1 (RSS against its baseline's; scan-only fits a lower bound).
   std::map<std::string, double> gain1;
   for (std::size_t i = 0; i < effects.size(); ++i)
@@ -1267,7 +1292,7 @@ Diagnosis diagnose_scored(const Scorer& sc, const std::vector<double>& r0, const
       throw std::invalid_argument("effect '" + opt.add[d.selected.size()] + "' writes what an effect before it does");
     if (next.empty()) break;
     ranked = rank_round(current, next, std::vector<Against>(next.size(), now), std::vector<int>(next.size(), 0),
-                        forced ? 1 : kFullFitsLater, opt, replacing);
+                        forced ? 1 : kFullFitsLater, opt, first_scans, replacing);
     d.rounds.push_back(ranked);
   }
   // The verdict: the selected effects when with them the record is explained; else "none" when the model
