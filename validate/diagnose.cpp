@@ -393,11 +393,13 @@ double search_grid(const Scorer& sc, const Effect& e, const std::vector<double>&
 }
 
 // The global scan's points in the box of coordinates: 16 evenly spaced for one parameter, an 8 x 8
-// grid for two, 64 Sobol' points for three, 128 for more, or the effect's own starts; the starting point first.
-std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<double>& start) {
+// grid for two, 64 Sobol' points for three, 128 for more, or the effect's own starts; the starting point
+// first. `coarse`: a quarter as many (4, a 4 x 4 grid, the first 16 or 32 Sobol' points; no starts).
+std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<double>& start, bool coarse = false) {
   const std::size_t p = e.params.size();
   if (!e.starts.empty()) {
     std::vector<std::vector<double>> out = {start};
+    if (coarse) return out;
     for (const auto& values : e.starts) {
       std::vector<double> t = start;
       for (std::size_t j = 0; j < p; ++j)
@@ -413,13 +415,14 @@ std::vector<std::vector<double>> scan_points(const Effect& e, const std::vector<
     hi[j] = param_theta(e.params[j], e.params[j].hi);
   }
   std::vector<std::vector<double>> u;  // unit-cube points
+  const int side = coarse ? 4 : p == 1 ? 16 : 8;
   if (p == 1) {
-    for (int i = 0; i < 16; ++i) u.push_back({i / 15.0});
+    for (int i = 0; i < side; ++i) u.push_back({i / (side - 1.0)});
   } else if (p == 2) {
-    for (int i = 0; i < 8; ++i)
-      for (int j = 0; j < 8; ++j) u.push_back({i / 7.0, j / 7.0});
+    for (int i = 0; i < side; ++i)
+      for (int j = 0; j < side; ++j) u.push_back({i / (side - 1.0), j / (side - 1.0)});
   } else {
-    const auto s = make_sobol_points_unscrambled(p == 3 ? 65 : 129, static_cast<int>(p));
+    const auto s = make_sobol_points_unscrambled((p == 3 ? 64 : 128) / (coarse ? 4 : 1) + 1, static_cast<int>(p));
     for (std::size_t i = 1; i < s.size(); ++i) u.push_back(s[i]);  // row 0 is the origin, a corner
   }
   std::vector<std::vector<double>> out = {start};
@@ -488,16 +491,20 @@ struct Scanned {
   std::vector<std::vector<double>> points;  // coordinates, best first (failed points dropped)
   std::vector<double> rss;                  // theirs
   std::string error;                        // non-empty: the scan failed
+  bool gained = false;                      // its best point's Delta BIC is below 0 (it paid for its parameters)
 };
 
-// A later round's points (`first`: the effect's scan in round 1, on the base model): its starting point,
-// then the best quarter (at least kRescanPoints) of the first scan's points, its own parameters' coordinates
-// (round 1 may have fitted re-fits beside them, last). Where the effects selected since have not moved an
-// effect's valley these hold it; the whole scan again each round cost three quarters of a two-effect
-// diagnosis.
+// A later round's points (`first`: the effect's scan in round 1, on the base model): its starting point
+// and a coarse scan (a quarter of the points), then, when the first scan paid for its parameters, the best quarter
+// (at least kRescanPoints) of its points, its own parameters' coordinates (round 1 may have fitted re-fits
+// beside them, last). The valleys the effects selected since have not moved are among the first scan's
+// best; the coarse scan finds one the first effect's misfit hid. (A scan that did not has as its best the
+// points nearest the base model: the stiffest drives, the costliest to run.) The whole scan
+// again each round cost three quarters of a two-effect diagnosis.
 constexpr std::size_t kRescanPoints = 8;
-std::vector<std::vector<double>> rescan_points(const std::vector<double>& start, const Scanned& first) {
-  std::vector<std::vector<double>> out = {start};
+std::vector<std::vector<double>> rescan_points(const Effect& e, const std::vector<double>& start, const Scanned& first) {
+  std::vector<std::vector<double>> out = scan_points(e, start, true);
+  if (!first.gained) return out;
   const std::size_t keep = std::min(first.points.size(), std::max(kRescanPoints, (first.points.size() + 3) / 4));
   for (std::size_t i = 0; i < keep; ++i) {
     if (first.points[i].size() < start.size()) continue;
@@ -516,7 +523,7 @@ Scanned scan_effect(const Scorer& sc, const Effect& e, const Scanned* first = nu
   try {
     if (!e.grid_path.empty()) s.grid_value = search_grid(sc, e, theta, &s.grid_rss);
     if (e.params.empty()) return s;
-    const auto points = first && !first->points.empty() ? rescan_points(theta, *first) : scan_points(e, theta);
+    const auto points = first && !first->points.empty() ? rescan_points(e, theta, *first) : scan_points(e, theta);
     const auto rss = trial_rss(sc, make_trials(e, points, s.grid_value));
     std::vector<std::size_t> order(points.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -905,7 +912,6 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
     const auto seen = first.find(effects[i].name);
     scans[i] = scan_effect(sc, effects[i], seen == first.end() ? nullptr : &seen->second);
   }
-  for (std::size_t i = 0; i < n; ++i) first.try_emplace(effects[i].name, scans[i]);
   std::vector<std::pair<double, std::size_t>> screen;
   for (std::size_t i = 0; i < n; ++i) {
     if (effects[i].params.empty() || !scans[i].error.empty()) continue;
@@ -917,6 +923,8 @@ std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& e
                         i);
   }
   std::stable_sort(screen.begin(), screen.end());
+  for (const auto& [delta_bic, i] : screen) scans[i].gained = delta_bic < 0.0;
+  for (std::size_t i = 0; i < n; ++i) first.try_emplace(effects[i].name, scans[i]);
   std::vector<bool> full(n, true);
   for (std::size_t j = static_cast<std::size_t>(std::max(keep, 0)); j < screen.size(); ++j)
     full[screen[j].second] = screen[j].second < always.size() && always[screen[j].second];
