@@ -901,7 +901,8 @@ void refit_stuck_forms(const Scorer& sc, const std::vector<Effect>& effects, con
 // One round of the search: every candidate scanned (its grid, its global scan), the `keep` best of those
 // with parameters by the scan's Delta BIC (n_eff ln(RSS_scan / RSS_base) + k ln n_eff, the baseline's
 // n_eff) fitted in full, the others as the scan left them (screened); ranked best first. against[i],
-// shared[i]: effect i's baseline and how many of its parameters are re-fits (as fit_one).
+// shared[i]: effect i's baseline and how many of its parameters are re-fits (as fit_one). `first`: each
+// effect's first scan (filled by round 1), from which a later round's scan starts (rescan_points).
 std::vector<EffectFit> rank_round(const Scorer& sc, const std::vector<Effect>& effects, const std::vector<Against>& against,
                                   const std::vector<int>& shared, int keep, const DiagnoseOptions& opt,
                                   std::map<std::string, Scanned>& first, const std::vector<bool>& always = {}) {
